@@ -1,0 +1,337 @@
+//! Typed errors. Every variant names the links, pairs, circuits or spec fields
+//! involved, so a user who wrote a wrong spec is told what is wrong and where.
+
+use std::fmt;
+
+/// Result alias for the core.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Every failure the core can report.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// The text is not valid TOML/JSON, or a value has the wrong type.
+    #[error("{0}")]
+    Syntax(#[from] SyntaxError),
+    /// The spec parses but says something invalid at `path`.
+    #[error("{path}: {kind}")]
+    Spec {
+        /// Field path, e.g. `gears[2].teeth[0]`.
+        path: String,
+        /// What is wrong there.
+        kind: SpecErrorKind,
+    },
+    /// The graph is not a valid geared kinematic chain (paper section 2).
+    #[error("topology: {0}")]
+    Topology(#[from] TopologyError),
+    /// The analysis was asked something the train cannot answer as posed.
+    #[error("{0}")]
+    Analysis(#[from] AnalysisError),
+}
+
+impl Error {
+    /// A spec error at `path`.
+    pub fn spec(path: impl Into<String>, kind: SpecErrorKind) -> Self {
+        Error::Spec { path: path.into(), kind }
+    }
+
+    /// An `Invalid` spec error at `path` with a message.
+    pub fn invalid(path: impl Into<String>, message: impl Into<String>) -> Self {
+        Error::spec(path, SpecErrorKind::Invalid { message: message.into() })
+    }
+}
+
+/// A syntax or type error, located by line and column (1-based).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub struct SyntaxError {
+    /// File name, or `<stdin>` / `<string>`.
+    pub source_name: String,
+    /// 1-based line.
+    pub line: usize,
+    /// 1-based column.
+    pub column: usize,
+    /// Field path where the error was found, when known.
+    pub path: Option<String>,
+    /// The parser's message.
+    pub message: String,
+}
+
+impl fmt::Display for SyntaxError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}:{}:{}: ", self.source_name, self.line, self.column)?;
+        if let Some(p) = &self.path {
+            write!(f, "at `{p}`: ")?;
+        }
+        write!(f, "{}", self.message)
+    }
+}
+
+/// What is wrong at a spec path.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum SpecErrorKind {
+    /// A name that no link has.
+    #[error("unknown link `{name}`{}", suggestion.as_ref().map(|s| format!(" (did you mean `{s}`?)")).unwrap_or_default())]
+    UnknownLink {
+        /// The name written.
+        name: String,
+        /// The closest declared name, if any is close.
+        suggestion: Option<String>,
+    },
+    /// A link declared twice.
+    #[error("link `{name}` is declared twice")]
+    DuplicateLink {
+        /// The name.
+        name: String,
+    },
+    /// Two pairs (or elements, or states) join the same links / carry the same name.
+    #[error("duplicate of {first} ({what})")]
+    Duplicate {
+        /// Path of the earlier occurrence.
+        first: String,
+        /// What is duplicated.
+        what: String,
+    },
+    /// A pair joining a link to itself.
+    #[error("pair joins link `{link}` to itself")]
+    SelfLoop {
+        /// The link.
+        link: String,
+    },
+    /// A tooth count that is zero or negative.
+    #[error("tooth count must be a positive integer, got {value}")]
+    InvalidTeeth {
+        /// The value written.
+        value: i64,
+    },
+    /// NaN or infinity.
+    #[error("value must be finite, got {value}")]
+    NonFinite {
+        /// The value written.
+        value: f64,
+    },
+    /// A number outside its range.
+    #[error("{value} is out of range: {expected}")]
+    OutOfRange {
+        /// The value written.
+        value: f64,
+        /// The allowed range, in words.
+        expected: String,
+    },
+    /// A required datum is absent.
+    #[error("missing {what}")]
+    Missing {
+        /// What is missing.
+        what: String,
+    },
+    /// Anything else, in words.
+    #[error("{message}")]
+    Invalid {
+        /// The explanation.
+        message: String,
+    },
+}
+
+/// Violations of the topological properties of geared kinematic chains (paper section 2).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum TopologyError {
+    /// Some links are not joined to the frame by any pair.
+    #[error("links {} are not connected to the frame", list(links))]
+    Disconnected {
+        /// The unreachable links.
+        links: Vec<String>,
+    },
+    /// Some links are held only by gear meshes: deleting the gear edges does not leave a spanning tree.
+    #[error(
+        "links {} have no chain of turning pairs to the frame (deleting the gear edges must leave a spanning tree)",
+        list(links)
+    )]
+    NoTurningPath {
+        /// The links without a turning-pair path to the frame.
+        links: Vec<String>,
+    },
+    /// The turning pairs close a loop: deleting gear edges leaves a cycle, not a tree.
+    #[error(
+        "turning pairs close a loop through {} (deleting the gear edges must leave a tree)",
+        list(links)
+    )]
+    RevoluteCycle {
+        /// Links on the loop.
+        links: Vec<String>,
+    },
+    /// L_ind differs from the number of gear pairs j_G.
+    #[error("{independent} independent circuits but {gears} gear pairs (L_ind = j_G must hold)")]
+    CircuitCount {
+        /// Independent circuits L_ind.
+        independent: usize,
+        /// Gear pairs j_G.
+        gears: usize,
+    },
+    /// The fundamental circuit of a gear pair has no transfer vertex (section 2.1).
+    #[error(
+        "gear pair {pair}: its fundamental circuit has turning pairs at levels {} — a transfer vertex needs exactly two levels meeting at one link",
+        list(levels)
+    )]
+    NoTransferVertex {
+        /// The gear pair.
+        pair: String,
+        /// The levels met on its circuit, in path order.
+        levels: Vec<String>,
+    },
+    /// The fundamental circuit of a gear pair has several candidate transfer vertices.
+    #[error("gear pair {pair}: its fundamental circuit has several transfer vertices {}", list(candidates))]
+    AmbiguousTransferVertex {
+        /// The gear pair.
+        pair: String,
+        /// The candidate links.
+        candidates: Vec<String>,
+    },
+    /// The graph is not planar.
+    #[error("the graph is not planar (a geared kinematic chain's graph must be)")]
+    NonPlanar,
+    /// Gruebler-Kutzbach gives no mobility.
+    #[error("Gruebler-Kutzbach degree of freedom is {dof}: the chain cannot move")]
+    NoMobility {
+        /// The computed F.
+        dof: i64,
+    },
+    /// A locked sub-chain: links that cannot turn relative to each other for any ratios (eq. 1).
+    #[error("locked sub-chain: links {} cannot turn relative to each other (eq. 1)", list(links))]
+    Locked {
+        /// Links of the locked sub-chain.
+        links: Vec<String>,
+    },
+    /// Gear pairs whose circuits repeat a constraint already imposed (generic rank deficiency).
+    #[error(
+        "redundant gear pairs {}: their Willis equations are dependent for any ratios (an over-constrained sub-chain, eq. 1)",
+        list(pairs)
+    )]
+    Redundant {
+        /// The dependent pairs.
+        pairs: Vec<String>,
+    },
+    /// The mobility is fractionated: a link separates sub-chains that move independently.
+    #[error(
+        "fractionated mobility at link `{link}`: it separates sub-chains {} that move independently (eq. 1)",
+        parts.iter().map(|p| list(p)).collect::<Vec<_>>().join(" and ")
+    )]
+    Fractionated {
+        /// The cut link.
+        link: String,
+        /// The separated groups of links.
+        parts: Vec<Vec<String>>,
+    },
+    /// Links that turn freely: their turning pairs lie on no fundamental circuit.
+    #[error("links {} turn freely: they are on no fundamental circuit (fractionated mobility)", list(links))]
+    FreeLinks {
+        /// The free links.
+        links: Vec<String>,
+    },
+}
+
+/// Analyses asked something the train cannot answer as posed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum AnalysisError {
+    /// The number of prescribed quantities does not match the DOF.
+    #[error("the train has {dof} degree(s) of freedom but {given} {what} were given")]
+    WrongInputCount {
+        /// The train's DOF.
+        dof: usize,
+        /// How many were given.
+        given: usize,
+        /// What was counted (e.g. `input speeds`).
+        what: String,
+    },
+    /// The frame cannot be an input.
+    #[error("link `{link}` is the frame; its speed is zero by definition")]
+    FrameInput {
+        /// The frame's name.
+        link: String,
+    },
+    /// The chosen inputs leave links undetermined.
+    #[error("the inputs do not determine the train: links {} are left free", list(free))]
+    Underdetermined {
+        /// Links whose speed is not fixed by the inputs.
+        free: Vec<String>,
+    },
+    /// The chosen inputs over-determine the train inconsistently.
+    #[error("the inputs conflict: the equations of {} cannot all hold", list(conflicting))]
+    Inconsistent {
+        /// The conflicting equations (gear pairs / inputs).
+        conflicting: Vec<String>,
+    },
+    /// A system is exactly singular.
+    #[error("{what} is singular: {detail}")]
+    Singular {
+        /// The system.
+        what: String,
+        /// Why, in words.
+        detail: String,
+    },
+    /// A system is too ill-conditioned for a trustworthy answer.
+    #[error("{what} is ill-conditioned (condition number {condition:.3e} > {threshold:.0e}); the result would not be trustworthy")]
+    IllConditioned {
+        /// The system.
+        what: String,
+        /// Estimated 1-norm condition number.
+        condition: f64,
+        /// The refusal threshold.
+        threshold: f64,
+    },
+    /// A datum this analysis needs is absent.
+    #[error("{what} is needed for {analysis} but missing ({hint})")]
+    MissingData {
+        /// What is missing.
+        what: String,
+        /// The analysis that needs it.
+        analysis: String,
+        /// Where to give it.
+        hint: String,
+    },
+    /// Anything else, in words.
+    #[error("{0}")]
+    Other(String),
+}
+
+fn list(items: &[String]) -> String {
+    let quoted: Vec<String> = items.iter().map(|s| format!("`{s}`")).collect();
+    quoted.join(", ")
+}
+
+/// The declared name closest to `name`, if it is close enough to be a typo.
+pub fn suggest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<String> {
+    let mut best: Option<(usize, &str)> = None;
+    for c in candidates {
+        let d = edit_distance(name, c);
+        if d <= 2.max(name.len() / 3) && best.is_none_or(|(bd, _)| d < bd) {
+            best = Some((d, c));
+        }
+    }
+    best.map(|(_, c)| c.to_string())
+}
+
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut cur = vec![i + 1; b.len() + 1];
+        for (j, cb) in b.iter().enumerate() {
+            cur[j + 1] = (prev[j] + usize::from(ca != *cb)).min(prev[j + 1] + 1).min(cur[j] + 1);
+        }
+        prev = cur;
+    }
+    prev[b.len()]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn suggests_close_names_only() {
+        assert_eq!(suggest("sunn", ["sun", "ring", "carrier"]), Some("sun".into()));
+        assert_eq!(suggest("xyzzy", ["sun", "ring"]), None);
+    }
+}

@@ -1,0 +1,247 @@
+//! Exact rational linear algebra (Gauss-Jordan over `BigRational`).
+//!
+//! Used where a decision must not depend on round-off: the generic-rank
+//! topology checks, the exact kinematics of tooth-count trains, and the
+//! diagnosis of singular systems (which links are free, which equations conflict).
+
+use num_bigint::BigInt;
+use num_rational::BigRational;
+use num_traits::{One, Signed, ToPrimitive, Zero};
+
+/// Exact rational number.
+pub type Q = BigRational;
+
+/// A dense matrix of rationals, row-major.
+pub type QMatrix = Vec<Vec<Q>>;
+
+/// Integer to rational.
+pub fn q(n: i64) -> Q {
+    Q::from_integer(BigInt::from(n))
+}
+
+/// p/q as a rational (`den` must be non-zero).
+pub fn frac(num: i64, den: i64) -> Q {
+    Q::new(BigInt::from(num), BigInt::from(den))
+}
+
+/// Nearest f64 of a rational (exact for values that fit in f64).
+pub fn to_f64(x: &Q) -> f64 {
+    x.to_f64().unwrap_or(f64::NAN)
+}
+
+/// The exact rational value of a finite f64 (every finite double is a dyadic rational).
+pub fn from_f64(x: f64) -> Option<Q> {
+    Q::from_float(x)
+}
+
+/// Parse `"p/q"`, `"-3"` or a decimal like `"2.5"` / `"1e-3"` exactly.
+pub fn parse_rational(s: &str) -> Option<Q> {
+    let s = s.trim();
+    if let Some((n, d)) = s.split_once('/') {
+        let n = parse_rational(n)?;
+        let d = parse_rational(d)?;
+        if d.is_zero() {
+            return None;
+        }
+        return Some(n / d);
+    }
+    let (mantissa, exp) = match s.find(['e', 'E']) {
+        Some(i) => (&s[..i], s[i + 1..].parse::<i32>().ok()?),
+        None => (s, 0),
+    };
+    let (neg, digits) = match mantissa.strip_prefix('-') {
+        Some(rest) => (true, rest),
+        None => (false, mantissa.strip_prefix('+').unwrap_or(mantissa)),
+    };
+    let (int, fracp) = digits.split_once('.').unwrap_or((digits, ""));
+    if int.is_empty() && fracp.is_empty() {
+        return None;
+    }
+    if !int.chars().chain(fracp.chars()).all(|c| c.is_ascii_digit()) {
+        return None;
+    }
+    let all: BigInt = format!("{int}{fracp}").parse().ok()?;
+    let scale = exp - i32::try_from(fracp.len()).ok()?;
+    let ten = BigInt::from(10);
+    let mut v = Q::from_integer(all);
+    if scale >= 0 {
+        v *= Q::from_integer(num_traits::pow(ten, scale as usize));
+    } else {
+        v /= Q::from_integer(num_traits::pow(ten, (-scale) as usize));
+    }
+    Some(if neg { -v } else { v })
+}
+
+/// Display as `p/q` (or `p` when the denominator is 1).
+pub fn display(x: &Q) -> String {
+    if x.denom().is_one() { x.numer().to_string() } else { format!("{}/{}", x.numer(), x.denom()) }
+}
+
+/// Reduce `m` to reduced row-echelon form in place; return the pivot columns.
+pub fn rref(m: &mut QMatrix) -> Vec<usize> {
+    let rows = m.len();
+    let cols = m.first().map_or(0, Vec::len);
+    let mut pivots = Vec::new();
+    let mut r = 0;
+    for c in 0..cols {
+        if r == rows {
+            break;
+        }
+        let Some(p) = (r..rows).find(|&i| !m[i][c].is_zero()) else { continue };
+        m.swap(r, p);
+        let inv = m[r][c].recip();
+        for x in m[r].iter_mut() {
+            *x *= &inv;
+        }
+        for i in 0..rows {
+            if i != r && !m[i][c].is_zero() {
+                let f = m[i][c].clone();
+                let (pivot_row, row_i) = if i < r {
+                    let (a, b) = m.split_at_mut(r);
+                    (&b[0], &mut a[i])
+                } else {
+                    let (a, b) = m.split_at_mut(i);
+                    (&a[r], &mut b[0])
+                };
+                for (x, y) in row_i.iter_mut().zip(pivot_row) {
+                    if !y.is_zero() {
+                        *x -= &f * y;
+                    }
+                }
+            }
+        }
+        pivots.push(c);
+        r += 1;
+    }
+    pivots
+}
+
+/// Rank of a matrix.
+pub fn rank(m: &QMatrix) -> usize {
+    let mut w = m.clone();
+    rref(&mut w).len()
+}
+
+/// A basis of the right null space {x : m x = 0}, `cols` wide.
+pub fn nullspace(m: &QMatrix, cols: usize) -> Vec<Vec<Q>> {
+    let mut w = m.clone();
+    let pivots = rref(&mut w);
+    let free: Vec<usize> = (0..cols).filter(|c| !pivots.contains(c)).collect();
+    free.iter()
+        .map(|&f| {
+            let mut v = vec![Q::zero(); cols];
+            v[f] = Q::one();
+            for (r, &pc) in pivots.iter().enumerate() {
+                v[pc] = -w[r][f].clone();
+            }
+            v
+        })
+        .collect()
+}
+
+/// Why an exact solve failed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SolveFailure {
+    /// Unknowns (columns) not fixed by the equations.
+    pub free_columns: Vec<usize>,
+    /// Rows that belong to an inconsistent dependent set (empty when consistent).
+    pub conflicting_rows: Vec<usize>,
+}
+
+/// Solve the square or rectangular system `a x = b` exactly, requiring a unique solution.
+///
+/// # Errors
+/// The free columns (null space support) and the rows of any inconsistent dependency.
+pub fn solve(a: &QMatrix, b: &[Q]) -> Result<Vec<Q>, SolveFailure> {
+    let cols = a.first().map_or(0, Vec::len);
+    let mut aug: QMatrix =
+        a.iter().zip(b).map(|(row, bi)| row.iter().cloned().chain([bi.clone()]).collect()).collect();
+    let pivots = rref(&mut aug);
+    let inconsistent = pivots.contains(&cols);
+    let rank_a = pivots.iter().filter(|&&c| c < cols).count();
+    if rank_a == cols && !inconsistent {
+        let mut x = vec![Q::zero(); cols];
+        for (r, &pc) in pivots.iter().enumerate() {
+            x[pc] = aug[r][cols].clone();
+        }
+        return Ok(x);
+    }
+    let free_columns = support(&nullspace(a, cols));
+    let conflicting_rows = if inconsistent { conflicting_rows(a, b) } else { Vec::new() };
+    Err(SolveFailure { free_columns, conflicting_rows })
+}
+
+/// Indices with a non-zero entry in some vector of `basis`.
+pub fn support(basis: &[Vec<Q>]) -> Vec<usize> {
+    let n = basis.first().map_or(0, Vec::len);
+    (0..n).filter(|&i| basis.iter().any(|v| !v[i].is_zero())).collect()
+}
+
+/// Rows involved in an inconsistency: those with a non-zero weight in a left
+/// null vector y (y^T a = 0) with y^T b != 0.
+fn conflicting_rows(a: &QMatrix, b: &[Q]) -> Vec<usize> {
+    let rows = a.len();
+    let cols = a.first().map_or(0, Vec::len);
+    let at: QMatrix = (0..cols).map(|c| (0..rows).map(|r| a[r][c].clone()).collect()).collect();
+    let left = nullspace(&at, rows);
+    let mut out = Vec::new();
+    for y in &left {
+        let yb: Q = y.iter().zip(b).map(|(yi, bi)| yi * bi).sum();
+        if !yb.is_zero() {
+            out.extend((0..rows).filter(|&i| !y[i].is_zero()));
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// Absolute value helper for callers that only import this module.
+pub fn abs(x: &Q) -> Q {
+    x.abs()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_fractions_and_decimals_exactly() {
+        assert_eq!(parse_rational("-162/77"), Some(frac(-162, 77)));
+        assert_eq!(parse_rational("2.5"), Some(frac(5, 2)));
+        assert_eq!(parse_rational("1e-3"), Some(frac(1, 1000)));
+        assert_eq!(parse_rational("0.1"), Some(frac(1, 10)));
+        assert_eq!(parse_rational("abc"), None);
+        assert_eq!(parse_rational("1/0"), None);
+    }
+
+    #[test]
+    fn solve_reconstructs_and_diagnoses() {
+        let a = vec![vec![q(2), q(1)], vec![q(1), q(3)]];
+        let b = vec![q(3), q(5)];
+        let x = solve(&a, &b).expect("regular");
+        for (row, bi) in a.iter().zip(&b) {
+            let ax: Q = row.iter().zip(&x).map(|(p, y)| p * y).sum();
+            assert_eq!(&ax, bi);
+        }
+        let sing = vec![vec![q(1), q(1)], vec![q(2), q(2)]];
+        let fail = solve(&sing, &[q(1), q(3)]).expect_err("singular");
+        assert_eq!(fail.free_columns, vec![0, 1]);
+        assert_eq!(fail.conflicting_rows, vec![0, 1]);
+        let fail = solve(&sing, &[q(1), q(2)]).expect_err("singular");
+        assert!(fail.conflicting_rows.is_empty());
+    }
+
+    #[test]
+    fn nullspace_vectors_are_annihilated() {
+        let a = vec![vec![q(1), q(-2), q(1)], vec![q(2), q(-4), q(2)]];
+        let ns = nullspace(&a, 3);
+        assert_eq!(ns.len(), 2);
+        for v in &ns {
+            for row in &a {
+                let s: Q = row.iter().zip(v).map(|(p, y)| p * y).sum();
+                assert!(s.is_zero());
+            }
+        }
+    }
+}

@@ -1,0 +1,331 @@
+//! Kinematics by the Willis equations (paper section 3, eq. 2):
+//! psi_m = w_i - tau_m w_j + (tau_m - 1) w_k = 0 for every fundamental circuit m.
+//!
+//! [`KinematicsPlan`] is prepared once per choice of input links (index maps
+//! and buffers sized then) and solves any number of ratio/speed sets without
+//! allocating. [`Train::kinematics`] wraps it for one scenario, adds the exact
+//! rational solution when every ratio is exact, and diagnoses singular inputs
+//! exactly (which links are free, which equations conflict).
+
+use nalgebra::DMatrix;
+use num_traits::Zero;
+use serde::Serialize;
+
+use crate::error::{AnalysisError, Error, Result};
+use crate::exact::{self, Q, QMatrix};
+use crate::linalg::{COND_REFUSE, COND_WARN, Lu};
+use crate::train::{LinkId, Train};
+
+/// One prescribed input speed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpeedInput {
+    /// The link.
+    pub link: LinkId,
+    /// Its speed.
+    pub speed: f64,
+    /// The exact speed, when known (for the exact solution).
+    pub exact: Option<Q>,
+}
+
+impl From<(LinkId, f64)> for SpeedInput {
+    fn from((link, speed): (LinkId, f64)) -> Self {
+        SpeedInput { link, speed, exact: exact::from_f64(speed) }
+    }
+}
+
+/// A planet's (or any floating link's) speed relative to the link carrying it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RelativeSpeed {
+    /// The floating link.
+    pub link: LinkId,
+    /// The carrier (its parent in the turning-pair tree).
+    pub carrier: LinkId,
+    /// w_link - w_carrier.
+    pub speed: f64,
+    /// Exact value, when known.
+    #[serde(skip)]
+    pub exact: Option<Q>,
+}
+
+/// The speeds of all links for one set of inputs.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Speeds {
+    /// Absolute angular speed of every link (indexed by `LinkId::index()`; the frame is 0).
+    pub speed: Vec<f64>,
+    /// False where the speed is unknown (a planet given without a tooth count).
+    pub known: Vec<bool>,
+    /// Exact speeds, when every ratio and input is exact.
+    #[serde(skip)]
+    pub exact: Option<Vec<Q>>,
+    /// Speeds of floating links relative to their carriers.
+    pub relative: Vec<RelativeSpeed>,
+    /// Largest Willis residual |psi_m| relative to the largest speed.
+    pub residual: f64,
+    /// 1-norm condition estimate of the solved system.
+    pub condition: f64,
+    /// Warnings (e.g. ill-conditioning below the refusal threshold).
+    pub warnings: Vec<String>,
+}
+
+/// Which column a link occupies in a prepared system.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Slot {
+    Frame,
+    Input(usize),
+    Unknown(usize),
+}
+
+/// A kinematic solve prepared for one choice of input links.
+#[derive(Debug, Clone)]
+pub struct KinematicsPlan {
+    inputs: Vec<LinkId>,
+    slots: Vec<Slot>,
+    unknowns: Vec<LinkId>,
+    circuits: Vec<[LinkId; 3]>,
+    lu: Lu,
+    rhs: Vec<f64>,
+}
+
+impl KinematicsPlan {
+    /// Prepare for `inputs` (as many distinct non-frame links as the train has DOF).
+    ///
+    /// # Errors
+    /// Wrong input count, the frame or a repeated link as input.
+    pub fn new(train: &Train, inputs: &[LinkId]) -> Result<Self> {
+        if inputs.len() != train.dof() {
+            return Err(AnalysisError::WrongInputCount { dof: train.dof(), given: inputs.len(), what: "input speeds".into() }.into());
+        }
+        let mut slots: Vec<Slot> = train.links().iter().map(|_| Slot::Frame).collect();
+        for (k, &l) in inputs.iter().enumerate() {
+            if l == train.frame() {
+                return Err(AnalysisError::FrameInput { link: train.link_name(l).to_string() }.into());
+            }
+            if slots[l.index()] != Slot::Frame {
+                return Err(AnalysisError::Other(format!("link `{}` is given as an input twice", train.link_name(l))).into());
+            }
+            if !train.link(l).sized {
+                return Err(unsized_error(train, l));
+            }
+            slots[l.index()] = Slot::Input(k);
+        }
+        let mut unknowns = Vec::new();
+        for &l in train.coordinates() {
+            if slots[l.index()] == Slot::Frame {
+                slots[l.index()] = Slot::Unknown(unknowns.len());
+                unknowns.push(l);
+            }
+        }
+        let n = unknowns.len();
+        debug_assert_eq!(n, train.circuits().len());
+        Ok(KinematicsPlan {
+            inputs: inputs.to_vec(),
+            slots,
+            unknowns,
+            circuits: train.circuits().iter().map(|c| [c.gear_i, c.gear_j, c.carrier]).collect(),
+            lu: Lu::new(n),
+            rhs: vec![0.0; n],
+        })
+    }
+
+    /// The input links, in order.
+    pub fn inputs(&self) -> &[LinkId] {
+        &self.inputs
+    }
+
+    /// Solve for every link's speed: `ratios` in gear-pair order, `input_speeds`
+    /// in input order; `speeds` (one per link) receives the result. Returns the
+    /// condition estimate. Allocates nothing.
+    ///
+    /// # Errors
+    /// [`AnalysisError::Singular`] on a zero pivot, [`AnalysisError::IllConditioned`]
+    /// past [`COND_REFUSE`]. (Use [`Train::kinematics`] for an exact diagnosis.)
+    pub fn solve(&mut self, ratios: &[f64], input_speeds: &[f64], speeds: &mut [f64]) -> Result<f64> {
+        let n = self.unknowns.len();
+        let a = self.lu.matrix_mut();
+        a.iter_mut().for_each(|v| *v = 0.0);
+        self.rhs.iter_mut().for_each(|v| *v = 0.0);
+        for (m, (ids, &tau)) in self.circuits.iter().zip(ratios).enumerate() {
+            for (l, coef) in ids.iter().zip([1.0, -tau, tau - 1.0]) {
+                match self.slots[l.index()] {
+                    Slot::Frame => {}
+                    Slot::Input(k) => self.rhs[m] -= coef * input_speeds[k],
+                    Slot::Unknown(u) => a[m * n + u] += coef,
+                }
+            }
+        }
+        self.lu.factor().map_err(|_| singular())?;
+        let cond = self.lu.condition();
+        if cond > COND_REFUSE {
+            return Err(AnalysisError::IllConditioned { what: "the Willis system".into(), condition: cond, threshold: COND_REFUSE }.into());
+        }
+        self.lu.solve(&mut self.rhs);
+        speeds.iter_mut().for_each(|v| *v = 0.0);
+        for (k, &l) in self.inputs.iter().enumerate() {
+            speeds[l.index()] = input_speeds[k];
+        }
+        for (u, &l) in self.unknowns.iter().enumerate() {
+            speeds[l.index()] = self.rhs[u];
+        }
+        Ok(cond)
+    }
+}
+
+fn singular() -> Error {
+    AnalysisError::Singular { what: "the Willis system".into(), detail: "a pivot column is zero".into() }.into()
+}
+
+fn unsized_error(train: &Train, l: LinkId) -> Error {
+    AnalysisError::MissingData {
+        what: format!("the tooth count of planet `{}`", train.link_name(l)),
+        analysis: "its speed".into(),
+        hint: "give `teeth.planet` in its planetary set".into(),
+    }
+    .into()
+}
+
+/// Largest |psi_m| over the circuits, relative to the largest |w| (eq. 2 residual).
+pub fn willis_residual(train: &Train, ratios: &[f64], speeds: &[f64]) -> f64 {
+    let scale = speeds.iter().fold(0.0_f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
+    train
+        .circuits()
+        .iter()
+        .zip(ratios)
+        .map(|(c, &t)| {
+            (speeds[c.gear_i.index()] - t * speeds[c.gear_j.index()] + (t - 1.0) * speeds[c.carrier.index()]).abs()
+        })
+        .fold(0.0, f64::max)
+        / scale
+}
+
+impl Train {
+    /// The Willis Jacobian [psi_w] (j_G x (l - 1)): rows are circuits, columns the
+    /// coordinates (every link but the frame, in link order).
+    ///
+    /// # Errors
+    /// Missing ratio.
+    pub fn willis_jacobian(&self) -> Result<DMatrix<f64>> {
+        let ratios = self.ratios()?;
+        let mut j = DMatrix::zeros(self.circuits().len(), self.coordinates().len());
+        for (m, (c, &t)) in self.circuits().iter().zip(&ratios).enumerate() {
+            for (l, v) in [(c.gear_i, 1.0), (c.gear_j, -t), (c.carrier, t - 1.0)] {
+                if let Some(k) = self.coordinate(l) {
+                    j[(m, k)] += v;
+                }
+            }
+        }
+        Ok(j)
+    }
+
+    /// The exact Willis Jacobian, when every ratio is exact.
+    pub fn willis_jacobian_exact(&self) -> Option<QMatrix> {
+        let taus: Vec<Q> = self.gears().iter().map(|g| g.ratio.as_ref()?.exact.clone()).collect::<Option<_>>()?;
+        Some(crate::topology::willis_exact(self.links().len(), self.frame(), self.circuits(), |m| taus[m].clone()))
+    }
+
+    /// Solve the speeds of every link for the given input speeds (one per DOF).
+    /// When every ratio and input is exact, `exact` holds the rational solution.
+    ///
+    /// # Errors
+    /// Missing ratios; wrong input count; [`AnalysisError::Underdetermined`] /
+    /// [`AnalysisError::Inconsistent`] naming the free links or conflicting
+    /// circuits when the inputs do not determine the train;
+    /// [`AnalysisError::IllConditioned`] when nearly singular.
+    pub fn kinematics(&self, inputs: &[SpeedInput]) -> Result<Speeds> {
+        let ratios = self.ratios()?;
+        let links: Vec<LinkId> = inputs.iter().map(|i| i.link).collect();
+        let values: Vec<f64> = inputs.iter().map(|i| i.speed).collect();
+        for (k, v) in values.iter().enumerate() {
+            if !v.is_finite() {
+                return Err(Error::spec(format!("input speed of `{}`", self.link_name(links[k])), crate::SpecErrorKind::NonFinite { value: *v }));
+            }
+        }
+        let mut plan = KinematicsPlan::new(self, &links)?;
+        let mut speed = vec![0.0; self.links().len()];
+        let solved = plan.solve(&ratios, &values, &mut speed);
+        let exact_inputs: Option<Vec<Q>> = inputs.iter().map(|i| i.exact.clone()).collect();
+        let exact_taus: Option<Vec<Q>> = self.gears().iter().map(|g| g.ratio.as_ref()?.exact.clone()).collect();
+        let condition = match solved {
+            Ok(c) => c,
+            Err(e) => {
+                // Diagnose exactly, on the exact ratios or on the exact values of the floats.
+                let taus: Vec<Q> = match &exact_taus {
+                    Some(t) => t.clone(),
+                    None => ratios.iter().map(|&r| exact::from_f64(r).unwrap_or_else(Q::zero)).collect(),
+                };
+                let ins: Vec<Q> = values.iter().map(|&v| exact::from_f64(v).unwrap_or_else(Q::zero)).collect();
+                self.solve_exact(&plan, &taus, &ins)?;
+                return Err(e);
+            }
+        };
+        let mut warnings = Vec::new();
+        if condition > COND_WARN {
+            warnings.push(format!("the Willis system is ill-conditioned (condition {condition:.2e}); expect about {:.0} correct digits", (16.0 - condition.log10()).max(0.0)));
+        }
+        let exact = match (exact_taus, exact_inputs) {
+            (Some(t), Some(i)) => Some(self.solve_exact(&plan, &t, &i)?),
+            _ => None,
+        };
+        let known: Vec<bool> = self.links().iter().map(|l| l.sized).collect();
+        let relative = self.relative_speeds(&speed, exact.as_deref(), &known);
+        let residual = willis_residual(self, &ratios, &speed);
+        Ok(Speeds { speed, known, exact, relative, residual, condition, warnings })
+    }
+
+    /// The exact solution for a prepared plan.
+    fn solve_exact(&self, plan: &KinematicsPlan, taus: &[Q], inputs: &[Q]) -> Result<Vec<Q>> {
+        let n = plan.unknowns.len();
+        let mut a: QMatrix = vec![vec![Q::zero(); n]; n];
+        let mut b: Vec<Q> = vec![Q::zero(); n];
+        for (m, (ids, tau)) in plan.circuits.iter().zip(taus).enumerate() {
+            let coefs = [exact::q(1), -tau.clone(), tau - exact::q(1)];
+            for (l, coef) in ids.iter().zip(coefs) {
+                match plan.slots[l.index()] {
+                    Slot::Frame => {}
+                    Slot::Input(k) => b[m] -= coef * &inputs[k],
+                    Slot::Unknown(u) => a[m][u] += coef,
+                }
+            }
+        }
+        match exact::solve(&a, &b) {
+            Ok(x) => {
+                let mut out = vec![Q::zero(); self.links().len()];
+                for (k, &l) in plan.inputs.iter().enumerate() {
+                    out[l.index()] = inputs[k].clone();
+                }
+                for (u, &l) in plan.unknowns.iter().enumerate() {
+                    out[l.index()] = x[u].clone();
+                }
+                Ok(out)
+            }
+            Err(f) if !f.conflicting_rows.is_empty() => Err(AnalysisError::Inconsistent {
+                conflicting: f.conflicting_rows.iter().map(|&m| format!("circuit #{} (gear pair {})", m + 1, self.gears()[m].name)).collect(),
+            }
+            .into()),
+            Err(f) => Err(AnalysisError::Underdetermined {
+                free: f.free_columns.iter().map(|&u| self.link_name(plan.unknowns[u]).to_string()).collect(),
+            }
+            .into()),
+        }
+    }
+
+    /// Speeds of floating links relative to their carriers: every link whose
+    /// turning pair to its tree parent (not the frame) is at another level than
+    /// the parent's own axis.
+    fn relative_speeds(&self, speed: &[f64], exact: Option<&[Q]>, known: &[bool]) -> Vec<RelativeSpeed> {
+        let mut out = Vec::new();
+        for &l in self.tree().order() {
+            let Some((p, r)) = self.tree().parent(l) else { continue };
+            let Some((_, rp)) = self.tree().parent(p) else { continue };
+            if self.revolutes()[r.index()].level == self.revolutes()[rp.index()].level || !known[l.index()] {
+                continue;
+            }
+            out.push(RelativeSpeed {
+                link: l,
+                carrier: p,
+                speed: speed[l.index()] - speed[p.index()],
+                exact: exact.map(|e| &e[l.index()] - &e[p.index()]),
+            });
+        }
+        out
+    }
+}

@@ -1,0 +1,340 @@
+//! The gear-train spec as a user writes it (TOML or JSON, one serde model).
+//!
+//! This is the input format, kept exactly as written: names, not ids; optional
+//! data left optional. [`crate::Train::from_spec`] validates it into a typed
+//! graph, and nothing downstream reads the spec again. The whole format is
+//! described for users in `docs/spec.md`; `egt schema` prints its JSON Schema.
+
+use indexmap::IndexMap;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+/// A whole gear-train spec: the graph (links, turning pairs, gear pairs, written
+/// out or through the shorthands), optional physical data, optional shift
+/// elements and gear states, and optional analysis settings.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Spec {
+    /// A title for reports.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Free text.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+    /// Name of the frame (ground) link. It need not be listed in `links`.
+    pub frame: String,
+    /// Links (bodies) with their optional physical data. Links created by
+    /// `planetary` sets or by `adjacency` need not be listed, but may be, to
+    /// give them data.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub links: Vec<LinkSpec>,
+    /// Revolute (turning) pairs.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub revolutes: Vec<RevoluteSpec>,
+    /// Gear pairs.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub gears: Vec<GearSpec>,
+    /// Planetary sets written as engineers draw them; each expands into links,
+    /// turning pairs and gear pairs.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub planetary: Vec<PlanetarySpec>,
+    /// The compact adjacency-list form printed by enumeration programs, e.g.
+    /// `"1-2:a 2-3:b 1-4:a 1-3:G 3-4:G=-5/2"`: `A-B:x` is a turning pair at
+    /// level `x`, `A-B:G` a gear pair, optionally with its Willis ratio after `=`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub adjacency: Option<String>,
+    /// Distances between adjacent axis levels (the paper's delta_ab, ...), for
+    /// the kinetic energy of floating links. Derived from pitch radii when absent.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub offsets: Vec<OffsetSpec>,
+    /// Shift elements: brakes, clutches and one-way clutches.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub elements: Vec<ElementSpec>,
+    /// Input, output and gear states of an automatic transmission.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transmission: Option<TransmissionSpec>,
+    /// Operating data for the analyses (speeds, loads, accelerations, curves).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub analysis: Option<AnalysisSpec>,
+}
+
+/// One link (rigid body). All physical data is optional: each analysis asks
+/// only for what it uses.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct LinkSpec {
+    /// Unique name.
+    pub name: String,
+    /// Moment of inertia of one copy about its own axis [kg m^2].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inertia: Option<f64>,
+    /// Mass of one copy [kg] (enters the kinetic energy of floating links, eq. 4).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass: Option<f64>,
+    /// Number of identical satellites this link stands for (the paper's n_s).
+    /// Default 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub copies: Option<u32>,
+    /// Number of gear wheels rigidly joined on this link. When it is 1, every
+    /// mesh of the link uses the same wheel, so its tooth counts and pitch radii
+    /// must agree. Default: one wheel per gear pair.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wheels: Option<u32>,
+}
+
+/// A revolute (turning) pair between two links, about an axis at `level`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RevoluteSpec {
+    /// The two links.
+    pub links: [String; 2],
+    /// The axis level label (`a`, `b`, `c`, ... or any name).
+    pub level: String,
+}
+
+/// Internal or external mesh.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "lowercase")]
+pub enum MeshKind {
+    /// Both wheels external: the carrier-relative speeds have opposite signs.
+    External,
+    /// One wheel is a ring (annulus): the carrier-relative speeds have equal signs.
+    Internal,
+}
+
+/// A gear ratio as written: a number, or an exact fraction as a string (`"-162/77"`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(untagged)]
+pub enum RatioSpec {
+    /// A decimal number.
+    Number(f64),
+    /// An exact rational `"p/q"` or decimal `"-2.5"`.
+    Text(String),
+}
+
+/// A gear pair between links `links[0]` (gear i) and `links[1]` (gear j).
+///
+/// The ratio is the paper's Willis ratio tau = (w_i - w_k) / (w_j - w_k), where
+/// k is the carrier (transfer vertex); from teeth, tau = -z_j/z_i for an
+/// external mesh and +z_j/z_i for an internal one.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct GearSpec {
+    /// Optional name (default `G<m>`, m counting from 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Gear i and gear j.
+    pub links: [String; 2],
+    /// Tooth counts [z_i, z_j]; needs `mesh`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub teeth: Option<[i64; 2]>,
+    /// Mesh kind, with `teeth`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mesh: Option<MeshKind>,
+    /// The Willis ratio, instead of teeth.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ratio: Option<RatioSpec>,
+    /// Module [m]: pitch radius = module * z / 2 (needs `teeth`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub module: Option<f64>,
+    /// Pitch radii [r_i, r_j] [m].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radii: Option<[f64; 2]>,
+    /// Basic mesh efficiency (power ratio in the carrier frame), in (0, 1]. Default 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub efficiency: Option<f64>,
+}
+
+/// Kinds of planetary set understood by the shorthand.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum PlanetaryKind {
+    /// Sun, planet, ring, carrier.
+    #[default]
+    Simple,
+    /// Sun meshes the inner planet, which meshes the outer planet, which meshes the ring.
+    DoublePinion,
+    /// A stepped (compound) planet: wheel `planet` meshes the sun, wheel `planet2`
+    /// meshes the ring (or the second sun `sun2`).
+    Stepped,
+    /// Ravigneaux: small sun - short pinion (`planet`) - long pinion (`planet2`),
+    /// and large sun `sun2` - long pinion - ring, on one carrier.
+    Ravigneaux,
+}
+
+/// Tooth counts of a planetary set. Only the central members are needed for
+/// the speeds of the central members; planets without teeth are created with
+/// an unknown size, and their own speeds are then reported as unknown.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PlanetaryTeeth {
+    /// Sun (the small sun of a Ravigneaux set).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sun: Option<i64>,
+    /// Ring (annulus).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ring: Option<i64>,
+    /// Second sun (large sun of a Ravigneaux set; second sun of a stepped set).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sun2: Option<i64>,
+    /// Planet meshing the sun (inner planet, short pinion, first step).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub planet: Option<i64>,
+    /// Outer planet / long pinion / second step.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub planet2: Option<i64>,
+}
+
+/// A planetary set in engineering terms. Central members name links, which may
+/// be shared with other sets or be the frame (a fixed ring: `ring = "frame"`).
+/// Central members turn about the main axis `axis`; planets turn on the carrier,
+/// each at its own level (named after the planet link).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PlanetarySpec {
+    /// Name of the set; planets default to `<name>.planet` and `<name>.planet2`.
+    pub name: String,
+    /// Kind of set. Default `simple`.
+    #[serde(default)]
+    pub kind: PlanetaryKind,
+    /// Sun link.
+    pub sun: String,
+    /// Ring link (absent only for a stepped set with two suns).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ring: Option<String>,
+    /// Second sun link (Ravigneaux large sun, or stepped set with two suns).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sun2: Option<String>,
+    /// Carrier link.
+    pub carrier: String,
+    /// Planet link name (default `<name>.planet`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub planet: Option<String>,
+    /// Second planet link name (default `<name>.planet2`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub planet2: Option<String>,
+    /// Tooth counts.
+    pub teeth: PlanetaryTeeth,
+    /// Module [m] for every wheel of the set (gives pitch radii and axis offsets).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub module: Option<f64>,
+    /// Basic efficiency of every mesh of the set. Default 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub efficiency: Option<f64>,
+    /// Level of the main axis. Default `a`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axis: Option<String>,
+}
+
+/// Distance between two axis levels.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct OffsetSpec {
+    /// The two levels.
+    pub levels: [String; 2],
+    /// Distance between the axes [m].
+    pub distance: f64,
+}
+
+/// Kind of shift element.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum ElementKind {
+    /// Holds one link to the frame.
+    Brake,
+    /// Joins two links.
+    Clutch,
+    /// Holds one link against turning backwards (negative speed).
+    OneWayBrake,
+    /// Joins two links when the first would turn slower than the second.
+    OneWayClutch,
+}
+
+/// A shift element.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ElementSpec {
+    /// Name used in the gear states (e.g. `A`).
+    pub name: String,
+    /// Kind of element.
+    pub kind: ElementKind,
+    /// One link for a brake, two for a clutch.
+    pub links: Vec<String>,
+}
+
+/// Input, output and gear states of a transmission.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct TransmissionSpec {
+    /// Input link.
+    pub input: String,
+    /// Output link.
+    pub output: String,
+    /// Gear states in shift order: state name -> engaged elements, e.g. `1 = ["A", "B", "C"]`.
+    #[serde(default)]
+    pub states: IndexMap<String, Vec<String>>,
+}
+
+/// A linearised torque-speed curve T = torque + slope * (w - speed) acting on
+/// a link (eq. 13-15). Torques are applied torques, positive along positive
+/// rotation; a motor whose torque falls as it speeds up has a negative slope.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CurveSpec {
+    /// Link the torque acts on.
+    pub link: String,
+    /// Torque at the operating speed [N m].
+    pub torque: f64,
+    /// dT/dw at the operating point [N m s].
+    #[serde(default)]
+    pub slope: f64,
+    /// Operating speed [rad/s].
+    #[serde(default)]
+    pub speed: f64,
+}
+
+/// Settings for time simulation.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SimulateSpec {
+    /// End time [s].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub t_end: Option<f64>,
+    /// Step [s].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dt: Option<f64>,
+    /// Integrator name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub method: Option<String>,
+    /// Initial speeds of the driving coordinates, link -> rad/s.
+    #[serde(default, skip_serializing_if = "IndexMap::is_empty")]
+    pub initial: IndexMap<String, f64>,
+}
+
+/// Operating data for the analyses. Every field is optional; each analysis
+/// reads only what it needs.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct AnalysisSpec {
+    /// Prescribed speeds, link -> rad/s (as many as the train has DOF).
+    #[serde(default, skip_serializing_if = "IndexMap::is_empty")]
+    pub speeds: IndexMap<String, RatioSpec>,
+    /// Known external torques, link -> N m (applied, positive along positive rotation).
+    #[serde(default, skip_serializing_if = "IndexMap::is_empty")]
+    pub torques: IndexMap<String, f64>,
+    /// Prescribed angular accelerations, link -> rad/s^2 (as many as DOF).
+    #[serde(default, skip_serializing_if = "IndexMap::is_empty")]
+    pub accelerations: IndexMap<String, f64>,
+    /// Links whose driving torque is unknown and solved for (as many as DOF).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub driving: Vec<String>,
+    /// Link to which the equivalent inertia is reduced.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reduce_to: Option<String>,
+    /// Linearised torque-speed curves of motors and loads.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub curves: Vec<CurveSpec>,
+    /// Time-simulation settings.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub simulate: Option<SimulateSpec>,
+}
