@@ -33,19 +33,25 @@
 //! ```
 
 pub mod circuits;
+pub mod dynamics;
 pub mod error;
 pub mod exact;
 mod expand;
 pub mod kinematics;
 pub mod linalg;
+pub mod mass;
 pub mod parse;
+pub mod power;
 pub mod spec;
 pub mod topology;
 pub mod train;
 
 pub use circuits::FundamentalCircuit;
+pub use dynamics::{DynamicsRequest, Extra, InverseDynamics, InverseDynamicsPlan, MeshLoad};
 pub use error::{AnalysisError, Error, Result, SpecErrorKind, SyntaxError, TopologyError};
 pub use kinematics::{KinematicsPlan, RelativeSpeed, SpeedInput, Speeds};
+pub use mass::{MassMatrix, Offset};
 pub use parse::{Format, parse_spec, spec_schema};
+pub use power::{Driver, LinkPower, MeshPower, PowerFlow, PowerRequest};
 pub use spec::Spec;
 pub use train::{Edge, GearId, GearPair, LevelId, Link, LinkId, Ratio, RevoluteId, Train};

@@ -1,0 +1,567 @@
+//! Inverse dynamics (paper section 4, eq. 6-11) for any number of DOF.
+//!
+//! Equations of motion, eq. (6): [M]{w'} + [psi~_w]^T {lambda} = {Q}, with the
+//! kinematic constraints [psi_w]{w'} = 0 (eq. 2 differentiated). The F
+//! prescribed accelerations complete [psi_w] to the square [Psi_w] of eq. (8);
+//! the F unknown driving torques join the multipliers in the transposed system
+//! of eq. (10). [psi~_w] equals [psi_w] for ideal meshes; with mesh losses its
+//! rows carry the efficiency (see `power.rs`).
+//!
+//! Constraint rows beyond the Willis equations (brakes holding a link, clutches
+//! joining two) are supported, so gear states of a transmission use the same
+//! solver; their multipliers are the element reaction torques.
+//!
+//! Sign convention: Q_l is the external torque applied to link l (positive
+//! along positive rotation). (psi_w^T lambda)_l is the torque link l spends on
+//! its constraints (eq. 7); the torque the frame or a held element applies to
+//! the train is the corresponding sum over the frame's column.
+
+use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
+
+use crate::error::{AnalysisError, Error, Result};
+use crate::linalg::{COND_REFUSE, COND_WARN, Lu};
+use crate::mass::MassMatrix;
+use crate::train::{GearId, LinkId, Train};
+
+/// A constraint row besides the Willis equations.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Extra {
+    /// w_link = 0 (a brake).
+    Hold(LinkId),
+    /// w_a - w_b = 0 (a clutch).
+    Join(LinkId, LinkId),
+}
+
+/// A column of the constraint Jacobian: a coordinate or the frame.
+type Col = Option<usize>;
+
+/// Inverse dynamics prepared for one choice of prescribed coordinates, driving
+/// links and extra constraints. Buffers are sized once; [`InverseDynamicsPlan::solve`]
+/// allocates nothing.
+#[derive(Debug, Clone)]
+pub struct InverseDynamicsPlan {
+    n: usize,
+    rows: Rows,
+    accel: Vec<usize>,
+    driving: Vec<usize>,
+    kin: Lu,
+    force: Lu,
+    wdot: Vec<f64>,
+    x: Vec<f64>,
+    cond: [f64; 2],
+}
+
+/// The constraint rows of a plan, by coordinate column.
+#[derive(Debug, Clone)]
+struct Rows {
+    circuits: Vec<[Col; 3]>,
+    extras: Vec<[(Col, f64); 2]>,
+}
+
+impl Rows {
+    /// Add the constraint rows into `out` (row-major with `stride` columns),
+    /// using `taus` for the Willis rows (eq. 2).
+    fn fill(&self, taus: &[f64], out: &mut [f64], stride: usize) {
+        for (m, (ids, &t)) in self.circuits.iter().zip(taus).enumerate() {
+            for (k, v) in ids.iter().zip([1.0, -t, t - 1.0]) {
+                if let Some(k) = k {
+                    out[m * stride + *k] += v;
+                }
+            }
+        }
+        let base = self.circuits.len();
+        for (e, row) in self.extras.iter().enumerate() {
+            for &(k, v) in row {
+                if let Some(k) = k {
+                    out[(base + e) * stride + k] += v;
+                }
+            }
+        }
+    }
+}
+
+impl InverseDynamicsPlan {
+    /// Prepare. `accelerated` and `driving` each hold F = n - (j_G + extras) links.
+    ///
+    /// # Errors
+    /// Wrong counts, the frame among them, or repeated links.
+    pub fn new(
+        train: &Train,
+        accelerated: &[LinkId],
+        driving: &[LinkId],
+        extras: &[Extra],
+    ) -> Result<Self> {
+        let n = train.coordinates().len();
+        let c = train.circuits().len() + extras.len();
+        let f = n.checked_sub(c).ok_or_else(|| {
+            AnalysisError::Other(format!(
+                "{c} constraints on {n} coordinates: over-constrained"
+            ))
+        })?;
+        let coords = |ls: &[LinkId], what: &str| -> Result<Vec<usize>> {
+            if ls.len() != f {
+                return Err(AnalysisError::WrongInputCount {
+                    dof: f,
+                    given: ls.len(),
+                    what: what.to_string(),
+                }
+                .into());
+            }
+            let mut out = Vec::with_capacity(ls.len());
+            for &l in ls {
+                let k = train
+                    .coordinate(l)
+                    .ok_or_else(|| AnalysisError::FrameInput {
+                        link: train.link_name(l).to_string(),
+                    })?;
+                if out.contains(&k) {
+                    return Err(AnalysisError::Other(format!(
+                        "link `{}` is listed twice among the {what}",
+                        train.link_name(l)
+                    ))
+                    .into());
+                }
+                out.push(k);
+            }
+            Ok(out)
+        };
+        let accel = coords(accelerated, "prescribed accelerations")?;
+        let driving = coords(driving, "driving (unknown-torque) links")?;
+        let col = |l: LinkId| train.coordinate(l);
+        Ok(InverseDynamicsPlan {
+            n,
+            rows: Rows {
+                circuits: train
+                    .circuits()
+                    .iter()
+                    .map(|c| [col(c.gear_i), col(c.gear_j), col(c.carrier)])
+                    .collect(),
+                extras: extras
+                    .iter()
+                    .map(|e| match *e {
+                        Extra::Hold(l) => [(col(l), 1.0), (None, 0.0)],
+                        Extra::Join(a, b) => [(col(a), 1.0), (col(b), -1.0)],
+                    })
+                    .collect(),
+            },
+            accel,
+            driving,
+            kin: Lu::new(n),
+            force: Lu::new(n),
+            wdot: vec![0.0; n],
+            x: vec![0.0; n],
+            cond: [1.0, 1.0],
+        })
+    }
+
+    /// Number of constraint rows (Willis + extra).
+    pub fn constraints(&self) -> usize {
+        self.rows.circuits.len() + self.rows.extras.len()
+    }
+
+    /// Solve one scenario. `ratios`: Willis ratios (kinematics); `force_ratios`:
+    /// the ratios of the force rows (equal to `ratios` for ideal meshes);
+    /// `mass`: [M] column-major or row-major (symmetric), n x n; `q`: known
+    /// applied torques per coordinate; `alpha`: prescribed accelerations.
+    /// Results are read with [`Self::accelerations`], [`Self::multipliers`],
+    /// [`Self::driving_torques`]. Allocates nothing.
+    ///
+    /// # Errors
+    /// Singular or ill-conditioned [Psi_w] (the prescribed accelerations do not
+    /// determine the motion) or force system (the driving links cannot balance the loads).
+    pub fn solve(
+        &mut self,
+        ratios: &[f64],
+        force_ratios: &[f64],
+        mass: &[f64],
+        q: &[f64],
+        alpha: &[f64],
+    ) -> Result<()> {
+        let n = self.n;
+        let c = self.constraints();
+        // eq. (8): [Psi_w] {w'} = {0, ..., alpha}.
+        let moving = alpha.iter().any(|&a| a != 0.0);
+        if moving {
+            let a = self.kin.matrix_mut();
+            a.iter_mut().for_each(|v| *v = 0.0);
+            self.rows.fill(ratios, self.kin.matrix_mut(), n);
+            let a = self.kin.matrix_mut();
+            for (r, &k) in self.accel.iter().enumerate() {
+                a[(c + r) * n + k] = 1.0;
+            }
+            self.kin.factor().map_err(|_| {
+                singular(
+                    "[Psi_w] (eq. 8)",
+                    "the prescribed accelerations do not determine the motion",
+                )
+            })?;
+            self.cond[0] = self.kin.condition();
+            refuse(self.cond[0], "[Psi_w] (eq. 8)")?;
+            self.wdot.iter_mut().for_each(|v| *v = 0.0);
+            for (r, &a) in alpha.iter().enumerate() {
+                self.wdot[c + r] = a;
+            }
+            self.kin.solve(&mut self.wdot);
+        } else {
+            self.wdot.iter_mut().for_each(|v| *v = 0.0);
+            self.cond[0] = 1.0;
+        }
+        // eq. (10): [psi~_w^T | -D^T] {lambda; T_d} = {Q} - [M]{w'}.
+        let f = self.force.matrix_mut();
+        f.iter_mut().for_each(|v| *v = 0.0);
+        self.rows.fill(force_ratios, self.force.matrix_mut(), n);
+        let f = self.force.matrix_mut();
+        for (r, &k) in self.driving.iter().enumerate() {
+            f[(c + r) * n + k] = -1.0;
+        }
+        self.force.factor().map_err(|_| {
+            singular(
+                "the force system (eq. 10)",
+                "the driving links cannot balance the loads",
+            )
+        })?;
+        self.cond[1] = self.force.condition();
+        refuse(self.cond[1], "the force system (eq. 10)")?;
+        for i in 0..n {
+            let mw: f64 = (0..n).map(|j| mass[i * n + j] * self.wdot[j]).sum();
+            self.x[i] = q[i] - mw;
+        }
+        self.force.solve_transpose(&mut self.x);
+        Ok(())
+    }
+
+    /// Accelerations of the coordinates from the last solve.
+    pub fn accelerations(&self) -> &[f64] {
+        &self.wdot
+    }
+    /// Lagrange multipliers (Willis rows, then extra rows) from the last solve.
+    pub fn multipliers(&self) -> &[f64] {
+        &self.x[..self.constraints()]
+    }
+    /// Driving torques, in the order of the driving links, from the last solve.
+    pub fn driving_torques(&self) -> &[f64] {
+        &self.x[self.constraints()..]
+    }
+    /// Condition estimates of [Psi_w] and of the force system from the last solve.
+    pub fn conditions(&self) -> [f64; 2] {
+        self.cond
+    }
+}
+
+fn singular(what: &str, detail: &str) -> Error {
+    AnalysisError::Singular {
+        what: what.into(),
+        detail: detail.into(),
+    }
+    .into()
+}
+
+fn refuse(cond: f64, what: &str) -> Result<()> {
+    if cond > COND_REFUSE {
+        return Err(AnalysisError::IllConditioned {
+            what: what.into(),
+            condition: cond,
+            threshold: COND_REFUSE,
+        }
+        .into());
+    }
+    Ok(())
+}
+
+/// What an inverse-dynamics (or static) analysis asks.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct DynamicsRequest {
+    /// Known applied torques.
+    pub torques: Vec<(LinkId, f64)>,
+    /// Prescribed accelerations (F of them, or none for the static case).
+    pub accelerations: Vec<(LinkId, f64)>,
+    /// Links whose torque is unknown (F of them).
+    pub driving: Vec<LinkId>,
+    /// Brakes and clutches in force.
+    pub extras: Vec<Extra>,
+}
+
+/// The tangential meshing force and torques of one gear pair (eq. 11).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MeshLoad {
+    /// The gear pair.
+    pub gear: GearId,
+    /// Its multiplier lambda_m.
+    pub multiplier: f64,
+    /// Torque gear i spends on the mesh, lambda_m psi_w[m, i].
+    pub torque_i: f64,
+    /// Torque gear j spends on the mesh, lambda_m psi_w[m, j].
+    pub torque_j: f64,
+    /// Torque the carrier spends on the mesh, lambda_m psi_w[m, k].
+    pub torque_carrier: f64,
+    /// F_im = torque_i / r_i and F_jm = torque_j / r_j (eq. 11), when radii are known.
+    pub force: Option<[f64; 2]>,
+}
+
+/// Results of inverse dynamics.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct InverseDynamics {
+    /// Angular acceleration of every link (by link index; frame 0).
+    pub acceleration: Vec<f64>,
+    /// Applied torque on every link, known and solved (by link index; the frame's
+    /// entry is the torque the housing applies to hold it).
+    pub torque: Vec<f64>,
+    /// The solved driving torques, in request order.
+    pub driving_torques: Vec<(LinkId, f64)>,
+    /// Multipliers of the Willis rows then the extra rows.
+    pub multipliers: Vec<f64>,
+    /// Torques the extra constraints apply to the train (brake or clutch reaction: on the first link).
+    pub element_torques: Vec<f64>,
+    /// Per gear pair: multiplier, torques, tangential forces.
+    pub meshes: Vec<MeshLoad>,
+    /// Condition estimates of [Psi_w] (eq. 8) and of the force system (eq. 10).
+    pub conditions: [f64; 2],
+    /// Warnings.
+    pub warnings: Vec<String>,
+}
+
+impl Train {
+    /// The prepared plan and the dense inputs for a request: useful to reuse
+    /// the plan over many parameter sets.
+    ///
+    /// # Errors
+    /// As [`InverseDynamicsPlan::new`].
+    pub fn inverse_dynamics_plan(&self, req: &DynamicsRequest) -> Result<InverseDynamicsPlan> {
+        let accelerated: Vec<LinkId> = if req.accelerations.is_empty() {
+            req.driving.clone()
+        } else {
+            req.accelerations.iter().map(|a| a.0).collect()
+        };
+        InverseDynamicsPlan::new(self, &accelerated, &req.driving, &req.extras)
+    }
+
+    /// Solve inverse dynamics: accelerations, multipliers, driving torques,
+    /// meshing forces (where pitch radii are known), the housing and element
+    /// reactions. With no accelerations it is the static-force analysis.
+    ///
+    /// # Errors
+    /// Missing ratios or data for the mass matrix, wrong counts, singular or
+    /// ill-conditioned systems.
+    pub fn inverse_dynamics(
+        &self,
+        req: &DynamicsRequest,
+        mass: Option<&MassMatrix>,
+    ) -> Result<InverseDynamics> {
+        let ratios = self.ratios()?;
+        self.inverse_dynamics_with(req, mass, &ratios, &ratios)
+    }
+
+    /// As [`Train::inverse_dynamics`] with explicit force-row ratios (mesh losses).
+    pub(crate) fn inverse_dynamics_with(
+        &self,
+        req: &DynamicsRequest,
+        mass: Option<&MassMatrix>,
+        ratios: &[f64],
+        force_ratios: &[f64],
+    ) -> Result<InverseDynamics> {
+        let n = self.coordinates().len();
+        let mut plan = self.inverse_dynamics_plan(req)?;
+        let mut q = vec![0.0; n];
+        for &(l, t) in &req.torques {
+            if !t.is_finite() {
+                return Err(Error::spec(
+                    format!("torque on `{}`", self.link_name(l)),
+                    crate::SpecErrorKind::NonFinite { value: t },
+                ));
+            }
+            if let Some(k) = self.coordinate(l) {
+                q[k] += t;
+            }
+        }
+        let alpha: Vec<f64> = req.accelerations.iter().map(|a| a.1).collect();
+        if alpha.iter().any(|a| !a.is_finite()) {
+            return Err(AnalysisError::Other("non-finite prescribed acceleration".into()).into());
+        }
+        let mvec: Vec<f64> = match mass {
+            Some(mm) => mm.matrix.transpose().iter().copied().collect(),
+            None => vec![0.0; n * n],
+        };
+        plan.solve(ratios, force_ratios, &mvec, &q, &alpha)?;
+
+        let mut acceleration = vec![0.0; self.links().len()];
+        for (k, l) in self.coordinates().iter().enumerate() {
+            acceleration[l.index()] = plan.accelerations()[k];
+        }
+        let lambda = plan.multipliers().to_vec();
+        let td = plan.driving_torques();
+        let mut torque = vec![0.0; self.links().len()];
+        for &(l, t) in &req.torques {
+            torque[l.index()] += t;
+        }
+        let driving_torques: Vec<(LinkId, f64)> =
+            req.driving.iter().zip(td).map(|(&l, &t)| (l, t)).collect();
+        for &(l, t) in &driving_torques {
+            torque[l.index()] += t;
+        }
+        // The frame: the torque the housing applies = the frame's column of psi~^T lambda.
+        let jg = self.circuits().len();
+        let mut meshes = Vec::with_capacity(jg);
+        for (m, (c, g)) in self.circuits().iter().zip(self.gears()).enumerate() {
+            let t = force_ratios[m];
+            let lam = lambda[m];
+            let (ti, tj, tk) = (lam, -t * lam, (t - 1.0) * lam);
+            for (l, v) in [(c.gear_i, ti), (c.gear_j, tj), (c.carrier, tk)] {
+                if l == self.frame() {
+                    torque[l.index()] += v;
+                }
+            }
+            let force = g.radii.map(|[ri, rj]| [ti / ri, tj / rj]);
+            meshes.push(MeshLoad {
+                gear: GearId::from_index(m),
+                multiplier: lam,
+                torque_i: ti,
+                torque_j: tj,
+                torque_carrier: tk,
+                force,
+            });
+        }
+        let element_torques = lambda[jg..].to_vec();
+        let conditions = plan.conditions();
+        let mut warnings = Vec::new();
+        for (c, what) in conditions.iter().zip(["[Psi_w]", "the force system"]) {
+            if *c > COND_WARN {
+                warnings.push(format!("{what} is ill-conditioned (condition {c:.2e})"));
+            }
+        }
+        if let Some(mm) = mass {
+            warnings.extend(mm.notes.iter().cloned());
+        }
+        debug_assert!(
+            self.residual_of_motion(
+                mass,
+                &acceleration,
+                &torque,
+                &lambda,
+                force_ratios,
+                &req.extras
+            ) < 1e-8
+        );
+        Ok(InverseDynamics {
+            acceleration,
+            torque,
+            driving_torques,
+            multipliers: lambda,
+            element_torques,
+            meshes,
+            conditions,
+            warnings,
+        })
+    }
+
+    /// max |M w' + psi~^T lambda - Q| over the coordinates, relative (a debug check of eq. 6).
+    fn residual_of_motion(
+        &self,
+        mass: Option<&MassMatrix>,
+        acc: &[f64],
+        torque: &[f64],
+        lambda: &[f64],
+        taus: &[f64],
+        extras: &[Extra],
+    ) -> f64 {
+        let n = self.coordinates().len();
+        let w = DVector::from_iterator(n, self.coordinates().iter().map(|l| acc[l.index()]));
+        let mut r = match mass {
+            Some(m) => &m.matrix * &w,
+            None => DVector::zeros(n),
+        };
+        for (m, c) in self.circuits().iter().enumerate() {
+            let t = taus[m];
+            for (l, v) in [(c.gear_i, 1.0), (c.gear_j, -t), (c.carrier, t - 1.0)] {
+                if let Some(k) = self.coordinate(l) {
+                    r[k] += v * lambda[m];
+                }
+            }
+        }
+        for (e, x) in extras.iter().enumerate() {
+            let lam = lambda[self.circuits().len() + e];
+            let (a, b) = match *x {
+                Extra::Hold(l) => (Some(l), None),
+                Extra::Join(a, b) => (Some(a), Some(b)),
+            };
+            if let Some(k) = a.and_then(|l| self.coordinate(l)) {
+                r[k] += lam;
+            }
+            if let Some(k) = b.and_then(|l| self.coordinate(l)) {
+                r[k] -= lam;
+            }
+        }
+        let scale = torque.iter().fold(1e-300_f64, |m, v| m.max(v.abs()));
+        self.coordinates()
+            .iter()
+            .enumerate()
+            .map(|(k, l)| (r[k] - torque[l.index()]).abs())
+            .fold(0.0, f64::max)
+            / scale
+    }
+
+    /// [V] of eq. (23): the speeds of every coordinate per unit speed of each
+    /// input (columns), from the Willis equations and any extra constraints.
+    ///
+    /// # Errors
+    /// As the kinematic solve: wrong count, free links, ill-conditioning.
+    pub fn velocity_matrix(&self, inputs: &[LinkId], extras: &[Extra]) -> Result<DMatrix<f64>> {
+        let n = self.coordinates().len();
+        let ratios = self.ratios()?;
+        let plan = InverseDynamicsPlan::new(self, inputs, inputs, extras)?;
+        let c = plan.constraints();
+        let mut lu = Lu::new(n);
+        {
+            let a = lu.matrix_mut();
+            plan.rows.fill(&ratios, a, n);
+            for (r, &k) in plan.accel.iter().enumerate() {
+                a[(c + r) * n + k] = 1.0;
+            }
+        }
+        lu.factor().map_err(|_| {
+            singular(
+                "[Gamma_w] (eq. 23)",
+                "the chosen inputs do not determine the train",
+            )
+        })?;
+        refuse(lu.condition(), "[Gamma_w] (eq. 23)")?;
+        let mut v = DMatrix::zeros(n, inputs.len());
+        let mut b = vec![0.0; n];
+        for col in 0..inputs.len() {
+            b.iter_mut().for_each(|x| *x = 0.0);
+            b[c + col] = 1.0;
+            lu.solve(&mut b);
+            for r in 0..n {
+                v[(r, col)] = b[r];
+            }
+        }
+        Ok(v)
+    }
+
+    /// The reduced mass matrix V^T M V (eq. 25) for the given independent inputs;
+    /// for one DOF, the equivalent inertia reduced to that link.
+    ///
+    /// # Errors
+    /// As [`Train::velocity_matrix`] and [`Train::mass_matrix`].
+    pub fn reduced_mass_matrix(&self, inputs: &[LinkId], extras: &[Extra]) -> Result<DMatrix<f64>> {
+        let v = self.velocity_matrix(inputs, extras)?;
+        let m = self.mass_matrix()?;
+        Ok(v.transpose() * &m.matrix * v)
+    }
+
+    /// Equivalent inertia of a 1-DOF train reduced to `link`: 2K / w_link^2.
+    ///
+    /// # Errors
+    /// When the train does not have one DOF, or as [`Train::reduced_mass_matrix`].
+    pub fn equivalent_inertia(&self, link: LinkId) -> Result<f64> {
+        if self.dof() != 1 {
+            return Err(AnalysisError::WrongInputCount {
+                dof: self.dof(),
+                given: 1,
+                what: "links to reduce to (use the reduced mass matrix for several DOF)".into(),
+            }
+            .into());
+        }
+        Ok(self.reduced_mass_matrix(&[link], &[])?[(0, 0)])
+    }
+}

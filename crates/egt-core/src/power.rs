@@ -1,0 +1,362 @@
+//! Power flow through every mesh, circulating power, and the torque balance
+//! with mesh losses.
+//!
+//! Link s spends the torque lambda_m psi~[m, s] on mesh m (eq. 7), so the power
+//! it sends into the mesh is lambda_m psi~[m, s] w_s. For an ideal mesh the
+//! three members' powers sum to lambda_m psi_m(w) = 0. A lossy mesh of basic
+//! efficiency eta loses (1 - eta) of the rolling power, the power in the
+//! carrier's frame, in the direction it actually flows. That is modelled by
+//! the force row psi~_m = (1, -tau', tau' - 1) with tau' = eta tau when gear i
+//! drives in the carrier frame and tau' = tau / eta when gear j drives; the
+//! mesh then dissipates lambda_m (tau - tau') (w_j - w_k) >= 0. The drive
+//! direction depends on the solution, so it is found by iteration, falling back
+//! to enumeration; when no assignment is consistent the train self-locks.
+
+use serde::Serialize;
+
+use crate::dynamics::{DynamicsRequest, InverseDynamics};
+use crate::error::{AnalysisError, Result};
+use crate::kinematics::{SpeedInput, Speeds};
+use crate::mass::MassMatrix;
+use crate::train::{GearId, LinkId, Train};
+
+/// Relative size under which a rolling speed or power counts as zero.
+const ZERO_REL: f64 = 1e-12;
+/// Largest number of rolling meshes whose directions are enumerated when iteration fails.
+const MAX_ENUMERATED_MESHES: usize = 16;
+
+/// Which gear drives a mesh in the carrier's frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Driver {
+    /// Gear i gives the rolling power.
+    GearI,
+    /// Gear j gives the rolling power.
+    GearJ,
+    /// No rolling power (no relative motion or no load).
+    None,
+}
+
+/// Power in one mesh.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MeshPower {
+    /// The gear pair.
+    pub gear: GearId,
+    /// Power sent into the mesh by gear i, gear j and the carrier (absolute frame).
+    pub absolute: [f64; 3],
+    /// Rolling power: the power the driving gear sends in the carrier's frame.
+    pub rolling: f64,
+    /// Which gear drives in the carrier's frame.
+    pub driver: Driver,
+    /// Basic efficiency used.
+    pub efficiency: f64,
+    /// Power lost in the mesh.
+    pub loss: f64,
+}
+
+/// Power of one link.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LinkPower {
+    /// The link.
+    pub link: LinkId,
+    /// Power received from its external torque, Q_l w_l.
+    pub external: f64,
+    /// Power stored in its inertia, w_l (M w')_l.
+    pub inertial: f64,
+}
+
+/// A power flow.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PowerFlow {
+    /// Speeds of all links.
+    pub speeds: Speeds,
+    /// The torque solution (with losses, if asked).
+    pub dynamics: InverseDynamics,
+    /// Per mesh.
+    pub meshes: Vec<MeshPower>,
+    /// Per link.
+    pub links: Vec<LinkPower>,
+    /// Sum of positive external powers.
+    pub input_power: f64,
+    /// Minus the sum of negative external powers.
+    pub output_power: f64,
+    /// Sum of mesh losses.
+    pub loss: f64,
+    /// dK/dt = w^T M w'.
+    pub kinetic_rate: f64,
+    /// output / input, when there is input power.
+    pub efficiency: Option<f64>,
+    /// Largest branch power (a shaft's exchange with one planetary unit or one
+    /// fixed-axis mesh) over the input power.
+    pub circulation_ratio: f64,
+    /// The meshes and shafts carrying more than the input power, when power circulates.
+    pub circulating: Option<(Vec<GearId>, Vec<LinkId>)>,
+    /// Direction iterations used (0 for ideal meshes).
+    pub iterations: usize,
+    /// Notes.
+    pub notes: Vec<String>,
+}
+
+/// What a power-flow analysis asks.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct PowerRequest {
+    /// Input speeds (one per DOF).
+    pub speeds: Vec<SpeedInput>,
+    /// Loads, accelerations, driving links.
+    pub dynamics: DynamicsRequest,
+    /// Apply the gear pairs' basic efficiencies.
+    pub losses: bool,
+}
+
+impl Train {
+    /// Power flow at an operating point, ideal or with mesh losses.
+    ///
+    /// # Errors
+    /// As kinematics and inverse dynamics; [`AnalysisError::Other`] when no
+    /// consistent direction of power flow exists (self-locking).
+    pub fn power_flow(&self, req: &PowerRequest, mass: Option<&MassMatrix>) -> Result<PowerFlow> {
+        let speeds = self.kinematics(&req.speeds)?;
+        let w = &speeds.speed;
+        let taus = self.ratios()?;
+        let etas: Vec<f64> = self
+            .gears()
+            .iter()
+            .map(|g| if req.losses { g.efficiency } else { 1.0 })
+            .collect();
+        let wscale = w.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let rolling: Vec<f64> = self
+            .circuits()
+            .iter()
+            .map(|c| w[c.gear_j.index()] - w[c.carrier.index()])
+            .collect();
+        let rolls: Vec<bool> = rolling
+            .iter()
+            .map(|r| r.abs() > ZERO_REL * wscale)
+            .collect();
+        let lossy: Vec<usize> = (0..taus.len())
+            .filter(|&m| rolls[m] && etas[m] < 1.0)
+            .collect();
+
+        let force_ratios = |dirs: &[Driver]| -> Vec<f64> {
+            taus.iter()
+                .zip(&etas)
+                .zip(dirs)
+                .map(|((&t, &e), d)| match d {
+                    Driver::GearI => t * e,
+                    Driver::GearJ => t / e,
+                    Driver::None => t,
+                })
+                .collect()
+        };
+        // The driver implied by a solution: gear i drives when lambda tau (w_j - w_k) > 0.
+        let implied = |dynamics: &InverseDynamics, m: usize| -> Driver {
+            let x = dynamics.multipliers[m] * taus[m] * rolling[m];
+            let scale = dynamics.multipliers[m].abs() * taus[m].abs() * wscale;
+            if !rolls[m] || x.abs() <= ZERO_REL * scale.max(f64::MIN_POSITIVE) {
+                Driver::None
+            } else if x > 0.0 {
+                Driver::GearI
+            } else {
+                Driver::GearJ
+            }
+        };
+
+        let mut dirs = vec![Driver::None; taus.len()];
+        let mut dynamics = self.inverse_dynamics_with(&req.dynamics, mass, &taus, &taus)?;
+        let mut iterations = 0;
+        let mut notes = Vec::new();
+        if !lossy.is_empty() {
+            let mut converged = false;
+            for _ in 0..(2 * lossy.len() + 4) {
+                iterations += 1;
+                let next: Vec<Driver> = (0..taus.len()).map(|m| implied(&dynamics, m)).collect();
+                if next == dirs && iterations > 1 {
+                    converged = true;
+                    break;
+                }
+                dirs = next;
+                dynamics =
+                    self.inverse_dynamics_with(&req.dynamics, mass, &taus, &force_ratios(&dirs))?;
+            }
+            if !converged {
+                let k = lossy.len();
+                if k > MAX_ENUMERATED_MESHES {
+                    return Err(AnalysisError::Other(format!("power-flow directions did not settle and {k} lossy meshes are too many to enumerate")).into());
+                }
+                let mut found = None;
+                for bits in 0..(1u32 << k) {
+                    let mut trial = vec![Driver::None; taus.len()];
+                    for (b, &m) in lossy.iter().enumerate() {
+                        trial[m] = if bits >> b & 1 == 1 {
+                            Driver::GearJ
+                        } else {
+                            Driver::GearI
+                        };
+                    }
+                    let Ok(d) = self.inverse_dynamics_with(
+                        &req.dynamics,
+                        mass,
+                        &taus,
+                        &force_ratios(&trial),
+                    ) else {
+                        continue;
+                    };
+                    if lossy
+                        .iter()
+                        .all(|&m| implied(&d, m) == trial[m] || implied(&d, m) == Driver::None)
+                    {
+                        found = Some((trial, d));
+                        break;
+                    }
+                }
+                let (d0, d1) = found.ok_or_else(|| {
+                    AnalysisError::Other(
+                        "no consistent direction of power flow exists through the lossy meshes: the train self-locks under these loads (or the driving torque cannot overcome friction)".into(),
+                    )
+                })?;
+                notes.push("power-flow directions found by enumeration".into());
+                dirs = d0;
+                dynamics = d1;
+            }
+        }
+        let tp = force_ratios(&dirs);
+
+        let mut meshes = Vec::with_capacity(taus.len());
+        for (m, c) in self.circuits().iter().enumerate() {
+            let lam = dynamics.multipliers[m];
+            let absolute = [
+                lam * w[c.gear_i.index()],
+                -tp[m] * lam * w[c.gear_j.index()],
+                (tp[m] - 1.0) * lam * w[c.carrier.index()],
+            ];
+            let driver = if dirs[m] != Driver::None {
+                dirs[m]
+            } else {
+                implied(&dynamics, m)
+            };
+            let p_i = lam * taus[m] * rolling[m];
+            meshes.push(MeshPower {
+                gear: GearId::from_index(m),
+                absolute,
+                rolling: p_i.abs(),
+                driver,
+                efficiency: etas[m],
+                loss: lam * (taus[m] - tp[m]) * rolling[m],
+            });
+        }
+
+        let mw: Vec<f64> = match mass {
+            Some(mm) => {
+                let wd = nalgebra::DVector::from_iterator(
+                    self.coordinates().len(),
+                    self.coordinates()
+                        .iter()
+                        .map(|l| dynamics.acceleration[l.index()]),
+                );
+                (&mm.matrix * wd).iter().copied().collect()
+            }
+            None => vec![0.0; self.coordinates().len()],
+        };
+        let mut links = Vec::new();
+        let (mut input_power, mut output_power, mut kinetic_rate) = (0.0, 0.0, 0.0);
+        for (k, &l) in self.coordinates().iter().enumerate() {
+            let external = dynamics.torque[l.index()] * w[l.index()];
+            let inertial = mw[k] * w[l.index()];
+            kinetic_rate += inertial;
+            if external > 0.0 {
+                input_power += external;
+            } else {
+                output_power -= external;
+            }
+            links.push(LinkPower {
+                link: l,
+                external,
+                inertial,
+            });
+        }
+        let loss: f64 = meshes.iter().map(|m| m.loss).sum();
+        let efficiency = (input_power > 0.0).then(|| output_power / input_power);
+
+        // Branch powers: what each shaft (a link turning about a frame axis)
+        // exchanges with each planetary unit (all meshes sharing a moving
+        // carrier) or with each fixed-axis mesh (carrier = frame).
+        let shaft = |l: LinkId| {
+            self.tree()
+                .parent(l)
+                .is_some_and(|(p, _)| p == self.frame())
+        };
+        let mut units: Vec<Vec<usize>> = Vec::new();
+        for (m, c) in self.circuits().iter().enumerate() {
+            let same = (c.carrier != self.frame())
+                .then(|| {
+                    units
+                        .iter_mut()
+                        .find(|u| self.circuits()[u[0]].carrier == c.carrier)
+                })
+                .flatten();
+            match same {
+                Some(u) => u.push(m),
+                None => units.push(vec![m]),
+            }
+        }
+        let mut circ_ratio: f64 = 0.0;
+        let (mut hot_meshes, mut hot_links) = (Vec::new(), Vec::new());
+        let threshold = input_power * (1.0 + 1e-9);
+        for unit in &units {
+            let mut members: Vec<LinkId> = Vec::new();
+            for &m in unit {
+                let c = &self.circuits()[m];
+                for l in [c.gear_i, c.gear_j, c.carrier] {
+                    if shaft(l) && !members.contains(&l) {
+                        members.push(l);
+                    }
+                }
+            }
+            for &l in &members {
+                let p: f64 = unit
+                    .iter()
+                    .map(|&m| {
+                        let c = &self.circuits()[m];
+                        [c.gear_i, c.gear_j, c.carrier]
+                            .iter()
+                            .zip(meshes[m].absolute)
+                            .filter(|(x, _)| **x == l)
+                            .map(|(_, p)| p)
+                            .sum::<f64>()
+                    })
+                    .sum::<f64>()
+                    .abs();
+                if input_power > 0.0 {
+                    circ_ratio = circ_ratio.max(p / input_power);
+                    if p > threshold {
+                        hot_meshes.extend(
+                            unit.iter()
+                                .map(|&m| GearId::from_index(m))
+                                .filter(|g| !hot_meshes.contains(g))
+                                .collect::<Vec<_>>(),
+                        );
+                        if !hot_links.contains(&l) {
+                            hot_links.push(l);
+                        }
+                    }
+                }
+            }
+        }
+        let circulating = (!hot_meshes.is_empty()).then_some((hot_meshes, hot_links));
+        Ok(PowerFlow {
+            speeds,
+            dynamics,
+            meshes,
+            links,
+            input_power,
+            output_power,
+            loss,
+            kinetic_rate,
+            efficiency,
+            circulation_ratio: circ_ratio,
+            circulating,
+            iterations,
+            notes,
+        })
+    }
+}
