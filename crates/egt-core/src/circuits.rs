@@ -8,8 +8,8 @@
 use serde::Serialize;
 
 use crate::error::TopologyError;
-use crate::train::{GearId, GearPair, LevelId, Link, LinkId, Revolute};
 use crate::topology::Tree;
+use crate::train::{GearId, GearPair, LevelId, Link, LinkId, Revolute};
 
 /// One row of the fundamental-circuit table (Table 1).
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
@@ -44,7 +44,8 @@ pub(crate) fn fundamental_circuits(
         .map(|(m, g)| {
             // Steps 2-4: the circuit's tree edges, from gear i to gear j.
             let (path, edges) = tree.path(g.gear_i, g.gear_j);
-            let edge_levels: Vec<LevelId> = edges.iter().map(|e| revolutes[e.index()].level).collect();
+            let edge_levels: Vec<LevelId> =
+                edges.iter().map(|e| revolutes[e.index()].level).collect();
             // Step 5: split by level.
             let mut distinct: Vec<LevelId> = Vec::new();
             for l in &edge_levels {
@@ -55,7 +56,10 @@ pub(crate) fn fundamental_circuits(
             if distinct.len() != 2 {
                 return Err(TopologyError::NoTransferVertex {
                     pair: g.name.clone(),
-                    levels: edge_levels.iter().map(|l| levels[l.index()].clone()).collect(),
+                    levels: edge_levels
+                        .iter()
+                        .map(|l| levels[l.index()].clone())
+                        .collect(),
                 });
             }
             // Step 6: the vertices touched by level-a edges intersected with those of level-b edges.
@@ -86,7 +90,10 @@ pub(crate) fn fundamental_circuits(
                 }),
                 _ => Err(TopologyError::AmbiguousTransferVertex {
                     pair: g.name.clone(),
-                    candidates: common.iter().map(|l| links[l.index()].name.clone()).collect(),
+                    candidates: common
+                        .iter()
+                        .map(|l| links[l.index()].name.clone())
+                        .collect(),
                 }),
             }
         })

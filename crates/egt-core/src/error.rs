@@ -32,12 +32,20 @@ pub enum Error {
 impl Error {
     /// A spec error at `path`.
     pub fn spec(path: impl Into<String>, kind: SpecErrorKind) -> Self {
-        Error::Spec { path: path.into(), kind }
+        Error::Spec {
+            path: path.into(),
+            kind,
+        }
     }
 
     /// An `Invalid` spec error at `path` with a message.
     pub fn invalid(path: impl Into<String>, message: impl Into<String>) -> Self {
-        Error::spec(path, SpecErrorKind::Invalid { message: message.into() })
+        Error::spec(
+            path,
+            SpecErrorKind::Invalid {
+                message: message.into(),
+            },
+        )
     }
 }
 
@@ -180,7 +188,10 @@ pub enum TopologyError {
         levels: Vec<String>,
     },
     /// The fundamental circuit of a gear pair has several candidate transfer vertices.
-    #[error("gear pair {pair}: its fundamental circuit has several transfer vertices {}", list(candidates))]
+    #[error(
+        "gear pair {pair}: its fundamental circuit has several transfer vertices {}",
+        list(candidates)
+    )]
     AmbiguousTransferVertex {
         /// The gear pair.
         pair: String,
@@ -197,7 +208,10 @@ pub enum TopologyError {
         dof: i64,
     },
     /// A locked sub-chain: links that cannot turn relative to each other for any ratios (eq. 1).
-    #[error("locked sub-chain: links {} cannot turn relative to each other (eq. 1)", list(links))]
+    #[error(
+        "locked sub-chain: links {} cannot turn relative to each other (eq. 1)",
+        list(links)
+    )]
     Locked {
         /// Links of the locked sub-chain.
         links: Vec<String>,
@@ -223,7 +237,10 @@ pub enum TopologyError {
         parts: Vec<Vec<String>>,
     },
     /// Links that turn freely: their turning pairs lie on no fundamental circuit.
-    #[error("links {} turn freely: they are on no fundamental circuit (fractionated mobility)", list(links))]
+    #[error(
+        "links {} turn freely: they are on no fundamental circuit (fractionated mobility)",
+        list(links)
+    )]
     FreeLinks {
         /// The free links.
         links: Vec<String>,
@@ -251,13 +268,19 @@ pub enum AnalysisError {
         link: String,
     },
     /// The chosen inputs leave links undetermined.
-    #[error("the inputs do not determine the train: links {} are left free", list(free))]
+    #[error(
+        "the inputs do not determine the train: links {} are left free",
+        list(free)
+    )]
     Underdetermined {
         /// Links whose speed is not fixed by the inputs.
         free: Vec<String>,
     },
     /// The chosen inputs over-determine the train inconsistently.
-    #[error("the inputs conflict: the equations of {} cannot all hold", list(conflicting))]
+    #[error(
+        "the inputs conflict: the equations of {} cannot all hold",
+        list(conflicting)
+    )]
     Inconsistent {
         /// The conflicting equations (gear pairs / inputs).
         conflicting: Vec<String>,
@@ -271,7 +294,9 @@ pub enum AnalysisError {
         detail: String,
     },
     /// A system is too ill-conditioned for a trustworthy answer.
-    #[error("{what} is ill-conditioned (condition number {condition:.3e} > {threshold:.0e}); the result would not be trustworthy")]
+    #[error(
+        "{what} is ill-conditioned (condition number {condition:.3e} > {threshold:.0e}); the result would not be trustworthy"
+    )]
     IllConditioned {
         /// The system.
         what: String,
@@ -318,7 +343,9 @@ fn edit_distance(a: &str, b: &str) -> usize {
     for (i, ca) in a.chars().enumerate() {
         let mut cur = vec![i + 1; b.len() + 1];
         for (j, cb) in b.iter().enumerate() {
-            cur[j + 1] = (prev[j] + usize::from(ca != *cb)).min(prev[j + 1] + 1).min(cur[j] + 1);
+            cur[j + 1] = (prev[j] + usize::from(ca != *cb))
+                .min(prev[j + 1] + 1)
+                .min(cur[j] + 1);
         }
         prev = cur;
     }
@@ -331,7 +358,10 @@ mod tests {
 
     #[test]
     fn suggests_close_names_only() {
-        assert_eq!(suggest("sunn", ["sun", "ring", "carrier"]), Some("sun".into()));
+        assert_eq!(
+            suggest("sunn", ["sun", "ring", "carrier"]),
+            Some("sun".into())
+        );
         assert_eq!(suggest("xyzzy", ["sun", "ring"]), None);
     }
 }

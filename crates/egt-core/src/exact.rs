@@ -74,7 +74,11 @@ pub fn parse_rational(s: &str) -> Option<Q> {
 
 /// Display as `p/q` (or `p` when the denominator is 1).
 pub fn display(x: &Q) -> String {
-    if x.denom().is_one() { x.numer().to_string() } else { format!("{}/{}", x.numer(), x.denom()) }
+    if x.denom().is_one() {
+        x.numer().to_string()
+    } else {
+        format!("{}/{}", x.numer(), x.denom())
+    }
 }
 
 /// Reduce `m` to reduced row-echelon form in place; return the pivot columns.
@@ -87,7 +91,9 @@ pub fn rref(m: &mut QMatrix) -> Vec<usize> {
         if r == rows {
             break;
         }
-        let Some(p) = (r..rows).find(|&i| !m[i][c].is_zero()) else { continue };
+        let Some(p) = (r..rows).find(|&i| !m[i][c].is_zero()) else {
+            continue;
+        };
         m.swap(r, p);
         let inv = m[r][c].recip();
         for x in m[r].iter_mut() {
@@ -154,8 +160,11 @@ pub struct SolveFailure {
 /// The free columns (null space support) and the rows of any inconsistent dependency.
 pub fn solve(a: &QMatrix, b: &[Q]) -> Result<Vec<Q>, SolveFailure> {
     let cols = a.first().map_or(0, Vec::len);
-    let mut aug: QMatrix =
-        a.iter().zip(b).map(|(row, bi)| row.iter().cloned().chain([bi.clone()]).collect()).collect();
+    let mut aug: QMatrix = a
+        .iter()
+        .zip(b)
+        .map(|(row, bi)| row.iter().cloned().chain([bi.clone()]).collect())
+        .collect();
     let pivots = rref(&mut aug);
     let inconsistent = pivots.contains(&cols);
     let rank_a = pivots.iter().filter(|&&c| c < cols).count();
@@ -167,14 +176,23 @@ pub fn solve(a: &QMatrix, b: &[Q]) -> Result<Vec<Q>, SolveFailure> {
         return Ok(x);
     }
     let free_columns = support(&nullspace(a, cols));
-    let conflicting_rows = if inconsistent { conflicting_rows(a, b) } else { Vec::new() };
-    Err(SolveFailure { free_columns, conflicting_rows })
+    let conflicting_rows = if inconsistent {
+        conflicting_rows(a, b)
+    } else {
+        Vec::new()
+    };
+    Err(SolveFailure {
+        free_columns,
+        conflicting_rows,
+    })
 }
 
 /// Indices with a non-zero entry in some vector of `basis`.
 pub fn support(basis: &[Vec<Q>]) -> Vec<usize> {
     let n = basis.first().map_or(0, Vec::len);
-    (0..n).filter(|&i| basis.iter().any(|v| !v[i].is_zero())).collect()
+    (0..n)
+        .filter(|&i| basis.iter().any(|v| !v[i].is_zero()))
+        .collect()
 }
 
 /// Rows involved in an inconsistency: those with a non-zero weight in a left
@@ -182,7 +200,9 @@ pub fn support(basis: &[Vec<Q>]) -> Vec<usize> {
 fn conflicting_rows(a: &QMatrix, b: &[Q]) -> Vec<usize> {
     let rows = a.len();
     let cols = a.first().map_or(0, Vec::len);
-    let at: QMatrix = (0..cols).map(|c| (0..rows).map(|r| a[r][c].clone()).collect()).collect();
+    let at: QMatrix = (0..cols)
+        .map(|c| (0..rows).map(|r| a[r][c].clone()).collect())
+        .collect();
     let left = nullspace(&at, rows);
     let mut out = Vec::new();
     for y in &left {

@@ -46,7 +46,13 @@ impl Draft {
     fn declare(&mut self, name: &str) {
         self.links
             .entry(name.to_string())
-            .or_insert_with(|| DraftLink { data: LinkSpec { name: name.to_string(), ..Default::default() }, sized: true });
+            .or_insert_with(|| DraftLink {
+                data: LinkSpec {
+                    name: name.to_string(),
+                    ..Default::default()
+                },
+                sized: true,
+            });
     }
 
     /// Check that `name` is declared; `path` is where it was written.
@@ -69,25 +75,49 @@ impl Draft {
 pub(crate) fn expand(spec: &Spec) -> Result<Draft> {
     let mut d = Draft::default();
     if spec.frame.trim().is_empty() {
-        return Err(Error::spec("frame", SpecErrorKind::Missing { what: "frame link name".into() }));
+        return Err(Error::spec(
+            "frame",
+            SpecErrorKind::Missing {
+                what: "frame link name".into(),
+            },
+        ));
     }
     d.declare(&spec.frame);
 
     for (n, l) in spec.links.iter().enumerate() {
         let path = format!("links[{n}]");
         if l.name.trim().is_empty() {
-            return Err(Error::spec(format!("{path}.name"), SpecErrorKind::Missing { what: "link name".into() }));
+            return Err(Error::spec(
+                format!("{path}.name"),
+                SpecErrorKind::Missing {
+                    what: "link name".into(),
+                },
+            ));
         }
         if l.name == spec.frame {
             if l.inertia.is_some() || l.mass.is_some() || l.copies.is_some() {
-                return Err(Error::invalid(path, "the frame carries no inertia, mass or copies"));
+                return Err(Error::invalid(
+                    path,
+                    "the frame carries no inertia, mass or copies",
+                ));
             }
             continue;
         }
         if d.links.contains_key(&l.name) {
-            return Err(Error::spec(format!("{path}.name"), SpecErrorKind::DuplicateLink { name: l.name.clone() }));
+            return Err(Error::spec(
+                format!("{path}.name"),
+                SpecErrorKind::DuplicateLink {
+                    name: l.name.clone(),
+                },
+            ));
         }
-        d.links.insert(l.name.clone(), DraftLink { data: l.clone(), sized: true });
+        d.links.insert(
+            l.name.clone(),
+            DraftLink {
+                data: l.clone(),
+                sized: true,
+            },
+        );
     }
 
     for (n, set) in spec.planetary.iter().enumerate() {
@@ -104,9 +134,18 @@ pub(crate) fn expand(spec: &Spec) -> Result<Draft> {
             d.require(name, &format!("{path}.links[{s}]"))?;
         }
         if r.level.trim().is_empty() {
-            return Err(Error::spec(format!("{path}.level"), SpecErrorKind::Missing { what: "axis level".into() }));
+            return Err(Error::spec(
+                format!("{path}.level"),
+                SpecErrorKind::Missing {
+                    what: "axis level".into(),
+                },
+            ));
         }
-        d.revolutes.push(DraftRevolute { links: r.links.clone(), level: r.level.clone(), path });
+        d.revolutes.push(DraftRevolute {
+            links: r.links.clone(),
+            level: r.level.clone(),
+            path,
+        });
     }
 
     for (n, g) in spec.gears.iter().enumerate() {
@@ -115,7 +154,11 @@ pub(crate) fn expand(spec: &Spec) -> Result<Draft> {
             d.require(name, &format!("{path}.links[{s}]"))?;
         }
         let name = g.name.clone().unwrap_or_default();
-        d.gears.push(DraftGear { name, spec: g.clone(), path });
+        d.gears.push(DraftGear {
+            name,
+            spec: g.clone(),
+            path,
+        });
     }
 
     // Default gear names G1, G2, ... in final order, where none was given.
@@ -131,13 +174,33 @@ fn expand_planetary(d: &mut Draft, set: &PlanetarySpec, frame: &str, path: &str)
     let t = &set.teeth;
     let axis = set.axis.clone().unwrap_or_else(|| "a".to_string());
     let need = |v: Option<i64>, field: &str| -> Result<i64> {
-        v.ok_or_else(|| Error::spec(format!("{path}.teeth.{field}"), SpecErrorKind::Missing { what: format!("tooth count `{field}` ({:?} set)", set.kind) }))
+        v.ok_or_else(|| {
+            Error::spec(
+                format!("{path}.teeth.{field}"),
+                SpecErrorKind::Missing {
+                    what: format!("tooth count `{field}` ({:?} set)", set.kind),
+                },
+            )
+        })
     };
     let need_link = |v: &Option<String>, field: &str| -> Result<String> {
-        v.clone().ok_or_else(|| Error::spec(format!("{path}.{field}"), SpecErrorKind::Missing { what: format!("link `{field}` ({:?} set)", set.kind) }))
+        v.clone().ok_or_else(|| {
+            Error::spec(
+                format!("{path}.{field}"),
+                SpecErrorKind::Missing {
+                    what: format!("link `{field}` ({:?} set)", set.kind),
+                },
+            )
+        })
     };
-    let planet = set.planet.clone().unwrap_or_else(|| format!("{}.planet", set.name));
-    let planet2 = set.planet2.clone().unwrap_or_else(|| format!("{}.planet2", set.name));
+    let planet = set
+        .planet
+        .clone()
+        .unwrap_or_else(|| format!("{}.planet", set.name));
+    let planet2 = set
+        .planet2
+        .clone()
+        .unwrap_or_else(|| format!("{}.planet2", set.name));
 
     // Central members on the main axis, planets on the carrier.
     let mut central = vec![set.sun.clone(), set.carrier.clone()];
@@ -149,12 +212,21 @@ fn expand_planetary(d: &mut Draft, set: &PlanetarySpec, frame: &str, path: &str)
     }
     for c in &central {
         d.declare(c);
-        mount(d, frame, c, &axis, &format!("{path} (central member `{c}`)"))?;
+        mount(
+            d,
+            frame,
+            c,
+            &axis,
+            &format!("{path} (central member `{c}`)"),
+        )?;
     }
 
     let add_planet = |d: &mut Draft, name: &str, teeth: Option<i64>| -> Result<()> {
         if d.links.contains_key(name) && !d.links[name].sized {
-            return Err(Error::invalid(path, format!("planet `{name}` is already used by another set")));
+            return Err(Error::invalid(
+                path,
+                format!("planet `{name}` is already used by another set"),
+            ));
         }
         d.declare(name);
         if teeth.is_none() {
@@ -170,24 +242,40 @@ fn expand_planetary(d: &mut Draft, set: &PlanetarySpec, frame: &str, path: &str)
         Ok(())
     };
 
-    let mesh = |a: &str, za: Option<i64>, b: &str, zb: Option<i64>, kind: MeshKind, tag: &str| DraftGear {
-        name: format!("{}/{tag}", set.name),
-        spec: GearSpec {
-            name: None,
-            links: [a.to_string(), b.to_string()],
-            // An unsized planet gets one virtual tooth: the product of ratios round the
-            // set, and so every central speed, does not depend on it.
-            teeth: Some([za.unwrap_or(1), zb.unwrap_or(1)]),
-            mesh: Some(kind),
-            ratio: None,
-            module: if za.is_some() && zb.is_some() { set.module } else { None },
-            radii: None,
-            efficiency: set.efficiency,
-        },
-        path: format!("{path} ({tag} mesh)"),
-    };
-    if set.module.is_some() && (t.planet.is_none() || (matches!(set.kind, PlanetaryKind::DoublePinion | PlanetaryKind::Ravigneaux) && t.planet2.is_none())) {
-        return Err(Error::spec(format!("{path}.teeth.planet"), SpecErrorKind::Missing { what: "planet tooth count (needed with `module` for radii and offsets)".into() }));
+    let mesh =
+        |a: &str, za: Option<i64>, b: &str, zb: Option<i64>, kind: MeshKind, tag: &str| DraftGear {
+            name: format!("{}/{tag}", set.name),
+            spec: GearSpec {
+                name: None,
+                links: [a.to_string(), b.to_string()],
+                // An unsized planet gets one virtual tooth: the product of ratios round the
+                // set, and so every central speed, does not depend on it.
+                teeth: Some([za.unwrap_or(1), zb.unwrap_or(1)]),
+                mesh: Some(kind),
+                ratio: None,
+                module: if za.is_some() && zb.is_some() {
+                    set.module
+                } else {
+                    None
+                },
+                radii: None,
+                efficiency: set.efficiency,
+            },
+            path: format!("{path} ({tag} mesh)"),
+        };
+    if set.module.is_some()
+        && (t.planet.is_none()
+            || (matches!(
+                set.kind,
+                PlanetaryKind::DoublePinion | PlanetaryKind::Ravigneaux
+            ) && t.planet2.is_none()))
+    {
+        return Err(Error::spec(
+            format!("{path}.teeth.planet"),
+            SpecErrorKind::Missing {
+                what: "planet tooth count (needed with `module` for radii and offsets)".into(),
+            },
+        ));
     }
 
     let zs = Some(need(t.sun, "sun")?);
@@ -196,17 +284,52 @@ fn expand_planetary(d: &mut Draft, set: &PlanetarySpec, frame: &str, path: &str)
             let ring = need_link(&set.ring, "ring")?;
             let zr = Some(need(t.ring, "ring")?);
             add_planet(d, &planet, t.planet)?;
-            d.gears.push(mesh(&set.sun, zs, &planet, t.planet, MeshKind::External, "sun-planet"));
-            d.gears.push(mesh(&planet, t.planet, &ring, zr, MeshKind::Internal, "planet-ring"));
+            d.gears.push(mesh(
+                &set.sun,
+                zs,
+                &planet,
+                t.planet,
+                MeshKind::External,
+                "sun-planet",
+            ));
+            d.gears.push(mesh(
+                &planet,
+                t.planet,
+                &ring,
+                zr,
+                MeshKind::Internal,
+                "planet-ring",
+            ));
         }
         PlanetaryKind::DoublePinion => {
             let ring = need_link(&set.ring, "ring")?;
             let zr = Some(need(t.ring, "ring")?);
             add_planet(d, &planet, t.planet)?;
             add_planet(d, &planet2, t.planet2)?;
-            d.gears.push(mesh(&set.sun, zs, &planet, t.planet, MeshKind::External, "sun-planet"));
-            d.gears.push(mesh(&planet, t.planet, &planet2, t.planet2, MeshKind::External, "planet-planet2"));
-            d.gears.push(mesh(&planet2, t.planet2, &ring, zr, MeshKind::Internal, "planet2-ring"));
+            d.gears.push(mesh(
+                &set.sun,
+                zs,
+                &planet,
+                t.planet,
+                MeshKind::External,
+                "sun-planet",
+            ));
+            d.gears.push(mesh(
+                &planet,
+                t.planet,
+                &planet2,
+                t.planet2,
+                MeshKind::External,
+                "planet-planet2",
+            ));
+            d.gears.push(mesh(
+                &planet2,
+                t.planet2,
+                &ring,
+                zr,
+                MeshKind::Internal,
+                "planet2-ring",
+            ));
         }
         PlanetaryKind::Stepped => {
             let zp = Some(need(t.planet, "planet")?);
@@ -215,17 +338,43 @@ fn expand_planetary(d: &mut Draft, set: &PlanetarySpec, frame: &str, path: &str)
             if let Some(l) = d.links.get_mut(&planet) {
                 l.data.wheels.get_or_insert(2);
             }
-            d.gears.push(mesh(&set.sun, zs, &planet, zp, MeshKind::External, "sun-planet"));
+            d.gears.push(mesh(
+                &set.sun,
+                zs,
+                &planet,
+                zp,
+                MeshKind::External,
+                "sun-planet",
+            ));
             match (&set.ring, &set.sun2) {
                 (Some(ring), None) => {
                     let zr = Some(need(t.ring, "ring")?);
-                    d.gears.push(mesh(&planet, zp2, ring, zr, MeshKind::Internal, "planet2-ring"));
+                    d.gears.push(mesh(
+                        &planet,
+                        zp2,
+                        ring,
+                        zr,
+                        MeshKind::Internal,
+                        "planet2-ring",
+                    ));
                 }
                 (None, Some(sun2)) => {
                     let z2 = Some(need(t.sun2, "sun2")?);
-                    d.gears.push(mesh(sun2, z2, &planet, zp2, MeshKind::External, "sun2-planet2"));
+                    d.gears.push(mesh(
+                        sun2,
+                        z2,
+                        &planet,
+                        zp2,
+                        MeshKind::External,
+                        "sun2-planet2",
+                    ));
                 }
-                _ => return Err(Error::invalid(path, "a stepped set needs exactly one of `ring` and `sun2`")),
+                _ => {
+                    return Err(Error::invalid(
+                        path,
+                        "a stepped set needs exactly one of `ring` and `sun2`",
+                    ));
+                }
             }
         }
         PlanetaryKind::Ravigneaux => {
@@ -235,10 +384,38 @@ fn expand_planetary(d: &mut Draft, set: &PlanetarySpec, frame: &str, path: &str)
             let z2 = Some(need(t.sun2, "sun2")?);
             add_planet(d, &planet, t.planet)?;
             add_planet(d, &planet2, t.planet2)?;
-            d.gears.push(mesh(&set.sun, zs, &planet, t.planet, MeshKind::External, "sun-planet"));
-            d.gears.push(mesh(&planet, t.planet, &planet2, t.planet2, MeshKind::External, "planet-planet2"));
-            d.gears.push(mesh(&sun2, z2, &planet2, t.planet2, MeshKind::External, "sun2-planet2"));
-            d.gears.push(mesh(&planet2, t.planet2, &ring, zr, MeshKind::Internal, "planet2-ring"));
+            d.gears.push(mesh(
+                &set.sun,
+                zs,
+                &planet,
+                t.planet,
+                MeshKind::External,
+                "sun-planet",
+            ));
+            d.gears.push(mesh(
+                &planet,
+                t.planet,
+                &planet2,
+                t.planet2,
+                MeshKind::External,
+                "planet-planet2",
+            ));
+            d.gears.push(mesh(
+                &sun2,
+                z2,
+                &planet2,
+                t.planet2,
+                MeshKind::External,
+                "sun2-planet2",
+            ));
+            d.gears.push(mesh(
+                &planet2,
+                t.planet2,
+                &ring,
+                zr,
+                MeshKind::Internal,
+                "planet2-ring",
+            ));
         }
     }
     Ok(())
@@ -249,11 +426,18 @@ fn mount(d: &mut Draft, frame: &str, link: &str, axis: &str, path: &str) -> Resu
     if link == frame {
         return Ok(());
     }
-    if let Some(existing) = d.revolutes.iter().find(|r| r.links[0] == frame && r.links[1] == link) {
+    if let Some(existing) = d
+        .revolutes
+        .iter()
+        .find(|r| r.links[0] == frame && r.links[1] == link)
+    {
         if existing.level != axis {
             return Err(Error::invalid(
                 path,
-                format!("link `{link}` is on axis level `{}` in {} but `{axis}` here", existing.level, existing.path),
+                format!(
+                    "link `{link}` is on axis level `{}` in {} but `{axis}` here",
+                    existing.level, existing.path
+                ),
             ));
         }
         return Ok(());
@@ -267,7 +451,11 @@ fn mount(d: &mut Draft, frame: &str, link: &str, axis: &str, path: &str) -> Resu
 }
 
 fn expand_adjacency(d: &mut Draft, text: &str) -> Result<()> {
-    for (n, tok) in text.split(|c: char| c.is_whitespace() || c == ',' || c == ';').filter(|t| !t.is_empty()).enumerate() {
+    for (n, tok) in text
+        .split(|c: char| c.is_whitespace() || c == ',' || c == ';')
+        .filter(|t| !t.is_empty())
+        .enumerate()
+    {
         let path = format!("adjacency (item {}: `{tok}`)", n + 1);
         let bad = || Error::invalid(&path, "expected `A-B:level` or `A-B:G` or `A-B:G=ratio`");
         let (pair, label) = tok.split_once(':').ok_or_else(bad)?;
@@ -278,14 +466,24 @@ fn expand_adjacency(d: &mut Draft, text: &str) -> Result<()> {
         d.declare(a);
         d.declare(b);
         if label == "G" || label.starts_with("G=") {
-            let ratio = label.strip_prefix("G=").map(|r| RatioSpec::Text(r.to_string()));
+            let ratio = label
+                .strip_prefix("G=")
+                .map(|r| RatioSpec::Text(r.to_string()));
             d.gears.push(DraftGear {
                 name: String::new(),
-                spec: GearSpec { links: [a.to_string(), b.to_string()], ratio, ..Default::default() },
+                spec: GearSpec {
+                    links: [a.to_string(), b.to_string()],
+                    ratio,
+                    ..Default::default()
+                },
                 path,
             });
         } else {
-            d.revolutes.push(DraftRevolute { links: [a.to_string(), b.to_string()], level: label.to_string(), path });
+            d.revolutes.push(DraftRevolute {
+                links: [a.to_string(), b.to_string()],
+                level: label.to_string(),
+                path,
+            });
         }
     }
     Ok(())

@@ -29,7 +29,11 @@ pub struct SpeedInput {
 
 impl From<(LinkId, f64)> for SpeedInput {
     fn from((link, speed): (LinkId, f64)) -> Self {
-        SpeedInput { link, speed, exact: exact::from_f64(speed) }
+        SpeedInput {
+            link,
+            speed,
+            exact: exact::from_f64(speed),
+        }
     }
 }
 
@@ -93,15 +97,27 @@ impl KinematicsPlan {
     /// Wrong input count, the frame or a repeated link as input.
     pub fn new(train: &Train, inputs: &[LinkId]) -> Result<Self> {
         if inputs.len() != train.dof() {
-            return Err(AnalysisError::WrongInputCount { dof: train.dof(), given: inputs.len(), what: "input speeds".into() }.into());
+            return Err(AnalysisError::WrongInputCount {
+                dof: train.dof(),
+                given: inputs.len(),
+                what: "input speeds".into(),
+            }
+            .into());
         }
         let mut slots: Vec<Slot> = train.links().iter().map(|_| Slot::Frame).collect();
         for (k, &l) in inputs.iter().enumerate() {
             if l == train.frame() {
-                return Err(AnalysisError::FrameInput { link: train.link_name(l).to_string() }.into());
+                return Err(AnalysisError::FrameInput {
+                    link: train.link_name(l).to_string(),
+                }
+                .into());
             }
             if slots[l.index()] != Slot::Frame {
-                return Err(AnalysisError::Other(format!("link `{}` is given as an input twice", train.link_name(l))).into());
+                return Err(AnalysisError::Other(format!(
+                    "link `{}` is given as an input twice",
+                    train.link_name(l)
+                ))
+                .into());
             }
             if !train.link(l).sized {
                 return Err(unsized_error(train, l));
@@ -121,7 +137,11 @@ impl KinematicsPlan {
             inputs: inputs.to_vec(),
             slots,
             unknowns,
-            circuits: train.circuits().iter().map(|c| [c.gear_i, c.gear_j, c.carrier]).collect(),
+            circuits: train
+                .circuits()
+                .iter()
+                .map(|c| [c.gear_i, c.gear_j, c.carrier])
+                .collect(),
             lu: Lu::new(n),
             rhs: vec![0.0; n],
         })
@@ -139,7 +159,12 @@ impl KinematicsPlan {
     /// # Errors
     /// [`AnalysisError::Singular`] on a zero pivot, [`AnalysisError::IllConditioned`]
     /// past [`COND_REFUSE`]. (Use [`Train::kinematics`] for an exact diagnosis.)
-    pub fn solve(&mut self, ratios: &[f64], input_speeds: &[f64], speeds: &mut [f64]) -> Result<f64> {
+    pub fn solve(
+        &mut self,
+        ratios: &[f64],
+        input_speeds: &[f64],
+        speeds: &mut [f64],
+    ) -> Result<f64> {
         let n = self.unknowns.len();
         let a = self.lu.matrix_mut();
         a.iter_mut().for_each(|v| *v = 0.0);
@@ -156,7 +181,12 @@ impl KinematicsPlan {
         self.lu.factor().map_err(|_| singular())?;
         let cond = self.lu.condition();
         if cond > COND_REFUSE {
-            return Err(AnalysisError::IllConditioned { what: "the Willis system".into(), condition: cond, threshold: COND_REFUSE }.into());
+            return Err(AnalysisError::IllConditioned {
+                what: "the Willis system".into(),
+                condition: cond,
+                threshold: COND_REFUSE,
+            }
+            .into());
         }
         self.lu.solve(&mut self.rhs);
         speeds.iter_mut().for_each(|v| *v = 0.0);
@@ -171,7 +201,11 @@ impl KinematicsPlan {
 }
 
 fn singular() -> Error {
-    AnalysisError::Singular { what: "the Willis system".into(), detail: "a pivot column is zero".into() }.into()
+    AnalysisError::Singular {
+        what: "the Willis system".into(),
+        detail: "a pivot column is zero".into(),
+    }
+    .into()
 }
 
 fn unsized_error(train: &Train, l: LinkId) -> Error {
@@ -185,13 +219,18 @@ fn unsized_error(train: &Train, l: LinkId) -> Error {
 
 /// Largest |psi_m| over the circuits, relative to the largest |w| (eq. 2 residual).
 pub fn willis_residual(train: &Train, ratios: &[f64], speeds: &[f64]) -> f64 {
-    let scale = speeds.iter().fold(0.0_f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
+    let scale = speeds
+        .iter()
+        .fold(0.0_f64, |m, v| m.max(v.abs()))
+        .max(f64::MIN_POSITIVE);
     train
         .circuits()
         .iter()
         .zip(ratios)
         .map(|(c, &t)| {
-            (speeds[c.gear_i.index()] - t * speeds[c.gear_j.index()] + (t - 1.0) * speeds[c.carrier.index()]).abs()
+            (speeds[c.gear_i.index()] - t * speeds[c.gear_j.index()]
+                + (t - 1.0) * speeds[c.carrier.index()])
+            .abs()
         })
         .fold(0.0, f64::max)
         / scale
@@ -218,8 +257,17 @@ impl Train {
 
     /// The exact Willis Jacobian, when every ratio is exact.
     pub fn willis_jacobian_exact(&self) -> Option<QMatrix> {
-        let taus: Vec<Q> = self.gears().iter().map(|g| g.ratio.as_ref()?.exact.clone()).collect::<Option<_>>()?;
-        Some(crate::topology::willis_exact(self.links().len(), self.frame(), self.circuits(), |m| taus[m].clone()))
+        let taus: Vec<Q> = self
+            .gears()
+            .iter()
+            .map(|g| g.ratio.as_ref()?.exact.clone())
+            .collect::<Option<_>>()?;
+        Some(crate::topology::willis_exact(
+            self.links().len(),
+            self.frame(),
+            self.circuits(),
+            |m| taus[m].clone(),
+        ))
     }
 
     /// Solve the speeds of every link for the given input speeds (one per DOF).
@@ -236,23 +284,36 @@ impl Train {
         let values: Vec<f64> = inputs.iter().map(|i| i.speed).collect();
         for (k, v) in values.iter().enumerate() {
             if !v.is_finite() {
-                return Err(Error::spec(format!("input speed of `{}`", self.link_name(links[k])), crate::SpecErrorKind::NonFinite { value: *v }));
+                return Err(Error::spec(
+                    format!("input speed of `{}`", self.link_name(links[k])),
+                    crate::SpecErrorKind::NonFinite { value: *v },
+                ));
             }
         }
         let mut plan = KinematicsPlan::new(self, &links)?;
         let mut speed = vec![0.0; self.links().len()];
         let solved = plan.solve(&ratios, &values, &mut speed);
         let exact_inputs: Option<Vec<Q>> = inputs.iter().map(|i| i.exact.clone()).collect();
-        let exact_taus: Option<Vec<Q>> = self.gears().iter().map(|g| g.ratio.as_ref()?.exact.clone()).collect();
+        let exact_taus: Option<Vec<Q>> = self
+            .gears()
+            .iter()
+            .map(|g| g.ratio.as_ref()?.exact.clone())
+            .collect();
         let condition = match solved {
             Ok(c) => c,
             Err(e) => {
                 // Diagnose exactly, on the exact ratios or on the exact values of the floats.
                 let taus: Vec<Q> = match &exact_taus {
                     Some(t) => t.clone(),
-                    None => ratios.iter().map(|&r| exact::from_f64(r).unwrap_or_else(Q::zero)).collect(),
+                    None => ratios
+                        .iter()
+                        .map(|&r| exact::from_f64(r).unwrap_or_else(Q::zero))
+                        .collect(),
                 };
-                let ins: Vec<Q> = values.iter().map(|&v| exact::from_f64(v).unwrap_or_else(Q::zero)).collect();
+                let ins: Vec<Q> = values
+                    .iter()
+                    .map(|&v| exact::from_f64(v).unwrap_or_else(Q::zero))
+                    .collect();
                 self.solve_exact(&plan, &taus, &ins)?;
                 return Err(e);
             }
@@ -268,7 +329,15 @@ impl Train {
         let known: Vec<bool> = self.links().iter().map(|l| l.sized).collect();
         let relative = self.relative_speeds(&speed, exact.as_deref(), &known);
         let residual = willis_residual(self, &ratios, &speed);
-        Ok(Speeds { speed, known, exact, relative, residual, condition, warnings })
+        Ok(Speeds {
+            speed,
+            known,
+            exact,
+            relative,
+            residual,
+            condition,
+            warnings,
+        })
     }
 
     /// The exact solution for a prepared plan.
@@ -298,11 +367,19 @@ impl Train {
                 Ok(out)
             }
             Err(f) if !f.conflicting_rows.is_empty() => Err(AnalysisError::Inconsistent {
-                conflicting: f.conflicting_rows.iter().map(|&m| format!("circuit #{} (gear pair {})", m + 1, self.gears()[m].name)).collect(),
+                conflicting: f
+                    .conflicting_rows
+                    .iter()
+                    .map(|&m| format!("circuit #{} (gear pair {})", m + 1, self.gears()[m].name))
+                    .collect(),
             }
             .into()),
             Err(f) => Err(AnalysisError::Underdetermined {
-                free: f.free_columns.iter().map(|&u| self.link_name(plan.unknowns[u]).to_string()).collect(),
+                free: f
+                    .free_columns
+                    .iter()
+                    .map(|&u| self.link_name(plan.unknowns[u]).to_string())
+                    .collect(),
             }
             .into()),
         }
@@ -311,12 +388,23 @@ impl Train {
     /// Speeds of floating links relative to their carriers: every link whose
     /// turning pair to its tree parent (not the frame) is at another level than
     /// the parent's own axis.
-    fn relative_speeds(&self, speed: &[f64], exact: Option<&[Q]>, known: &[bool]) -> Vec<RelativeSpeed> {
+    fn relative_speeds(
+        &self,
+        speed: &[f64],
+        exact: Option<&[Q]>,
+        known: &[bool],
+    ) -> Vec<RelativeSpeed> {
         let mut out = Vec::new();
         for &l in self.tree().order() {
-            let Some((p, r)) = self.tree().parent(l) else { continue };
-            let Some((_, rp)) = self.tree().parent(p) else { continue };
-            if self.revolutes()[r.index()].level == self.revolutes()[rp.index()].level || !known[l.index()] {
+            let Some((p, r)) = self.tree().parent(l) else {
+                continue;
+            };
+            let Some((_, rp)) = self.tree().parent(p) else {
+                continue;
+            };
+            if self.revolutes()[r.index()].level == self.revolutes()[rp.index()].level
+                || !known[l.index()]
+            {
                 continue;
             }
             out.push(RelativeSpeed {

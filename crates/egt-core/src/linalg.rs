@@ -29,7 +29,14 @@ pub struct ZeroPivot(pub usize);
 impl Lu {
     /// Buffers for an `n x n` system.
     pub fn new(n: usize) -> Self {
-        Lu { n, a: vec![0.0; n * n], piv: vec![0; n], anorm: 0.0, work: vec![0.0; n], work2: vec![0.0; n] }
+        Lu {
+            n,
+            a: vec![0.0; n * n],
+            piv: vec![0; n],
+            anorm: 0.0,
+            work: vec![0.0; n],
+            work2: vec![0.0; n],
+        }
     }
 
     /// Order of the system.
@@ -49,7 +56,9 @@ impl Lu {
     pub fn factor(&mut self) -> Result<(), ZeroPivot> {
         let n = self.n;
         let a = &mut self.a;
-        self.anorm = (0..n).map(|j| (0..n).map(|i| a[i * n + j].abs()).sum::<f64>()).fold(0.0, f64::max);
+        self.anorm = (0..n)
+            .map(|j| (0..n).map(|i| a[i * n + j].abs()).sum::<f64>())
+            .fold(0.0, f64::max);
         for k in 0..n {
             let (mut p, mut best) = (k, a[k * n + k].abs());
             for i in k + 1..n {

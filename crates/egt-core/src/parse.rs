@@ -16,12 +16,20 @@ pub enum Format {
 impl Format {
     /// Guess from a file name (`.json` is JSON, anything else TOML).
     pub fn from_path(path: &str) -> Format {
-        if path.to_ascii_lowercase().ends_with(".json") { Format::Json } else { Format::Toml }
+        if path.to_ascii_lowercase().ends_with(".json") {
+            Format::Json
+        } else {
+            Format::Toml
+        }
     }
 
     /// Guess from content: JSON documents start with `{`.
     pub fn sniff(text: &str) -> Format {
-        if text.trim_start().starts_with('{') { Format::Json } else { Format::Toml }
+        if text.trim_start().starts_with('{') {
+            Format::Json
+        } else {
+            Format::Toml
+        }
     }
 }
 
@@ -47,10 +55,7 @@ pub fn parse_spec(text: &str, format: Format, source_name: &str) -> Result<Spec>
         }
         Format::Toml => {
             let located = |e: toml::de::Error, path: Option<String>| {
-                let (line, column) = e
-                    .span()
-                    .map(|s| line_col(text, s.start))
-                    .unwrap_or((1, 1));
+                let (line, column) = e.span().map(|s| line_col(text, s.start)).unwrap_or((1, 1));
                 Error::Syntax(SyntaxError {
                     source_name: source_name.to_string(),
                     line,

@@ -97,7 +97,9 @@ pub(crate) struct Topology {
 }
 
 fn names(links: &[Link], ids: impl IntoIterator<Item = LinkId>) -> Vec<String> {
-    ids.into_iter().map(|l| links[l.index()].name.clone()).collect()
+    ids.into_iter()
+        .map(|l| links[l.index()].name.clone())
+        .collect()
 }
 
 pub(crate) fn analyse(
@@ -107,23 +109,34 @@ pub(crate) fn analyse(
     revolutes: &[Revolute],
     gears: &[GearPair],
     graph: &UnGraph<LinkId, Edge>,
+    clutched: &[LinkId],
 ) -> Result<Topology, TopologyError> {
     let n = links.len();
     let mut checks = Vec::new();
 
     // 1. Connected.
     let reach = bfs(graph, frame, |_| true);
-    let unreached: Vec<LinkId> = (0..n).map(LinkId::from_index).filter(|l| reach[l.index()].is_none()).collect();
+    let unreached: Vec<LinkId> = (0..n)
+        .map(LinkId::from_index)
+        .filter(|l| reach[l.index()].is_none())
+        .collect();
     if !unreached.is_empty() {
-        return Err(TopologyError::Disconnected { links: names(links, unreached) });
+        return Err(TopologyError::Disconnected {
+            links: names(links, unreached),
+        });
     }
     checks.push(format!("connected: all {n} links reach the frame"));
 
     // 2. Deleting gear edges leaves a spanning tree.
     let parent = bfs(graph, frame, |e| matches!(e, Edge::Revolute(_)));
-    let orphans: Vec<LinkId> = (0..n).map(LinkId::from_index).filter(|l| parent[l.index()].is_none()).collect();
+    let orphans: Vec<LinkId> = (0..n)
+        .map(LinkId::from_index)
+        .filter(|l| parent[l.index()].is_none())
+        .collect();
     if !orphans.is_empty() {
-        return Err(TopologyError::NoTurningPath { links: names(links, orphans) });
+        return Err(TopologyError::NoTurningPath {
+            links: names(links, orphans),
+        });
     }
     let tree = make_tree(&parent, frame);
     if revolutes.len() != n - 1 {
@@ -140,20 +153,32 @@ pub(crate) fn analyse(
         let extra = (0..revolutes.len()).find(|&r| !in_tree[r]).unwrap_or(0);
         let [a, b] = revolutes[extra].links;
         let (path, _) = tree.path(a, b);
-        return Err(TopologyError::RevoluteCycle { links: names(links, path) });
+        return Err(TopologyError::RevoluteCycle {
+            links: names(links, path),
+        });
     }
-    checks.push(format!("deleting the {} gear edges leaves a spanning tree of {} turning pairs", gears.len(), revolutes.len()));
+    checks.push(format!(
+        "deleting the {} gear edges leaves a spanning tree of {} turning pairs",
+        gears.len(),
+        revolutes.len()
+    ));
 
     // 3. L_ind = j_G (cycle rank of a connected graph: E - V + 1).
     let independent = revolutes.len() + gears.len() + 1 - n;
     if independent != gears.len() {
-        return Err(TopologyError::CircuitCount { independent, gears: gears.len() });
+        return Err(TopologyError::CircuitCount {
+            independent,
+            gears: gears.len(),
+        });
     }
     checks.push(format!("L_ind = j_G = {independent}"));
 
     // 4. A transfer vertex for every fundamental circuit.
     let circuits = circuits::fundamental_circuits(links, levels, revolutes, gears, &tree)?;
-    checks.push(format!("every fundamental circuit ({}) has one transfer vertex", circuits.len()));
+    checks.push(format!(
+        "every fundamental circuit ({}) has one transfer vertex",
+        circuits.len()
+    ));
 
     // 5. Planarity.
     if !is_planar(graph) {
@@ -166,7 +191,11 @@ pub(crate) fn analyse(
     if dof < 1 {
         return Err(TopologyError::NoMobility { dof });
     }
-    checks.push(format!("Gruebler-Kutzbach F = 3({n} - 1) - 2*{} - {} = {dof}", revolutes.len(), gears.len()));
+    checks.push(format!(
+        "Gruebler-Kutzbach F = 3({n} - 1) - 2*{} - {} = {dof}",
+        revolutes.len(),
+        gears.len()
+    ));
 
     // 7. Eq. (1): no over-constrained or locked sub-chain, for generic ratios (exact rank).
     generic_mobility(links, frame, revolutes, &circuits)?;
@@ -186,20 +215,33 @@ pub(crate) fn analyse(
         if !on {
             // The subtree beyond this pair turns freely.
             let [a, b] = revolutes[r].links;
-            let child = if tree.parent(a).is_some_and(|(_, e)| e.index() == r) { a } else { b };
+            let child = if tree.parent(a).is_some_and(|(_, e)| e.index() == r) {
+                a
+            } else {
+                b
+            };
             free.extend(subtree(&tree, child));
         }
     }
+    // A shaft joined to the train only by clutches (e.g. a transmission's input
+    // shaft) turns freely in the bare train; its gear states tie it down.
+    free.retain(|l| !clutched.contains(l));
     if !free.is_empty() {
         free.sort();
         free.dedup();
-        return Err(TopologyError::FreeLinks { links: names(links, free) });
+        return Err(TopologyError::FreeLinks {
+            links: names(links, free),
+        });
     }
     let mut cuts: Vec<NodeIndex> = articulation_points(graph, None).into_iter().collect();
     cuts.sort();
     for cut in cuts {
         let parts = components_without(graph, cut);
-        let geared: Vec<Vec<LinkId>> = parts.into_iter().filter(|(_, has_gear)| *has_gear).map(|(p, _)| p).collect();
+        let geared: Vec<Vec<LinkId>> = parts
+            .into_iter()
+            .filter(|(_, has_gear)| *has_gear)
+            .map(|(p, _)| p)
+            .collect();
         if geared.len() >= 2 {
             return Err(TopologyError::Fractionated {
                 link: links[cut.index()].name.clone(),
@@ -209,7 +251,12 @@ pub(crate) fn analyse(
     }
     checks.push("no fractionated mobility: every turning pair is on a circuit and no link separates geared sub-chains".to_string());
 
-    Ok(Topology { tree, circuits, dof: dof as usize, checks })
+    Ok(Topology {
+        tree,
+        circuits,
+        dof: dof as usize,
+        checks,
+    })
 }
 
 type Parent = Option<Option<(NodeIndex, Edge)>>;
@@ -225,7 +272,11 @@ fn bfs(graph: &UnGraph<LinkId, Edge>, root: LinkId, keep: impl Fn(&Edge) -> bool
         let mut edges: Vec<_> = graph.edges(v).filter(|e| keep(e.weight())).collect();
         edges.sort_by_key(|e| e.id());
         for e in edges {
-            let w = if e.source() == v { e.target() } else { e.source() };
+            let w = if e.source() == v {
+                e.target()
+            } else {
+                e.source()
+            };
             if parent[w.index()].is_none() {
                 parent[w.index()] = Some(Some((v, *e.weight())));
                 queue.push_back(w);
@@ -260,22 +311,30 @@ fn make_tree(parent: &[Parent], root: LinkId) -> Tree {
         }
         k += 1;
     }
-    Tree { parent: p, depth, order }
+    Tree {
+        parent: p,
+        depth,
+        order,
+    }
 }
 
 fn subtree(tree: &Tree, top: LinkId) -> Vec<LinkId> {
-    tree.order().iter().copied().filter(|&l| {
-        let mut x = l;
-        loop {
-            if x == top {
-                return true;
+    tree.order()
+        .iter()
+        .copied()
+        .filter(|&l| {
+            let mut x = l;
+            loop {
+                if x == top {
+                    return true;
+                }
+                match tree.parent(x) {
+                    Some((p, _)) => x = p,
+                    None => return false,
+                }
             }
-            match tree.parent(x) {
-                Some((p, _)) => x = p,
-                None => return false,
-            }
-        }
-    }).collect()
+        })
+        .collect()
 }
 
 /// Connected components of the graph with `cut` removed, each with whether it holds a gear edge.
@@ -294,7 +353,11 @@ fn components_without(graph: &UnGraph<LinkId, Edge>, cut: NodeIndex) -> Vec<(Vec
         while let Some(v) = stack.pop() {
             comp.push(LinkId::from_index(v.index()));
             for e in graph.edges(v) {
-                let w = if e.source() == v { e.target() } else { e.source() };
+                let w = if e.source() == v {
+                    e.target()
+                } else {
+                    e.source()
+                };
                 if w == cut {
                     continue;
                 }
@@ -322,7 +385,12 @@ pub(crate) fn generic_ratio(m: usize) -> Q {
 }
 
 /// The Willis Jacobian over the coordinates (every link but the frame), exactly.
-pub(crate) fn willis_exact(n_links: usize, frame: LinkId, circuits: &[FundamentalCircuit], tau: impl Fn(usize) -> Q) -> QMatrix {
+pub(crate) fn willis_exact(
+    n_links: usize,
+    frame: LinkId,
+    circuits: &[FundamentalCircuit],
+    tau: impl Fn(usize) -> Q,
+) -> QMatrix {
     let col = |l: LinkId| -> Option<usize> {
         match l.index().cmp(&frame.index()) {
             std::cmp::Ordering::Less => Some(l.index()),
@@ -337,7 +405,11 @@ pub(crate) fn willis_exact(n_links: usize, frame: LinkId, circuits: &[Fundamenta
             let t = tau(m);
             let mut row = vec![Q::zero(); n_links - 1];
             // eq. (2): psi_m = w_i - tau w_j + (tau - 1) w_k
-            for (l, v) in [(c.gear_i, exact::q(1)), (c.gear_j, -t.clone()), (c.carrier, t - exact::q(1))] {
+            for (l, v) in [
+                (c.gear_i, exact::q(1)),
+                (c.gear_j, -t.clone()),
+                (c.carrier, t - exact::q(1)),
+            ] {
                 if let Some(k) = col(l) {
                     row[k] += v;
                 }
@@ -347,20 +419,44 @@ pub(crate) fn willis_exact(n_links: usize, frame: LinkId, circuits: &[Fundamenta
         .collect()
 }
 
-fn generic_mobility(links: &[Link], frame: LinkId, revolutes: &[Revolute], circuits: &[FundamentalCircuit]) -> Result<(), TopologyError> {
+fn generic_mobility(
+    links: &[Link],
+    frame: LinkId,
+    revolutes: &[Revolute],
+    circuits: &[FundamentalCircuit],
+) -> Result<(), TopologyError> {
     let n = links.len();
     let j = willis_exact(n, frame, circuits, generic_ratio);
     let cols = n - 1;
     if exact::rank(&j) < circuits.len() {
         // Rows with weight in a left null vector are the dependent ones.
-        let jt: QMatrix = (0..cols).map(|c| j.iter().map(|r| r[c].clone()).collect()).collect();
+        let jt: QMatrix = (0..cols)
+            .map(|c| j.iter().map(|r| r[c].clone()).collect())
+            .collect();
         let dependent = exact::support(&exact::nullspace(&jt, circuits.len()));
         return Err(TopologyError::Redundant {
-            pairs: dependent.iter().map(|&m| format!("#{} ({})", m + 1, names(links, [circuits[m].gear_i, circuits[m].gear_j]).join("-"))).collect(),
+            pairs: dependent
+                .iter()
+                .map(|&m| {
+                    format!(
+                        "#{} ({})",
+                        m + 1,
+                        names(links, [circuits[m].gear_i, circuits[m].gear_j]).join("-")
+                    )
+                })
+                .collect(),
         });
     }
     let null = exact::nullspace(&j, cols);
-    let col = |l: LinkId| (l != frame).then(|| if l.index() < frame.index() { l.index() } else { l.index() - 1 });
+    let col = |l: LinkId| {
+        (l != frame).then(|| {
+            if l.index() < frame.index() {
+                l.index()
+            } else {
+                l.index() - 1
+            }
+        })
+    };
     let speed = |v: &Vec<Q>, l: LinkId| col(l).map_or_else(Q::zero, |c| v[c].clone());
     // A turning pair that never moves, for any motion, belongs to a locked sub-chain.
     let mut locked: Vec<LinkId> = Vec::new();
@@ -373,7 +469,9 @@ fn generic_mobility(links: &[Link], frame: LinkId, revolutes: &[Revolute], circu
     if !locked.is_empty() {
         locked.sort();
         locked.dedup();
-        return Err(TopologyError::Locked { links: names(links, locked) });
+        return Err(TopologyError::Locked {
+            links: names(links, locked),
+        });
     }
     Ok(())
 }

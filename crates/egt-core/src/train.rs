@@ -269,7 +269,10 @@ impl Train {
     }
     /// Look up a link by name.
     pub fn link_id(&self, name: &str) -> Option<LinkId> {
-        self.links.iter().position(|l| l.name == name).map(LinkId::from_index)
+        self.links
+            .iter()
+            .position(|l| l.name == name)
+            .map(LinkId::from_index)
     }
     /// Look up a link by name, with a spec error naming `path` when it is unknown.
     ///
@@ -348,7 +351,9 @@ impl Train {
     }
     /// True when every gear pair has an exact ratio.
     pub fn has_exact_ratios(&self) -> bool {
-        self.gears.iter().all(|g| g.ratio.as_ref().is_some_and(|r| r.exact.is_some()))
+        self.gears
+            .iter()
+            .all(|g| g.ratio.as_ref().is_some_and(|r| r.exact.is_some()))
     }
     /// Float Willis ratios in gear-pair order.
     ///
@@ -358,7 +363,10 @@ impl Train {
         self.gears
             .iter()
             .map(|g| {
-                g.ratio.as_ref().map(|r| r.value).ok_or_else(|| missing_ratio(g, "kinematics"))
+                g.ratio
+                    .as_ref()
+                    .map(|r| r.value)
+                    .ok_or_else(|| missing_ratio(g, "kinematics"))
             })
             .collect()
     }
@@ -374,7 +382,11 @@ pub(crate) fn missing_ratio(g: &GearPair, analysis: &str) -> Error {
 }
 
 fn finite(path: String, v: f64) -> Result<f64> {
-    if v.is_finite() { Ok(v) } else { Err(Error::spec(path, SpecErrorKind::NonFinite { value: v })) }
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(Error::spec(path, SpecErrorKind::NonFinite { value: v }))
+    }
 }
 
 fn positive(path: String, v: f64) -> Result<f64> {
@@ -382,7 +394,13 @@ fn positive(path: String, v: f64) -> Result<f64> {
     if v > 0.0 {
         Ok(v)
     } else {
-        Err(Error::spec(path, SpecErrorKind::OutOfRange { value: v, expected: "must be > 0".into() }))
+        Err(Error::spec(
+            path,
+            SpecErrorKind::OutOfRange {
+                value: v,
+                expected: "must be > 0".into(),
+            },
+        ))
     }
 }
 
@@ -391,7 +409,13 @@ fn non_negative(path: String, v: f64) -> Result<f64> {
     if v >= 0.0 {
         Ok(v)
     } else {
-        Err(Error::spec(path, SpecErrorKind::OutOfRange { value: v, expected: "must be >= 0".into() }))
+        Err(Error::spec(
+            path,
+            SpecErrorKind::OutOfRange {
+                value: v,
+                expected: "must be >= 0".into(),
+            },
+        ))
     }
 }
 
@@ -409,56 +433,103 @@ fn gear_pair(g: &DraftGear, ids: &HashMap<&str, LinkId>) -> Result<GearPair> {
     let gear_i = ids[s.links[0].as_str()];
     let gear_j = ids[s.links[1].as_str()];
     let teeth = match s.teeth {
-        Some([zi, zj]) => {
-            Some([teeth_value(format!("{p}.teeth[0]"), zi)?, teeth_value(format!("{p}.teeth[1]"), zj)?])
-        }
+        Some([zi, zj]) => Some([
+            teeth_value(format!("{p}.teeth[0]"), zi)?,
+            teeth_value(format!("{p}.teeth[1]"), zj)?,
+        ]),
         None => None,
     };
     let ratio = match (&teeth, &s.ratio) {
         (Some(_), Some(_)) => {
-            return Err(Error::invalid(p.clone(), "give either `teeth` (with `mesh`) or `ratio`, not both"));
+            return Err(Error::invalid(
+                p.clone(),
+                "give either `teeth` (with `mesh`) or `ratio`, not both",
+            ));
         }
         (Some([zi, zj]), None) => {
             let mesh = s.mesh.ok_or_else(|| {
-                Error::spec(format!("{p}.mesh"), SpecErrorKind::Missing { what: "mesh kind (`external` or `internal`) for `teeth`".into() })
+                Error::spec(
+                    format!("{p}.mesh"),
+                    SpecErrorKind::Missing {
+                        what: "mesh kind (`external` or `internal`) for `teeth`".into(),
+                    },
+                )
             })?;
             if mesh == MeshKind::Internal && zi == zj {
-                return Err(Error::invalid(format!("{p}.teeth"), "an internal mesh needs different tooth counts (tau = 1 would lock the pair)"));
+                return Err(Error::invalid(
+                    format!("{p}.teeth"),
+                    "an internal mesh needs different tooth counts (tau = 1 would lock the pair)",
+                ));
             }
             let tau = exact::frac(i64::from(*zj), i64::from(*zi));
-            let tau = if mesh == MeshKind::External { -tau } else { tau };
-            Some(Ratio { value: exact::to_f64(&tau), exact: Some(tau) })
+            let tau = if mesh == MeshKind::External {
+                -tau
+            } else {
+                tau
+            };
+            Some(Ratio {
+                value: exact::to_f64(&tau),
+                exact: Some(tau),
+            })
         }
         (None, Some(RatioSpec::Number(v))) => {
             let v = finite(format!("{p}.ratio"), *v)?;
-            Some(Ratio { value: v, exact: None })
+            Some(Ratio {
+                value: v,
+                exact: None,
+            })
         }
         (None, Some(RatioSpec::Text(t))) => {
             let q = exact::parse_rational(t).ok_or_else(|| {
-                Error::invalid(format!("{p}.ratio"), format!("`{t}` is not a number or a fraction p/q"))
+                Error::invalid(
+                    format!("{p}.ratio"),
+                    format!("`{t}` is not a number or a fraction p/q"),
+                )
             })?;
-            Some(Ratio { value: exact::to_f64(&q), exact: Some(q) })
+            Some(Ratio {
+                value: exact::to_f64(&q),
+                exact: Some(q),
+            })
         }
         (None, None) => {
             if s.mesh.is_some() {
-                return Err(Error::spec(format!("{p}.teeth"), SpecErrorKind::Missing { what: "`teeth` for `mesh`".into() }));
+                return Err(Error::spec(
+                    format!("{p}.teeth"),
+                    SpecErrorKind::Missing {
+                        what: "`teeth` for `mesh`".into(),
+                    },
+                ));
             }
             None
         }
     };
     if let Some(r) = &ratio {
         if r.value == 0.0 {
-            return Err(Error::spec(format!("{p}.ratio"), SpecErrorKind::OutOfRange { value: 0.0, expected: "a Willis ratio is never 0".into() }));
+            return Err(Error::spec(
+                format!("{p}.ratio"),
+                SpecErrorKind::OutOfRange {
+                    value: 0.0,
+                    expected: "a Willis ratio is never 0".into(),
+                },
+            ));
         }
     }
     let mut radii = match s.radii {
-        Some([ri, rj]) => Some([positive(format!("{p}.radii[0]"), ri)?, positive(format!("{p}.radii[1]"), rj)?]),
+        Some([ri, rj]) => Some([
+            positive(format!("{p}.radii[0]"), ri)?,
+            positive(format!("{p}.radii[1]"), rj)?,
+        ]),
         None => None,
     };
     if let Some(m) = s.module {
         let m = positive(format!("{p}.module"), m)?;
         let [zi, zj] = teeth.ok_or_else(|| {
-            Error::spec(format!("{p}.teeth"), SpecErrorKind::Missing { what: "`teeth` for `module`".into() })
+            Error::spec(
+                format!("{p}.teeth"),
+                SpecErrorKind::Missing {
+                    what: "`teeth` for `module`".into(),
+                },
+            )
         })?;
         let from_module = [m * f64::from(zi) / 2.0, m * f64::from(zj) / 2.0];
         if let Some(r) = radii {
@@ -475,36 +546,87 @@ fn gear_pair(g: &DraftGear, ids: &HashMap<&str, LinkId>) -> Result<GearPair> {
         Some(e) => {
             let e = finite(format!("{p}.efficiency"), e)?;
             if !(e > 0.0 && e <= 1.0) {
-                return Err(Error::spec(format!("{p}.efficiency"), SpecErrorKind::OutOfRange { value: e, expected: "efficiency must be in (0, 1]".into() }));
+                return Err(Error::spec(
+                    format!("{p}.efficiency"),
+                    SpecErrorKind::OutOfRange {
+                        value: e,
+                        expected: "efficiency must be in (0, 1]".into(),
+                    },
+                ));
             }
             e
         }
         None => 1.0,
     };
-    Ok(GearPair { name: g.name.clone(), gear_i, gear_j, ratio, teeth, mesh: s.mesh, radii, efficiency, path: p.clone() })
+    Ok(GearPair {
+        name: g.name.clone(),
+        gear_i,
+        gear_j,
+        ratio,
+        teeth,
+        mesh: s.mesh,
+        radii,
+        efficiency,
+        path: p.clone(),
+    })
 }
 
 fn build(spec: &Spec, draft: &Draft) -> Result<Train> {
     // Links.
     let mut links = Vec::with_capacity(draft.links.len());
     for (n, (name, dl)) in draft.links.iter().enumerate() {
-        let path = spec.links.iter().position(|l| &l.name == name).map_or_else(|| format!("link `{name}`"), |k| format!("links[{k}]"));
+        let path = spec
+            .links
+            .iter()
+            .position(|l| &l.name == name)
+            .map_or_else(|| format!("link `{name}`"), |k| format!("links[{k}]"));
         let d = &dl.data;
-        let inertia = d.inertia.map(|v| non_negative(format!("{path}.inertia"), v)).transpose()?;
-        let mass = d.mass.map(|v| non_negative(format!("{path}.mass"), v)).transpose()?;
+        let inertia = d
+            .inertia
+            .map(|v| non_negative(format!("{path}.inertia"), v))
+            .transpose()?;
+        let mass = d
+            .mass
+            .map(|v| non_negative(format!("{path}.mass"), v))
+            .transpose()?;
         let copies = match d.copies {
-            Some(0) => return Err(Error::spec(format!("{path}.copies"), SpecErrorKind::OutOfRange { value: 0.0, expected: "at least 1".into() })),
+            Some(0) => {
+                return Err(Error::spec(
+                    format!("{path}.copies"),
+                    SpecErrorKind::OutOfRange {
+                        value: 0.0,
+                        expected: "at least 1".into(),
+                    },
+                ));
+            }
             Some(c) => c,
             None => 1,
         };
         if d.wheels == Some(0) {
-            return Err(Error::spec(format!("{path}.wheels"), SpecErrorKind::OutOfRange { value: 0.0, expected: "at least 1".into() }));
+            return Err(Error::spec(
+                format!("{path}.wheels"),
+                SpecErrorKind::OutOfRange {
+                    value: 0.0,
+                    expected: "at least 1".into(),
+                },
+            ));
         }
         debug_assert!(n > 0 || name == &spec.frame);
-        links.push(Link { name: name.clone(), inertia, mass, copies, wheels: d.wheels, sized: dl.sized });
+        links.push(Link {
+            name: name.clone(),
+            inertia,
+            mass,
+            copies,
+            wheels: d.wheels,
+            sized: dl.sized,
+        });
     }
-    let ids: HashMap<&str, LinkId> =
-        draft.links.keys().enumerate().map(|(i, k)| (k.as_str(), LinkId::from_index(i))).collect();
+    let ids: HashMap<&str, LinkId> = draft
+        .links
+        .keys()
+        .enumerate()
+        .map(|(i, k)| (k.as_str(), LinkId::from_index(i)))
+        .collect();
     let frame = ids[spec.frame.as_str()];
 
     // Levels, interned in first-appearance order.
@@ -527,12 +649,29 @@ fn build(spec: &Spec, draft: &Draft) -> Result<Train> {
         let a = ids[r.links[0].as_str()];
         let b = ids[r.links[1].as_str()];
         if a == b {
-            return Err(Error::spec(format!("{}.links", r.path), SpecErrorKind::SelfLoop { link: r.links[0].clone() }));
+            return Err(Error::spec(
+                format!("{}.links", r.path),
+                SpecErrorKind::SelfLoop {
+                    link: r.links[0].clone(),
+                },
+            ));
         }
         if let Some(first) = seen.insert(key(a, b), r.path.clone()) {
-            return Err(Error::spec(r.path.clone(), SpecErrorKind::Duplicate { first, what: format!("a second turning pair between `{}` and `{}`", r.links[0], r.links[1]) }));
+            return Err(Error::spec(
+                r.path.clone(),
+                SpecErrorKind::Duplicate {
+                    first,
+                    what: format!(
+                        "a second turning pair between `{}` and `{}`",
+                        r.links[0], r.links[1]
+                    ),
+                },
+            ));
         }
-        revolutes.push(Revolute { links: [a, b], level: level_id(&r.level) });
+        revolutes.push(Revolute {
+            links: [a, b],
+            level: level_id(&r.level),
+        });
     }
 
     // Gear pairs.
@@ -542,19 +681,42 @@ fn build(spec: &Spec, draft: &Draft) -> Result<Train> {
     for g in &draft.gears {
         let gp = gear_pair(g, &ids)?;
         if gp.gear_i == gp.gear_j {
-            return Err(Error::spec(format!("{}.links", g.path), SpecErrorKind::SelfLoop { link: g.spec.links[0].clone() }));
+            return Err(Error::spec(
+                format!("{}.links", g.path),
+                SpecErrorKind::SelfLoop {
+                    link: g.spec.links[0].clone(),
+                },
+            ));
         }
         if let Some(first) = seen_gear.insert(key(gp.gear_i, gp.gear_j), g.path.clone()) {
-            return Err(Error::spec(g.path.clone(), SpecErrorKind::Duplicate { first, what: format!("a second gear pair between `{}` and `{}`", g.spec.links[0], g.spec.links[1]) }));
+            return Err(Error::spec(
+                g.path.clone(),
+                SpecErrorKind::Duplicate {
+                    first,
+                    what: format!(
+                        "a second gear pair between `{}` and `{}`",
+                        g.spec.links[0], g.spec.links[1]
+                    ),
+                },
+            ));
         }
         if let Some(first) = seen_name.insert(g.name.as_str(), g.path.as_str()) {
-            return Err(Error::spec(format!("{}.name", g.path), SpecErrorKind::Duplicate { first: first.to_string(), what: format!("gear pair name `{}`", g.name) }));
+            return Err(Error::spec(
+                format!("{}.name", g.path),
+                SpecErrorKind::Duplicate {
+                    first: first.to_string(),
+                    what: format!("gear pair name `{}`", g.name),
+                },
+            ));
         }
         for (side, l) in [gp.gear_i, gp.gear_j].into_iter().enumerate() {
             if !links[l.index()].sized && !g.path.starts_with("planetary") {
                 return Err(Error::invalid(
                     format!("{}.links[{side}]", g.path),
-                    format!("planet `{}` has no tooth count in its planetary set; give `teeth.planet` there to mesh it elsewhere", links[l.index()].name),
+                    format!(
+                        "planet `{}` has no tooth count in its planetary set; give `teeth.planet` there to mesh it elsewhere",
+                        links[l.index()].name
+                    ),
                 ));
             }
         }
@@ -573,32 +735,62 @@ fn build(spec: &Spec, draft: &Draft) -> Result<Train> {
                 None => {
                     return Err(Error::invalid(
                         format!("{path}.levels[{s}]"),
-                        format!("unknown axis level `{name}` (levels in use: {})", levels.join(", ")),
+                        format!(
+                            "unknown axis level `{name}` (levels in use: {})",
+                            levels.join(", ")
+                        ),
                     ));
                 }
             };
         }
         if lv[0] == lv[1] {
-            return Err(Error::invalid(format!("{path}.levels"), "an offset joins two different levels"));
+            return Err(Error::invalid(
+                format!("{path}.levels"),
+                "an offset joins two different levels",
+            ));
         }
-        offsets.push((lv[0], lv[1], positive(format!("{path}.distance"), o.distance)?));
+        offsets.push((
+            lv[0],
+            lv[1],
+            positive(format!("{path}.distance"), o.distance)?,
+        ));
     }
 
     // The typed graph: node i is link i.
-    let mut graph = UnGraph::<LinkId, Edge>::with_capacity(links.len(), revolutes.len() + gears.len());
+    let mut graph =
+        UnGraph::<LinkId, Edge>::with_capacity(links.len(), revolutes.len() + gears.len());
     for i in 0..links.len() {
         graph.add_node(LinkId::from_index(i));
     }
     for (i, r) in revolutes.iter().enumerate() {
-        graph.add_edge(node(r.links[0]), node(r.links[1]), Edge::Revolute(RevoluteId::from_index(i)));
+        graph.add_edge(
+            node(r.links[0]),
+            node(r.links[1]),
+            Edge::Revolute(RevoluteId::from_index(i)),
+        );
     }
     for (i, g) in gears.iter().enumerate() {
-        graph.add_edge(node(g.gear_i), node(g.gear_j), Edge::Gear(GearId::from_index(i)));
+        graph.add_edge(
+            node(g.gear_i),
+            node(g.gear_j),
+            Edge::Gear(GearId::from_index(i)),
+        );
     }
 
-    let topo = topology::analyse(&links, frame, &levels, &revolutes, &gears, &graph)?;
+    let clutched: Vec<LinkId> = spec
+        .elements
+        .iter()
+        .filter(|e| matches!(e.kind, ElementKind::Clutch | ElementKind::OneWayClutch))
+        .flat_map(|e| e.links.iter().filter_map(|n| ids.get(n.as_str()).copied()))
+        .collect();
+    let topo = topology::analyse(
+        &links, frame, &levels, &revolutes, &gears, &graph, &clutched,
+    )?;
 
-    let coordinates: Vec<LinkId> = (0..links.len()).map(LinkId::from_index).filter(|&l| l != frame).collect();
+    let coordinates: Vec<LinkId> = (0..links.len())
+        .map(LinkId::from_index)
+        .filter(|&l| l != frame)
+        .collect();
     let mut coord_of = vec![None; links.len()];
     for (c, l) in coordinates.iter().enumerate() {
         coord_of[l.index()] = Some(c);
@@ -639,16 +831,26 @@ fn check_single_wheels(links: &[Link], gears: &[GearPair]) -> Result<()> {
         }
         let mut first: Option<(&GearPair, Option<u32>, Option<f64>)> = None;
         for g in gears {
-            let side = if g.gear_i.index() == li { 0 } else if g.gear_j.index() == li { 1 } else { continue };
+            let side = if g.gear_i.index() == li {
+                0
+            } else if g.gear_j.index() == li {
+                1
+            } else {
+                continue;
+            };
             let z = g.teeth.map(|t| t[side]);
             let r = g.radii.map(|r| r[side]);
             if let Some((g0, z0, r0)) = first {
                 let z_clash = matches!((z0, z), (Some(a), Some(b)) if a != b);
-                let r_clash = matches!((r0, r), (Some(a), Some(b)) if (a - b).abs() > 1e-9 * a.abs());
+                let r_clash =
+                    matches!((r0, r), (Some(a), Some(b)) if (a - b).abs() > 1e-9 * a.abs());
                 if z_clash || r_clash {
                     return Err(Error::invalid(
                         g.path.clone(),
-                        format!("link `{}` has one wheel, but it has different teeth or radius here than in {}", link.name, g0.path),
+                        format!(
+                            "link `{}` has one wheel, but it has different teeth or radius here than in {}",
+                            link.name, g0.path
+                        ),
                     ));
                 }
             } else {
@@ -665,14 +867,23 @@ fn resolve_extras(spec: &Spec, train: &mut Train) -> Result<()> {
     for (n, e) in spec.elements.iter().enumerate() {
         let path = format!("elements[{n}]");
         if let Some(k) = elements.iter().position(|x| x.name == e.name) {
-            return Err(Error::spec(format!("{path}.name"), SpecErrorKind::Duplicate { first: format!("elements[{k}]"), what: format!("element name `{}`", e.name) }));
+            return Err(Error::spec(
+                format!("{path}.name"),
+                SpecErrorKind::Duplicate {
+                    first: format!("elements[{k}]"),
+                    what: format!("element name `{}`", e.name),
+                },
+            ));
         }
         let want = match e.kind {
             ElementKind::Brake | ElementKind::OneWayBrake => 1,
             ElementKind::Clutch | ElementKind::OneWayClutch => 2,
         };
         if e.links.len() != want {
-            return Err(Error::invalid(format!("{path}.links"), format!("a {:?} takes {want} link(s), got {}", e.kind, e.links.len())));
+            return Err(Error::invalid(
+                format!("{path}.links"),
+                format!("a {:?} takes {want} link(s), got {}", e.kind, e.links.len()),
+            ));
         }
         let links = e
             .links
@@ -681,12 +892,24 @@ fn resolve_extras(spec: &Spec, train: &mut Train) -> Result<()> {
             .map(|(s, l)| train.resolve(l, &format!("{path}.links[{s}]")))
             .collect::<Result<Vec<_>>>()?;
         if links.contains(&train.frame) {
-            return Err(Error::invalid(format!("{path}.links"), "name the held link; the frame is implied for a brake"));
+            return Err(Error::invalid(
+                format!("{path}.links"),
+                "name the held link; the frame is implied for a brake",
+            ));
         }
         if want == 2 && links[0] == links[1] {
-            return Err(Error::spec(format!("{path}.links"), SpecErrorKind::SelfLoop { link: e.links[0].clone() }));
+            return Err(Error::spec(
+                format!("{path}.links"),
+                SpecErrorKind::SelfLoop {
+                    link: e.links[0].clone(),
+                },
+            ));
         }
-        elements.push(ShiftElement { name: e.name.clone(), kind: e.kind, links });
+        elements.push(ShiftElement {
+            name: e.name.clone(),
+            kind: e.kind,
+            links,
+        });
     }
     train.elements = elements;
 
@@ -698,24 +921,40 @@ fn resolve_extras(spec: &Spec, train: &mut Train) -> Result<()> {
             let path = format!("transmission.states.{name}");
             let mut ids = Vec::new();
             for (s, e) in engaged.iter().enumerate() {
-                let id = train.elements.iter().position(|x| &x.name == e).ok_or_else(|| {
-                    Error::invalid(
-                        format!("{path}[{s}]"),
-                        format!(
-                            "unknown shift element `{e}`{}",
-                            suggest(e, train.elements.iter().map(|x| x.name.as_str())).map(|s| format!(" (did you mean `{s}`?)")).unwrap_or_default()
-                        ),
-                    )
-                })?;
+                let id = train
+                    .elements
+                    .iter()
+                    .position(|x| &x.name == e)
+                    .ok_or_else(|| {
+                        Error::invalid(
+                            format!("{path}[{s}]"),
+                            format!(
+                                "unknown shift element `{e}`{}",
+                                suggest(e, train.elements.iter().map(|x| x.name.as_str()))
+                                    .map(|s| format!(" (did you mean `{s}`?)"))
+                                    .unwrap_or_default()
+                            ),
+                        )
+                    })?;
                 let id = ElementId::from_index(id);
                 if ids.contains(&id) {
-                    return Err(Error::invalid(format!("{path}[{s}]"), format!("element `{e}` is listed twice")));
+                    return Err(Error::invalid(
+                        format!("{path}[{s}]"),
+                        format!("element `{e}` is listed twice"),
+                    ));
                 }
                 ids.push(id);
             }
-            states.push(GearState { name: name.clone(), engaged: ids });
+            states.push(GearState {
+                name: name.clone(),
+                engaged: ids,
+            });
         }
-        train.transmission = Some(Transmission { input, output, states });
+        train.transmission = Some(Transmission {
+            input,
+            output,
+            states,
+        });
     }
 
     if let Some(a) = &spec.analysis {
@@ -726,7 +965,8 @@ fn resolve_extras(spec: &Spec, train: &mut Train) -> Result<()> {
             let (value, exact) = match v {
                 RatioSpec::Number(x) => (finite(path, *x)?, exact::from_f64(*x)),
                 RatioSpec::Text(t) => {
-                    let q = exact::parse_rational(t).ok_or_else(|| Error::invalid(&path, format!("`{t}` is not a number")))?;
+                    let q = exact::parse_rational(t)
+                        .ok_or_else(|| Error::invalid(&path, format!("`{t}` is not a number")))?;
                     (exact::to_f64(&q), Some(q))
                 }
             };
@@ -734,14 +974,17 @@ fn resolve_extras(spec: &Spec, train: &mut Train) -> Result<()> {
         }
         for (name, v) in &a.torques {
             let path = format!("analysis.torques.{name}");
-            out.torques.push((train.resolve(name, &path)?, finite(path, *v)?));
+            out.torques
+                .push((train.resolve(name, &path)?, finite(path, *v)?));
         }
         for (name, v) in &a.accelerations {
             let path = format!("analysis.accelerations.{name}");
-            out.accelerations.push((train.resolve(name, &path)?, finite(path, *v)?));
+            out.accelerations
+                .push((train.resolve(name, &path)?, finite(path, *v)?));
         }
         for (k, name) in a.driving.iter().enumerate() {
-            out.driving.push(train.resolve(name, &format!("analysis.driving[{k}]"))?);
+            out.driving
+                .push(train.resolve(name, &format!("analysis.driving[{k}]"))?);
         }
         if let Some(r) = &a.reduce_to {
             out.reduce_to = Some(train.resolve(r, "analysis.reduce_to")?);
@@ -762,8 +1005,14 @@ fn resolve_extras(spec: &Spec, train: &mut Train) -> Result<()> {
                 initial.push((train.resolve(name, &path)?, finite(path, *v)?));
             }
             out.simulate = Some(Simulate {
-                t_end: s.t_end.map(|v| positive("analysis.simulate.t_end".into(), v)).transpose()?,
-                dt: s.dt.map(|v| positive("analysis.simulate.dt".into(), v)).transpose()?,
+                t_end: s
+                    .t_end
+                    .map(|v| positive("analysis.simulate.t_end".into(), v))
+                    .transpose()?,
+                dt: s
+                    .dt
+                    .map(|v| positive("analysis.simulate.dt".into(), v))
+                    .transpose()?,
                 method: s.method.clone(),
                 initial,
             });
