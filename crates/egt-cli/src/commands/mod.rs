@@ -1,0 +1,24 @@
+//! One module per subcommand. Each has an `Args` struct (clap) and a
+//! `run(&Args, &mut dyn Write)`; `run` here dispatches on the enum in `cli.rs`.
+
+use std::io::Write;
+
+use crate::cli::Command;
+
+pub mod check;
+pub mod circuits;
+pub mod kinematics;
+pub mod schema;
+
+/// Run one subcommand, writing its report to `out`.
+///
+/// # Errors
+/// Whatever the subcommand reports; `main` maps it to an exit code.
+pub fn run(command: &Command, out: &mut dyn Write) -> anyhow::Result<()> {
+    match command {
+        Command::Check(args) => check::run(args, out),
+        Command::Circuits(args) => circuits::run(args, out),
+        Command::Kinematics(args) => kinematics::run(args, out),
+        Command::Schema(args) => schema::run(args, out),
+    }
+}

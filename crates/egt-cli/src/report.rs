@@ -1,0 +1,152 @@
+//! Output helpers: aligned plain-text tables, number formatting (floats and
+//! exact fractions) and JSON printing. Commands build named result structs
+//! and choose table or JSON here; nothing else formats numbers.
+
+use std::io::{self, Write};
+
+use egt_core::exact::{self, Q};
+use serde::Serialize;
+
+/// Column alignment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Align {
+    Left,
+    Right,
+}
+
+/// A plain-text table: a header line, a rule, then rows, columns padded to
+/// the widest cell (numbers right-aligned).
+#[derive(Debug, Clone)]
+pub struct Table {
+    headers: Vec<String>,
+    align: Vec<Align>,
+    rows: Vec<Vec<String>>,
+}
+
+impl Table {
+    /// A table with these column headers, all left-aligned.
+    pub fn new(headers: &[&str]) -> Self {
+        Table {
+            headers: headers.iter().map(|h| (*h).to_string()).collect(),
+            align: vec![Align::Left; headers.len()],
+            rows: Vec::new(),
+        }
+    }
+
+    /// Right-align these columns (numbers).
+    pub fn right(mut self, cols: &[usize]) -> Self {
+        for &c in cols {
+            if let Some(a) = self.align.get_mut(c) {
+                *a = Align::Right;
+            }
+        }
+        self
+    }
+
+    /// Append a row (missing cells print empty).
+    pub fn row(&mut self, cells: Vec<String>) {
+        self.rows.push(cells);
+    }
+
+    /// Write the table, each line indented by `indent` spaces.
+    pub fn write(&self, out: &mut dyn Write, indent: usize) -> io::Result<()> {
+        let n = self.headers.len();
+        let mut width: Vec<usize> = self.headers.iter().map(|h| h.chars().count()).collect();
+        for r in &self.rows {
+            for (c, cell) in r.iter().enumerate().take(n) {
+                width[c] = width[c].max(cell.chars().count());
+            }
+        }
+        let pad = " ".repeat(indent);
+        let line = |out: &mut dyn Write, cells: &[String]| -> io::Result<()> {
+            let mut s = String::new();
+            for (c, (w, align)) in width.iter().zip(&self.align).enumerate() {
+                let cell = cells.get(c).map_or("", String::as_str);
+                let fill = " ".repeat(w - cell.chars().count());
+                if c > 0 {
+                    s.push_str("  ");
+                }
+                match align {
+                    Align::Left => {
+                        s.push_str(cell);
+                        s.push_str(&fill);
+                    }
+                    Align::Right => {
+                        s.push_str(&fill);
+                        s.push_str(cell);
+                    }
+                }
+            }
+            writeln!(out, "{pad}{}", s.trim_end())
+        };
+        line(out, &self.headers)?;
+        let rule: Vec<String> = width.iter().map(|w| "-".repeat(*w)).collect();
+        line(out, &rule)?;
+        for r in &self.rows {
+            line(out, r)?;
+        }
+        Ok(())
+    }
+}
+
+/// A float for a table: up to 6 decimals, trailing zeros dropped; scientific
+/// notation for very large or very small magnitudes.
+pub fn float(x: f64) -> String {
+    if !x.is_finite() {
+        return x.to_string();
+    }
+    if x == 0.0 {
+        return "0".to_string();
+    }
+    let a = x.abs();
+    if !(1e-4..1e9).contains(&a) {
+        return format!("{x:.6e}");
+    }
+    let s = format!("{x:.6}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" {
+        "0".to_string()
+    } else {
+        s.to_string()
+    }
+}
+
+/// An exact rational as `p/q` (or `p`).
+pub fn exact(q: &Q) -> String {
+    exact::display(q)
+}
+
+/// Write `value` as pretty JSON followed by a newline.
+///
+/// # Errors
+/// I/O errors (a closed pipe among them).
+pub fn json(out: &mut dyn Write, value: &impl Serialize) -> anyhow::Result<()> {
+    serde_json::to_writer_pretty(&mut *out, value)?;
+    writeln!(out)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn floats_are_short_and_signed_zero_is_plain() {
+        assert_eq!(float(2.0), "2");
+        assert_eq!(float(162.0 / 77.0), "2.103896");
+        assert_eq!(float(-0.0), "0");
+        assert_eq!(float(-1e-9), "-1.000000e-9");
+        assert_eq!(float(1e12), "1.000000e12");
+    }
+
+    #[test]
+    fn table_pads_and_right_aligns() {
+        let mut t = Table::new(&["name", "x"]).right(&[1]);
+        t.row(vec!["a".into(), "1".into()]);
+        t.row(vec!["long".into(), "10.5".into()]);
+        let mut out = Vec::new();
+        t.write(&mut out, 0).expect("write to a Vec");
+        let s = String::from_utf8(out).expect("utf8");
+        assert_eq!(s, "name     x\n----  ----\na        1\nlong  10.5\n");
+    }
+}
