@@ -506,6 +506,15 @@ impl Train {
     /// # Errors
     /// As the kinematic solve: wrong count, free links, ill-conditioning.
     pub fn velocity_matrix(&self, inputs: &[LinkId], extras: &[Extra]) -> Result<DMatrix<f64>> {
+        Ok(self.velocity_matrix_cond(inputs, extras)?.0)
+    }
+
+    /// [`Train::velocity_matrix`] with the condition estimate of [Gamma_w].
+    pub(crate) fn velocity_matrix_cond(
+        &self,
+        inputs: &[LinkId],
+        extras: &[Extra],
+    ) -> Result<(DMatrix<f64>, f64)> {
         let n = self.coordinates().len();
         let ratios = self.ratios()?;
         let plan = InverseDynamicsPlan::new(self, inputs, inputs, extras)?;
@@ -524,7 +533,8 @@ impl Train {
                 "the chosen inputs do not determine the train",
             )
         })?;
-        refuse(lu.condition(), "[Gamma_w] (eq. 23)")?;
+        let cond = lu.condition();
+        refuse(cond, "[Gamma_w] (eq. 23)")?;
         let mut v = DMatrix::zeros(n, inputs.len());
         let mut b = vec![0.0; n];
         for col in 0..inputs.len() {
@@ -535,7 +545,7 @@ impl Train {
                 v[(r, col)] = b[r];
             }
         }
-        Ok(v)
+        Ok((v, cond))
     }
 
     /// The reduced mass matrix V^T M V (eq. 25) for the given independent inputs;

@@ -109,13 +109,47 @@ pub struct PowerRequest {
 }
 
 impl Train {
+    /// Speeds under brakes/clutches as well as the Willis equations:
+    /// w = [V] w_in with [V] from eq. (23).
+    fn constrained_speeds(
+        &self,
+        inputs: &[SpeedInput],
+        extras: &[crate::dynamics::Extra],
+    ) -> Result<Speeds> {
+        let links: Vec<LinkId> = inputs.iter().map(|i| i.link).collect();
+        let (v, condition) = self.velocity_matrix_cond(&links, extras)?;
+        let mut speed = vec![0.0; self.links().len()];
+        for (r, l) in self.coordinates().iter().enumerate() {
+            speed[l.index()] = inputs
+                .iter()
+                .enumerate()
+                .map(|(c, i)| v[(r, c)] * i.speed)
+                .sum();
+        }
+        let ratios = self.ratios()?;
+        let residual = crate::kinematics::willis_residual(self, &ratios, &speed);
+        Ok(Speeds {
+            known: self.links().iter().map(|l| l.sized).collect(),
+            speed,
+            exact: None,
+            relative: Vec::new(),
+            residual,
+            condition,
+            warnings: Vec::new(),
+        })
+    }
+
     /// Power flow at an operating point, ideal or with mesh losses.
     ///
     /// # Errors
     /// As kinematics and inverse dynamics; [`AnalysisError::Other`] when no
     /// consistent direction of power flow exists (self-locking).
     pub fn power_flow(&self, req: &PowerRequest, mass: Option<&MassMatrix>) -> Result<PowerFlow> {
-        let speeds = self.kinematics(&req.speeds)?;
+        let speeds = if req.dynamics.extras.is_empty() {
+            self.kinematics(&req.speeds)?
+        } else {
+            self.constrained_speeds(&req.speeds, &req.dynamics.extras)?
+        };
         let w = &speeds.speed;
         let taus = self.ratios()?;
         let etas: Vec<f64> = self

@@ -1,0 +1,54 @@
+# egt: every task a person or CI runs, in one place. `make help` lists them.
+# Each target does its own set-up: cargo fetches crates, Python work happens
+# in a local virtualenv (.venv) built here, never in the system Python.
+
+PYTHON ?= python3
+VENV   ?= .venv
+VPY    := $(VENV)/bin/python
+EXAMPLE ?= examples/fig3_example61.toml
+
+.PHONY: help demo test test-rust test-python venv python-dev fmt lint bench chart clean
+
+help: ## List the targets
+	@grep -E '^[a-zA-Z_-]+:.*?## ' $(MAKEFILE_LIST) | awk -F':.*?## ' '{printf "  %-12s %s\n", $$1, $$2}'
+
+demo: ## Run egt on a bundled example: topology checks, circuit table, speeds
+	cargo run --release --quiet -p egt-cli -- check $(EXAMPLE)
+	cargo run --release --quiet -p egt-cli -- kinematics $(EXAMPLE)
+
+test: test-rust test-python ## Run every test (Rust and Python)
+
+test-rust: ## Rust unit, integration, CLI and doc tests
+	cargo fetch --locked || cargo fetch
+	cargo test --workspace --all-targets
+	cargo test --workspace --doc
+
+$(VENV)/.ready:
+	$(PYTHON) -m venv $(VENV)
+	$(VPY) -m pip install --quiet --upgrade pip
+	$(VPY) -m pip install --quiet maturin pytest hypothesis numpy sympy mypy
+	touch $@
+
+venv: $(VENV)/.ready ## Create the Python virtualenv with the test tools
+
+python-dev: venv ## Build and install the egt Python module into the virtualenv
+	@if [ -f crates/egt-py/pyproject.toml ]; then \
+		VIRTUAL_ENV=$(abspath $(VENV)) PATH=$(abspath $(VENV))/bin:$$PATH \
+		$(VENV)/bin/maturin develop --release --quiet -m crates/egt-py/Cargo.toml; \
+	fi
+
+test-python: python-dev ## Python tests (pytest, warnings as errors)
+	@if [ -d crates/egt-py/tests ]; then \
+		$(VPY) -m pytest -q -W error crates/egt-py/tests; \
+	else echo "no Python package yet"; fi
+
+fmt: ## Format the Rust code
+	cargo fmt --all
+
+lint: ## Clippy and format check
+	cargo fmt --all -- --check
+	cargo clippy --workspace --all-targets -- -D warnings
+
+clean: ## Remove build outputs and the virtualenv
+	cargo clean
+	rm -rf $(VENV)
