@@ -26,6 +26,10 @@ pub enum Command {
     Circuits(commands::circuits::Args),
     /// Solve every link's speed from input speeds (Willis equations, eq. 2).
     Kinematics(commands::kinematics::Args),
+    /// Inverse dynamics (eq. 6-11): driving torques, meshing forces, reactions, equivalent inertia.
+    Dynamics(commands::dynamics::Args),
+    /// Power flow: per-mesh power, mesh losses, efficiency, circulating power.
+    Power(commands::power::Args),
     /// Print the JSON Schema of the spec format.
     Schema(commands::schema::Args),
 }

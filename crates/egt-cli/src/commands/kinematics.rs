@@ -38,7 +38,7 @@ pub struct InputArg {
     pub speed: Q,
 }
 
-fn parse_input(s: &str) -> Result<InputArg, String> {
+pub(crate) fn parse_input(s: &str) -> Result<InputArg, String> {
     let (link, speed) = s
         .split_once('=')
         .ok_or_else(|| format!("expected LINK=SPEED, got `{s}`"))?;
@@ -125,7 +125,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
 }
 
 /// Inputs from `--input`, else from the spec's `[analysis] speeds`.
-fn inputs(train: &Train, args: &[InputArg]) -> anyhow::Result<Vec<SpeedInput>> {
+pub(crate) fn inputs(train: &Train, args: &[InputArg]) -> anyhow::Result<Vec<SpeedInput>> {
     if !args.is_empty() {
         return args
             .iter()

@@ -7,7 +7,9 @@ use crate::cli::Command;
 
 pub mod check;
 pub mod circuits;
+pub mod dynamics;
 pub mod kinematics;
+pub mod power;
 pub mod schema;
 
 /// Run one subcommand, writing its report to `out`.
@@ -19,6 +21,8 @@ pub fn run(command: &Command, out: &mut dyn Write) -> anyhow::Result<()> {
         Command::Check(args) => check::run(args, out),
         Command::Circuits(args) => circuits::run(args, out),
         Command::Kinematics(args) => kinematics::run(args, out),
+        Command::Dynamics(args) => dynamics::run(args, out),
+        Command::Power(args) => power::run(args, out),
         Command::Schema(args) => schema::run(args, out),
     }
 }

@@ -1,0 +1,239 @@
+//! `egt power SPEC`: power flow at an operating point: the power each link
+//! receives, the power through every mesh in the absolute frame and in its
+//! carrier's frame (the rolling power that causes mesh loss), the loss in each
+//! mesh with its basic efficiency, overall efficiency, and circulating power.
+
+use std::io::Write;
+
+use anyhow::Context;
+use egt_core::power::{Driver, PowerFlow, PowerRequest};
+use egt_core::{LinkId, Train};
+use serde::Serialize;
+
+use crate::cli::{OutputFormat, SpecArgs};
+use crate::commands::circuits::title;
+use crate::commands::dynamics::{LoadArgs, mass_if_needed, request};
+use crate::commands::kinematics::{InputArg, inputs, parse_input};
+use crate::input;
+use crate::report::{self, Table};
+
+/// Arguments of `egt power`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct Args {
+    #[command(flatten)]
+    pub spec: SpecArgs,
+    /// An input speed, `LINK=SPEED`, one per DOF. Default: `[analysis] speeds`.
+    #[arg(short, long = "input", value_name = "LINK=SPEED", value_parser = parse_input)]
+    pub inputs: Vec<InputArg>,
+    #[command(flatten)]
+    pub loads: LoadArgs,
+    /// Ignore the gear pairs' efficiencies (ideal meshes).
+    #[arg(long)]
+    pub ideal: bool,
+}
+
+#[derive(Debug, Serialize)]
+struct LinkRow {
+    name: String,
+    speed: f64,
+    torque: f64,
+    external_power: f64,
+    inertial_power: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct MeshRow {
+    pair: String,
+    carrier: String,
+    /// Power sent into the mesh by gear i, gear j and the carrier (absolute frame).
+    absolute: [f64; 3],
+    /// Rolling power in the carrier's frame.
+    rolling: f64,
+    driver: Option<String>,
+    efficiency: f64,
+    loss: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct Report {
+    source: String,
+    name: Option<String>,
+    losses: bool,
+    links: Vec<LinkRow>,
+    meshes: Vec<MeshRow>,
+    input_power: f64,
+    output_power: f64,
+    loss: f64,
+    kinetic_rate: f64,
+    efficiency: Option<f64>,
+    circulation_ratio: f64,
+    circulating_meshes: Vec<String>,
+    circulating_shafts: Vec<String>,
+    warnings: Vec<String>,
+}
+
+/// Run `egt power`.
+///
+/// # Errors
+/// Spec errors (exit 2); missing data, singular systems, self-locking (exit 1).
+pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
+    let loaded = input::load(&args.spec)?;
+    let train = &loaded.train;
+    let speeds = inputs(train, &args.inputs)?;
+    let dynamics = request(train, &args.loads)?;
+    let mass = mass_if_needed(train, &dynamics)?;
+    let req = PowerRequest {
+        speeds,
+        dynamics,
+        losses: !args.ideal,
+    };
+    let pf = train
+        .power_flow(&req, mass.as_ref())
+        .with_context(|| format!("{}: power flow", loaded.source))?;
+    let report = build(train, &loaded.source, &pf, req.losses);
+    match args.spec.format {
+        OutputFormat::Json => report::json(out, &report),
+        OutputFormat::Table => write_table(out, train, &loaded.source, &report),
+    }
+}
+
+fn build(train: &Train, source: &str, pf: &PowerFlow, losses: bool) -> Report {
+    let name = |l: LinkId| train.link_name(l).to_string();
+    let links = pf
+        .links
+        .iter()
+        .map(|l| LinkRow {
+            name: name(l.link),
+            speed: pf.speeds.speed[l.link.index()],
+            torque: pf.dynamics.torque[l.link.index()],
+            external_power: l.external,
+            inertial_power: l.inertial,
+        })
+        .collect();
+    let meshes = pf
+        .meshes
+        .iter()
+        .map(|m| {
+            let c = &train.circuits()[m.gear.index()];
+            MeshRow {
+                pair: train.gears()[m.gear.index()].name.clone(),
+                carrier: name(c.carrier),
+                absolute: m.absolute,
+                rolling: m.rolling,
+                driver: match m.driver {
+                    Driver::GearI => Some(name(c.gear_i)),
+                    Driver::GearJ => Some(name(c.gear_j)),
+                    Driver::None => None,
+                },
+                efficiency: m.efficiency,
+                loss: m.loss,
+            }
+        })
+        .collect();
+    let (cm, cs) = pf.circulating.clone().unwrap_or_default();
+    let mut warnings = pf.notes.clone();
+    warnings.extend(pf.dynamics.warnings.iter().cloned());
+    Report {
+        source: source.to_string(),
+        name: train.name().map(str::to_string),
+        losses,
+        links,
+        meshes,
+        input_power: pf.input_power,
+        output_power: pf.output_power,
+        loss: pf.loss,
+        kinetic_rate: pf.kinetic_rate,
+        efficiency: pf.efficiency,
+        circulation_ratio: pf.circulation_ratio,
+        circulating_meshes: cm
+            .iter()
+            .map(|g| train.gears()[g.index()].name.clone())
+            .collect(),
+        circulating_shafts: cs.iter().map(|&l| name(l)).collect(),
+        warnings,
+    }
+}
+
+fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> anyhow::Result<()> {
+    let f = report::float;
+    let kind = if r.losses {
+        "with mesh losses"
+    } else {
+        "ideal meshes"
+    };
+    writeln!(out, "{}: power flow ({kind})", title(train, source))?;
+    let mut t =
+        Table::new(&["link", "speed", "torque", "power in", "to inertia"]).right(&[1, 2, 3, 4]);
+    for l in &r.links {
+        t.row(vec![
+            l.name.clone(),
+            f(l.speed),
+            f(l.torque),
+            f(l.external_power),
+            f(l.inertial_power),
+        ]);
+    }
+    writeln!(out, "links (power in = applied torque x speed):")?;
+    t.write(out, 2)?;
+    let mut t = Table::new(&[
+        "pair",
+        "carrier",
+        "P_i",
+        "P_j",
+        "P_carrier",
+        "rolling",
+        "driver",
+        "eta",
+        "loss",
+    ])
+    .right(&[2, 3, 4, 5, 7, 8]);
+    for m in &r.meshes {
+        t.row(vec![
+            m.pair.clone(),
+            m.carrier.clone(),
+            f(m.absolute[0]),
+            f(m.absolute[1]),
+            f(m.absolute[2]),
+            f(m.rolling),
+            m.driver.clone().unwrap_or_else(|| "-".into()),
+            f(m.efficiency),
+            f(m.loss),
+        ]);
+    }
+    writeln!(
+        out,
+        "meshes (power sent into the mesh by each member; rolling = power in the carrier's frame):"
+    )?;
+    t.write(out, 2)?;
+    writeln!(
+        out,
+        "input power {}, output power {}, mesh losses {}, dK/dt {}",
+        f(r.input_power),
+        f(r.output_power),
+        f(r.loss),
+        f(r.kinetic_rate)
+    )?;
+    match r.efficiency {
+        Some(e) => writeln!(out, "efficiency: {}", f(e))?,
+        None => writeln!(out, "efficiency: - (no input power)")?,
+    }
+    if r.circulating_meshes.is_empty() {
+        writeln!(
+            out,
+            "circulating power: none (largest branch / input = {})",
+            f(r.circulation_ratio)
+        )?;
+    } else {
+        writeln!(
+            out,
+            "circulating power: largest branch / input = {} through shafts [{}] and meshes [{}]",
+            f(r.circulation_ratio),
+            r.circulating_shafts.join(", "),
+            r.circulating_meshes.join(", ")
+        )?;
+    }
+    for w in &r.warnings {
+        writeln!(out, "warning: {w}")?;
+    }
+    Ok(())
+}
