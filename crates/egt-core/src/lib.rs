@@ -32,6 +32,7 @@
 //! assert_eq!(egt_core::exact::display(&speeds.exact.unwrap()[carrier.index()]), "30");
 //! ```
 
+pub mod batch;
 pub mod circuits;
 pub mod dynamics;
 pub mod error;
@@ -42,6 +43,7 @@ pub mod linalg;
 pub mod mass;
 pub mod parse;
 pub mod power;
+pub mod prepared;
 pub mod spec;
 pub mod topology;
 pub mod train;

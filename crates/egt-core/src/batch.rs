@@ -1,0 +1,430 @@
+//! Batch screening: many scenarios of one prepared train, as rows of a
+//! parameter matrix, solved in parallel into rows of an output matrix.
+//!
+//! A [`BatchPlan`] names its parameter columns (`ratio.<gear>`, `speed.<link>`,
+//! `accel.<link>`, `torque.<link>`, `inertia.<link>`, `mass.<link>`,
+//! `efficiency.<gear>`) and its output columns (`speed.<link>`, `accel.<link>`,
+//! `lambda.<gear or element>`, `torque.<driving link>`, `force.<gear>`,
+//! `power.*`, `cond.*`), and gives a base row holding the spec's own values.
+//! A caller copies the base row, overrides the columns it varies, and calls
+//! [`BatchPlan::run`] (all rows, in parallel with rayon) or a [`Worker`]
+//! (one row at a time, on one thread). Rows are independent: a bad row (a
+//! non-finite parameter, a singular or ill-conditioned system, a self-locking
+//! train) is reported with its index, its outputs are NaN, and the others go on.
+//!
+//! The layout is row-major `f64` throughout, so a NumPy array maps onto it
+//! without copying. A row allocates nothing unless it fails.
+
+use rayon::prelude::*;
+
+use crate::dynamics::Extra;
+use crate::error::{AnalysisError, Error, Result};
+use crate::prepared::{Compute, PreparedTrain, Scenario, Workspace};
+use crate::train::{LinkId, Train};
+
+/// Rows solved by one worker before rayon may hand the rest to another thread.
+const ROWS_PER_TASK: usize = 256;
+
+/// What a batch asks: which links are driven at a prescribed speed and
+/// acceleration, which carry the unknown torques, which shift elements are
+/// engaged, and what to compute.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct BatchSpec {
+    /// Links with prescribed speed and acceleration (one per DOF left by the constraints).
+    pub inputs: Vec<LinkId>,
+    /// Links whose torque is solved (as many as `inputs`; often the same links).
+    pub driving: Vec<LinkId>,
+    /// Engaged brakes and clutches, each with the name its reaction column takes.
+    pub extras: Vec<(String, Extra)>,
+    /// What each row computes.
+    pub compute: Compute,
+}
+
+impl BatchSpec {
+    /// The batch the spec's `[analysis]` section describes: its speed inputs,
+    /// its driving links (default: the inputs), no engaged elements.
+    ///
+    /// # Errors
+    /// [`AnalysisError::MissingData`] when the section gives no input speeds.
+    pub fn from_analysis(train: &Train, compute: Compute) -> Result<Self> {
+        let a = train.analysis();
+        let inputs: Vec<LinkId> = a.speeds.iter().map(|s| s.0).collect();
+        if inputs.is_empty() {
+            return Err(AnalysisError::MissingData {
+                what: "the input links".into(),
+                analysis: "a batch".into(),
+                hint: "give `[analysis] speeds = { LINK = SPEED }`".into(),
+            }
+            .into());
+        }
+        let driving = if a.driving.is_empty() {
+            inputs.clone()
+        } else {
+            a.driving.clone()
+        };
+        Ok(BatchSpec {
+            inputs,
+            driving,
+            extras: Vec::new(),
+            compute,
+        })
+    }
+}
+
+/// Where each parameter group starts in a row.
+#[derive(Debug, Clone, Copy, Default)]
+struct Groups {
+    ratio: usize,
+    speed: usize,
+    accel: usize,
+    torque: usize,
+    inertia: usize,
+    mass: usize,
+    efficiency: usize,
+    end: usize,
+}
+
+/// A failed row.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RowError {
+    /// Index of the row.
+    pub row: usize,
+    /// Why it failed.
+    pub error: Error,
+}
+
+/// A train prepared for batch evaluation. Immutable and `Sync`.
+#[derive(Debug, Clone)]
+pub struct BatchPlan {
+    prepared: PreparedTrain,
+    compute: Compute,
+    parameters: Vec<String>,
+    base: Vec<f64>,
+    outputs: Vec<String>,
+    groups: Groups,
+    /// Coordinates whose speed is known (sized links), in link order.
+    known: Vec<usize>,
+    /// Gear pairs with a radius for gear i, and the radius (eq. 11).
+    forces: Vec<(usize, f64)>,
+}
+
+impl BatchPlan {
+    /// Prepare a batch.
+    ///
+    /// # Errors
+    /// As [`PreparedTrain::new`]: wrong counts, the frame or repeated links,
+    /// mass data with unknown offsets.
+    pub fn new(train: &Train, spec: &BatchSpec) -> Result<Self> {
+        let extras: Vec<Extra> = spec.extras.iter().map(|e| e.1).collect();
+        let prepared = PreparedTrain::new(train, &spec.inputs, &spec.driving, &extras)?;
+        let dynamic = spec.compute != Compute::Kinematics;
+        let a = train.analysis();
+        let name = |l: LinkId| train.link_name(l).to_string();
+        let (mut parameters, mut base) = (Vec::new(), Vec::new());
+        let mut push = |p: String, v: f64| {
+            parameters.push(p);
+            base.push(v);
+        };
+        let mut groups = Groups::default();
+        for g in train.gears() {
+            let v = g.ratio.as_ref().map_or(f64::NAN, |r| r.value);
+            push(format!("ratio.{}", g.name), v);
+        }
+        groups.speed = train.gears().len();
+        for &l in &spec.inputs {
+            let v = a.speeds.iter().find(|s| s.0 == l).map_or(f64::NAN, |s| s.1);
+            push(format!("speed.{}", name(l)), v);
+        }
+        groups.accel = groups.speed + spec.inputs.len();
+        groups.torque = groups.accel;
+        groups.inertia = groups.accel;
+        groups.mass = groups.accel;
+        groups.efficiency = groups.accel;
+        if dynamic {
+            for &l in &spec.inputs {
+                let v = a
+                    .accelerations
+                    .iter()
+                    .find(|s| s.0 == l)
+                    .map_or(0.0, |s| s.1);
+                push(format!("accel.{}", name(l)), v);
+            }
+            groups.torque = groups.accel + spec.inputs.len();
+            for &l in train.coordinates() {
+                let v: f64 = a.torques.iter().filter(|s| s.0 == l).map(|s| s.1).sum();
+                push(format!("torque.{}", name(l)), v);
+            }
+            groups.inertia = groups.torque + train.coordinates().len();
+            let mm = prepared.mass_model();
+            let (inertia, mass) = mm.train_values(train);
+            for (&l, &v) in mm.inertia_links().iter().zip(&inertia) {
+                push(format!("inertia.{}", name(l)), v);
+            }
+            groups.mass = groups.inertia + inertia.len();
+            for (&l, &v) in mm.mass_links().iter().zip(&mass) {
+                push(format!("mass.{}", name(l)), v);
+            }
+            groups.efficiency = groups.mass + mass.len();
+        }
+        if spec.compute == Compute::Power {
+            for g in train.gears() {
+                push(format!("efficiency.{}", g.name), g.efficiency);
+            }
+        }
+        groups.end = parameters.len();
+
+        let known: Vec<usize> = train
+            .coordinates()
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| train.link(**l).sized)
+            .map(|(k, _)| k)
+            .collect();
+        let coord_name = |k: usize| name(train.coordinates()[k]);
+        let mut outputs: Vec<String> = known
+            .iter()
+            .map(|&k| format!("speed.{}", coord_name(k)))
+            .collect();
+        let mut forces = Vec::new();
+        if dynamic {
+            outputs.extend(known.iter().map(|&k| format!("accel.{}", coord_name(k))));
+            outputs.extend(train.gears().iter().map(|g| format!("lambda.{}", g.name)));
+            outputs.extend(spec.extras.iter().map(|e| format!("lambda.{}", e.0)));
+            outputs.extend(spec.driving.iter().map(|&l| format!("torque.{}", name(l))));
+            for (m, g) in train.gears().iter().enumerate() {
+                if let Some(r) = prepared.radii()[m] {
+                    forces.push((m, r));
+                    outputs.push(format!("force.{}", g.name));
+                }
+            }
+        }
+        if spec.compute == Compute::Power {
+            for p in ["input", "output", "loss", "kinetic_rate", "efficiency"] {
+                outputs.push(format!("power.{p}"));
+            }
+        }
+        outputs.push("cond.kinematics".into());
+        if dynamic {
+            outputs.push("cond.forces".into());
+        }
+        Ok(BatchPlan {
+            prepared,
+            compute: spec.compute,
+            parameters,
+            base,
+            outputs,
+            groups,
+            known,
+            forces,
+        })
+    }
+
+    /// Parameter column names, in row order.
+    pub fn parameters(&self) -> &[String] {
+        &self.parameters
+    }
+    /// The column of a parameter.
+    pub fn parameter(&self, name: &str) -> Option<usize> {
+        self.parameters.iter().position(|p| p == name)
+    }
+    /// The spec's own values, one per parameter (NaN where the spec gives none).
+    pub fn base(&self) -> &[f64] {
+        &self.base
+    }
+    /// Output column names, in row order.
+    pub fn outputs(&self) -> &[String] {
+        &self.outputs
+    }
+    /// The output column of a name.
+    pub fn output(&self, name: &str) -> Option<usize> {
+        self.outputs.iter().position(|p| p == name)
+    }
+    /// What each row computes.
+    pub fn compute(&self) -> Compute {
+        self.compute
+    }
+    /// The prepared train underneath.
+    pub fn prepared(&self) -> &PreparedTrain {
+        &self.prepared
+    }
+    /// A single-threaded evaluator with its own buffers.
+    pub fn worker(&self) -> Worker<'_> {
+        Worker {
+            plan: self,
+            ws: self.prepared.workspace(),
+        }
+    }
+
+    /// Solve every row of `params` (row-major, `parameters().len()` columns)
+    /// into `out` (row-major, `outputs().len()` columns), in parallel on the
+    /// current rayon pool. Failed rows get NaN outputs and are returned, in row order.
+    ///
+    /// # Panics
+    /// When the slice lengths do not match the column counts.
+    pub fn run(&self, params: &[f64], out: &mut [f64]) -> Vec<RowError> {
+        let (p, q) = (self.parameters.len(), self.outputs.len());
+        let rows = params.len().checked_div(p).unwrap_or(0);
+        assert_eq!(
+            params.len(),
+            rows * p,
+            "params is not a whole number of rows"
+        );
+        assert_eq!(
+            out.len(),
+            rows * q,
+            "out does not have one row per scenario"
+        );
+        let mut errors: Vec<RowError> = params
+            .par_chunks(p * ROWS_PER_TASK)
+            .zip(out.par_chunks_mut(q * ROWS_PER_TASK))
+            .enumerate()
+            .map_init(
+                || self.worker(),
+                |w, (task, (pin, pout))| {
+                    let mut errors = Vec::new();
+                    for (r, (row, o)) in pin.chunks(p).zip(pout.chunks_mut(q)).enumerate() {
+                        if let Err(error) = w.eval(row, o) {
+                            errors.push(RowError {
+                                row: task * ROWS_PER_TASK + r,
+                                error,
+                            });
+                        }
+                    }
+                    errors
+                },
+            )
+            .flatten()
+            .collect();
+        errors.sort_by_key(|e| e.row);
+        errors
+    }
+}
+
+/// Evaluates rows one at a time with buffers of its own.
+#[derive(Debug)]
+pub struct Worker<'a> {
+    plan: &'a BatchPlan,
+    ws: Workspace,
+}
+
+impl Worker<'_> {
+    /// Solve one row into `out`; on error `out` is filled with NaN. Allocates
+    /// nothing unless the row fails.
+    ///
+    /// # Errors
+    /// A non-finite or out-of-range parameter (naming it); the analysis errors
+    /// of [`PreparedTrain::solve`].
+    ///
+    /// # Panics
+    /// When `row` or `out` has the wrong length.
+    pub fn eval(&mut self, row: &[f64], out: &mut [f64]) -> Result<()> {
+        let plan = self.plan;
+        assert_eq!(row.len(), plan.parameters.len(), "wrong parameter count");
+        assert_eq!(out.len(), plan.outputs.len(), "wrong output count");
+        let result = self.eval_inner(row, out);
+        if result.is_err() {
+            out.iter_mut().for_each(|v| *v = f64::NAN);
+        }
+        result
+    }
+
+    fn eval_inner(&mut self, row: &[f64], out: &mut [f64]) -> Result<()> {
+        let plan = self.plan;
+        let g = plan.groups;
+        check(plan, row)?;
+        let s = Scenario {
+            ratios: &row[g.ratio..g.speed],
+            speeds: &row[g.speed..g.accel],
+            accelerations: &row[g.accel..g.torque],
+            torques: &row[g.torque..g.inertia],
+            inertia: &row[g.inertia..g.mass],
+            mass: &row[g.mass..g.efficiency],
+            efficiency: &row[g.efficiency..g.end],
+        };
+        let pt = &plan.prepared;
+        pt.solve(&mut self.ws, &s, plan.compute)?;
+        let ws = &self.ws;
+        let mut o = 0;
+        let mut put = |v: f64| {
+            out[o] = v;
+            o += 1;
+        };
+        for &k in &plan.known {
+            put(ws.speeds()[k]);
+        }
+        if plan.compute != Compute::Kinematics {
+            for &k in &plan.known {
+                put(ws.accelerations()[k]);
+            }
+            for &v in ws.multipliers(pt) {
+                put(v);
+            }
+            for &v in ws.driving_torques(pt) {
+                put(v);
+            }
+            for &(m, r) in &plan.forces {
+                put(ws.multipliers(pt)[m] / r);
+            }
+        }
+        if plan.compute == Compute::Power {
+            let p = ws.power();
+            put(p.input);
+            put(p.output);
+            put(p.loss);
+            put(p.kinetic_rate);
+            put(if p.input > 0.0 {
+                p.output / p.input
+            } else {
+                f64::NAN
+            });
+        }
+        put(ws.conditions()[0]);
+        if plan.compute != Compute::Kinematics {
+            put(ws.conditions()[1]);
+        }
+        Ok(())
+    }
+
+    /// The workspace of the last row (all coordinates, multipliers, mass matrix).
+    pub fn workspace(&self) -> &Workspace {
+        &self.ws
+    }
+}
+
+/// Every parameter finite; inertias and masses non-negative; efficiencies in (0, 1].
+fn check(plan: &BatchPlan, row: &[f64]) -> Result<()> {
+    let g = plan.groups;
+    for (c, &v) in row.iter().enumerate() {
+        let bad = !v.is_finite()
+            || (c >= g.inertia && c < g.efficiency && v < 0.0)
+            || (c >= g.efficiency && !(v > 0.0 && v <= 1.0))
+            || (c < g.speed && v == 0.0);
+        if bad {
+            return Err(bad_parameter(plan, c, v));
+        }
+    }
+    Ok(())
+}
+
+#[cold]
+fn bad_parameter(plan: &BatchPlan, c: usize, v: f64) -> Error {
+    let g = plan.groups;
+    let expected = if v.is_nan() {
+        "a number (the spec gives no value; set it)"
+    } else if !v.is_finite() {
+        "a finite number"
+    } else if c < g.speed {
+        "a non-zero Willis ratio"
+    } else if c >= g.efficiency {
+        "an efficiency in (0, 1]"
+    } else {
+        "a value >= 0"
+    };
+    Error::spec(
+        plan.parameters[c].clone(),
+        crate::SpecErrorKind::OutOfRange {
+            value: v,
+            expected: expected.into(),
+        },
+    )
+}

@@ -1,0 +1,743 @@
+//! A train prepared for many scenarios: every index map, matrix and buffer is
+//! built once, and each scenario (one set of ratios, speeds, accelerations,
+//! loads, inertias, masses and efficiencies) is then solved without allocating.
+//!
+//! * [`MassModel`]: the mass matrix of eq. (3)-(5) as a fill from parameter
+//!   slices, built once from the eq. (4) offset chains.
+//! * [`PreparedTrain`] (immutable, shared between threads) and [`Workspace`]
+//!   (one per thread): speeds from the Willis equations (eq. 2) completed by
+//!   the input rows; accelerations from [Psi_w] (eq. 8); multipliers and driving
+//!   torques from the transposed system (eq. 10); with mesh losses, the
+//!   power-flow directions found as in `power.rs`.
+//!
+//! When the driving links are the input links and the meshes are ideal, the
+//! force matrix of eq. (10) is the matrix of eq. (8) with the input rows negated,
+//! so one LU factorisation serves speeds, accelerations and torques alike.
+
+use std::ops::Range;
+
+use crate::dynamics::Extra;
+use crate::error::{AnalysisError, Error, Result};
+use crate::linalg::{COND_REFUSE, Lu};
+use crate::power::Driver;
+use crate::train::{LinkId, Train};
+
+/// Relative size under which a rolling speed or power counts as zero (as in `power.rs`).
+const ZERO_REL: f64 = 1e-12;
+/// Largest number of lossy meshes whose directions are enumerated when iteration fails.
+const MAX_ENUMERATED_MESHES: usize = 16;
+
+/// One link's share of the mass matrix.
+#[derive(Debug, Clone)]
+struct MassEntry {
+    /// Its coordinate and its slot among the inertia parameters (own rotation, eq. 3).
+    spin: Option<(usize, usize)>,
+    /// Its slot among the mass parameters and its eq. (4) terms (translation on carriers).
+    float: Option<(usize, Range<usize>)>,
+    copies: f64,
+}
+
+/// The mass matrix [M] (eq. 3-5) prepared for varying inertias and masses.
+///
+/// Built once from the train's eq. (4) offset chains; [`MassModel::fill`] then
+/// writes [M] for any inertias and masses into a caller's buffer. With the
+/// train's own values it reproduces [`Train::mass_matrix`] exactly.
+#[derive(Debug, Clone)]
+pub struct MassModel {
+    n: usize,
+    entries: Vec<MassEntry>,
+    terms: Vec<(usize, f64)>,
+    inertia_links: Vec<LinkId>,
+    mass_links: Vec<LinkId>,
+    notes: Vec<String>,
+}
+
+impl MassModel {
+    /// Prepare from the train: an inertia slot for every sized moving link, a
+    /// mass slot for every link that floats on a moving carrier with known offsets.
+    ///
+    /// # Errors
+    /// As [`Train::mass_matrix`]: a link with a mass whose offsets are unknown,
+    /// or an inertia given for a planet whose speed is unknown.
+    pub fn new(train: &Train) -> Result<Self> {
+        // The offsets and the errors come from the one definition in mass.rs.
+        let reference = train.mass_matrix()?;
+        let n = train.coordinates().len();
+        let mut entries = Vec::new();
+        let mut terms = Vec::new();
+        let (mut inertia_links, mut mass_links) = (Vec::new(), Vec::new());
+        for (li, link) in train.links().iter().enumerate() {
+            let l = LinkId::from_index(li);
+            let Some(c) = train.coordinate(l) else {
+                continue;
+            };
+            let spin = link.sized.then(|| {
+                inertia_links.push(l);
+                (c, inertia_links.len() - 1)
+            });
+            let start = terms.len();
+            let mut complete = true;
+            for (carrier, lv) in train.offset_chain(l) {
+                match reference.offsets.iter().find(|o| o.levels == lv) {
+                    Some(o) => {
+                        if let Some(k) = train.coordinate(carrier) {
+                            terms.push((k, o.distance));
+                        }
+                    }
+                    None => complete = false,
+                }
+            }
+            let float = if complete && terms.len() > start {
+                mass_links.push(l);
+                Some((mass_links.len() - 1, start..terms.len()))
+            } else {
+                terms.truncate(start);
+                None
+            };
+            entries.push(MassEntry {
+                spin,
+                float,
+                copies: f64::from(link.copies),
+            });
+        }
+        Ok(MassModel {
+            n,
+            entries,
+            terms,
+            inertia_links,
+            mass_links,
+            notes: reference.notes,
+        })
+    }
+
+    /// Order of [M] (the number of coordinates).
+    pub fn n(&self) -> usize {
+        self.n
+    }
+    /// The links whose inertia [`MassModel::fill`] reads, in slot order.
+    pub fn inertia_links(&self) -> &[LinkId] {
+        &self.inertia_links
+    }
+    /// The links whose mass [`MassModel::fill`] reads, in slot order: those
+    /// carried on moving carriers (eq. 4).
+    pub fn mass_links(&self) -> &[LinkId] {
+        &self.mass_links
+    }
+    /// Notes from [`Train::mass_matrix`] (nested carriers, disagreeing offsets).
+    pub fn notes(&self) -> &[String] {
+        &self.notes
+    }
+    /// The train's own inertias and masses, in slot order (0 where not given).
+    pub fn train_values(&self, train: &Train) -> (Vec<f64>, Vec<f64>) {
+        let value = |v: Option<f64>| v.filter(|&x| x > 0.0).unwrap_or(0.0);
+        (
+            self.inertia_links
+                .iter()
+                .map(|&l| value(train.link(l).inertia))
+                .collect(),
+            self.mass_links
+                .iter()
+                .map(|&l| value(train.link(l).mass))
+                .collect(),
+        )
+    }
+
+    /// Write [M] (row-major, n x n) for one inertia per [`MassModel::inertia_links`]
+    /// and one mass per [`MassModel::mass_links`]. Allocates nothing.
+    pub fn fill(&self, inertia: &[f64], mass: &[f64], m: &mut [f64]) {
+        let n = self.n;
+        debug_assert_eq!(m.len(), n * n);
+        m.iter_mut().for_each(|v| *v = 0.0);
+        for e in &self.entries {
+            if let Some((c, s)) = e.spin {
+                m[c * n + c] += e.copies * inertia[s];
+            }
+            if let Some((s, range)) = &e.float {
+                let w = e.copies * mass[*s];
+                let terms = &self.terms[range.clone()];
+                for &(a, da) in terms {
+                    for &(b, db) in terms {
+                        m[a * n + b] += w * da * db;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// What a scenario computes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Compute {
+    /// Speeds only (eq. 2).
+    Kinematics,
+    /// Speeds, accelerations, multipliers, driving torques and meshing forces (eq. 2, 8, 10, 11).
+    #[default]
+    Dynamics,
+    /// As `Dynamics`, with mesh losses and the power balance.
+    Power,
+}
+
+/// One scenario's parameters, borrowed from the caller.
+#[derive(Debug, Clone, Copy)]
+pub struct Scenario<'a> {
+    /// Willis ratios, one per gear pair.
+    pub ratios: &'a [f64],
+    /// Speeds of the input links, in input order.
+    pub speeds: &'a [f64],
+    /// Accelerations of the input links (ignored for `Kinematics`).
+    pub accelerations: &'a [f64],
+    /// Known applied torque on every coordinate (ignored for `Kinematics`).
+    pub torques: &'a [f64],
+    /// One per [`MassModel::inertia_links`].
+    pub inertia: &'a [f64],
+    /// One per [`MassModel::mass_links`].
+    pub mass: &'a [f64],
+    /// Basic mesh efficiencies, one per gear pair (read by `Power` only).
+    pub efficiency: &'a [f64],
+}
+
+/// A power balance (for [`Compute::Power`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PowerSummary {
+    /// Sum of positive external powers.
+    pub input: f64,
+    /// Minus the sum of negative external powers.
+    pub output: f64,
+    /// Power lost in the meshes.
+    pub loss: f64,
+    /// dK/dt = w^T M w'.
+    pub kinetic_rate: f64,
+    /// Direction iterations used.
+    pub iterations: usize,
+}
+
+/// A train prepared for one choice of input links, driving links and extra
+/// constraints. Immutable: share it between threads, one [`Workspace`] each.
+#[derive(Debug, Clone)]
+pub struct PreparedTrain {
+    n: usize,
+    circuits: Vec<[Option<usize>; 3]>,
+    extras: Vec<[(Option<usize>, f64); 2]>,
+    inputs: Vec<usize>,
+    driving: Vec<usize>,
+    shared: bool,
+    mass: MassModel,
+    radii: Vec<Option<f64>>,
+}
+
+/// Per-thread buffers for [`PreparedTrain::solve`]; results are read from here.
+#[derive(Debug, Clone)]
+pub struct Workspace {
+    kin: Lu,
+    force: Lu,
+    speed: Vec<f64>,
+    accel: Vec<f64>,
+    x: Vec<f64>,
+    m: Vec<f64>,
+    rhs: Vec<f64>,
+    tau: Vec<f64>,
+    rolling: Vec<f64>,
+    dirs: Vec<Driver>,
+    next: Vec<Driver>,
+    lossy: Vec<usize>,
+    cond: [f64; 2],
+    power: PowerSummary,
+}
+
+impl PreparedTrain {
+    /// Prepare. `inputs` are the links whose speed (and acceleration) each
+    /// scenario prescribes; `driving` those whose torque is solved; both hold
+    /// F = coordinates - gear pairs - extras links.
+    ///
+    /// # Errors
+    /// Wrong counts, the frame or a repeated link among them; the mass-matrix
+    /// errors of [`MassModel::new`].
+    pub fn new(
+        train: &Train,
+        inputs: &[LinkId],
+        driving: &[LinkId],
+        extras: &[Extra],
+    ) -> Result<Self> {
+        let n = train.coordinates().len();
+        let c = train.circuits().len() + extras.len();
+        let f = n.checked_sub(c).ok_or_else(|| {
+            AnalysisError::Other(format!(
+                "{c} constraints on {n} coordinates: over-constrained"
+            ))
+        })?;
+        let coords = |ls: &[LinkId], what: &str| -> Result<Vec<usize>> {
+            if ls.len() != f {
+                return Err(AnalysisError::WrongInputCount {
+                    dof: f,
+                    given: ls.len(),
+                    what: what.to_string(),
+                }
+                .into());
+            }
+            let mut out = Vec::with_capacity(f);
+            for &l in ls {
+                let k = train
+                    .coordinate(l)
+                    .ok_or_else(|| AnalysisError::FrameInput {
+                        link: train.link_name(l).to_string(),
+                    })?;
+                if out.contains(&k) {
+                    return Err(AnalysisError::Other(format!(
+                        "link `{}` is listed twice among the {what}",
+                        train.link_name(l)
+                    ))
+                    .into());
+                }
+                out.push(k);
+            }
+            Ok(out)
+        };
+        let inputs = coords(inputs, "input links")?;
+        let driving = coords(driving, "driving (unknown-torque) links")?;
+        let col = |l: LinkId| train.coordinate(l);
+        Ok(PreparedTrain {
+            n,
+            circuits: train
+                .circuits()
+                .iter()
+                .map(|c| [col(c.gear_i), col(c.gear_j), col(c.carrier)])
+                .collect(),
+            extras: extras
+                .iter()
+                .map(|e| match *e {
+                    Extra::Hold(l) => [(col(l), 1.0), (None, 0.0)],
+                    Extra::Join(a, b) => [(col(a), 1.0), (col(b), -1.0)],
+                })
+                .collect(),
+            shared: inputs == driving,
+            inputs,
+            driving,
+            mass: MassModel::new(train)?,
+            radii: train
+                .gears()
+                .iter()
+                .map(|g| g.radii.map(|r| r[0]))
+                .collect(),
+        })
+    }
+
+    /// Number of coordinates (links but the frame).
+    pub fn n(&self) -> usize {
+        self.n
+    }
+    /// Number of constraint rows (Willis + extra).
+    pub fn constraints(&self) -> usize {
+        self.circuits.len() + self.extras.len()
+    }
+    /// Number of gear pairs.
+    pub fn gears(&self) -> usize {
+        self.circuits.len()
+    }
+    /// Degree of freedom left by the constraints (inputs, driving links).
+    pub fn dof(&self) -> usize {
+        self.inputs.len()
+    }
+    /// The mass model.
+    pub fn mass_model(&self) -> &MassModel {
+        &self.mass
+    }
+    /// Pitch radius of gear i of each gear pair, when known (for eq. 11).
+    pub fn radii(&self) -> &[Option<f64>] {
+        &self.radii
+    }
+    /// True when one factorisation serves eq. (8) and eq. (10) (driving links = inputs).
+    pub fn shares_factorisation(&self) -> bool {
+        self.shared
+    }
+
+    /// Buffers for one thread.
+    pub fn workspace(&self) -> Workspace {
+        let (n, g) = (self.n, self.circuits.len());
+        Workspace {
+            kin: Lu::new(n),
+            force: Lu::new(n),
+            speed: vec![0.0; n],
+            accel: vec![0.0; n],
+            x: vec![0.0; n],
+            m: vec![0.0; n * n],
+            rhs: vec![0.0; n],
+            tau: vec![0.0; g],
+            rolling: vec![0.0; g],
+            dirs: vec![Driver::None; g],
+            next: vec![Driver::None; g],
+            lossy: Vec::with_capacity(g),
+            cond: [1.0, 1.0],
+            power: PowerSummary::default(),
+        }
+    }
+
+    /// Write the constraint rows (eq. 2 with `taus`, then the extras) into the
+    /// zeroed row-major `out` with `n` columns.
+    fn fill_constraints(&self, taus: &[f64], out: &mut [f64]) {
+        let n = self.n;
+        for (m, (cols, &t)) in self.circuits.iter().zip(taus).enumerate() {
+            for (k, v) in cols.iter().zip([1.0, -t, t - 1.0]) {
+                if let Some(k) = k {
+                    out[m * n + k] += v;
+                }
+            }
+        }
+        let base = self.circuits.len();
+        for (e, row) in self.extras.iter().enumerate() {
+            for &(k, v) in row {
+                if let Some(k) = k {
+                    out[(base + e) * n + k] += v;
+                }
+            }
+        }
+    }
+
+    /// The matrix of eq. (8) (and of the speeds): constraint rows, then a unit
+    /// row per input link. Row-major n x n into `out`.
+    pub fn kinematic_matrix(&self, ratios: &[f64], out: &mut [f64]) {
+        out.iter_mut().for_each(|v| *v = 0.0);
+        self.fill_constraints(ratios, out);
+        let c = self.constraints();
+        for (r, &k) in self.inputs.iter().enumerate() {
+            out[(c + r) * self.n + k] = 1.0;
+        }
+    }
+
+    /// The matrix whose transpose eq. (10) solves: constraint rows with the
+    /// force ratios, then -1 in each driving link's column. Row-major into `out`.
+    pub fn force_matrix(&self, force_ratios: &[f64], out: &mut [f64]) {
+        out.iter_mut().for_each(|v| *v = 0.0);
+        self.fill_constraints(force_ratios, out);
+        let c = self.constraints();
+        for (r, &k) in self.driving.iter().enumerate() {
+            out[(c + r) * self.n + k] = -1.0;
+        }
+    }
+
+    /// The right-hand side of the speed (or acceleration) solve: zeros, then the inputs.
+    pub fn input_rhs(&self, values: &[f64], out: &mut [f64]) {
+        let c = self.constraints();
+        out.iter_mut().for_each(|v| *v = 0.0);
+        out[c..].copy_from_slice(values);
+    }
+
+    /// The right-hand side of eq. (10), {Q} - [M]{w'}, into `out`.
+    pub fn force_rhs(&self, mass: &[f64], torques: &[f64], accel: &[f64], out: &mut [f64]) {
+        let n = self.n;
+        for (i, o) in out.iter_mut().enumerate() {
+            let row = &mass[i * n..(i + 1) * n];
+            *o = torques[i] - row.iter().zip(accel).map(|(a, b)| a * b).sum::<f64>();
+        }
+    }
+
+    /// Solve one scenario into `ws`. Allocates nothing.
+    ///
+    /// # Errors
+    /// [`AnalysisError::Singular`] or [`AnalysisError::IllConditioned`] (past
+    /// [`COND_REFUSE`]) for eq. (8) or eq. (10); with losses, no consistent
+    /// direction of power flow (self-locking).
+    pub fn solve(&self, ws: &mut Workspace, s: &Scenario<'_>, what: Compute) -> Result<()> {
+        // Speeds and accelerations: one factorisation of eq. (8).
+        self.kinematic_matrix(s.ratios, ws.kin.matrix_mut());
+        ws.kin
+            .factor()
+            .map_err(|_| singular("[Psi_w] (eq. 8)", "the inputs do not determine the motion"))?;
+        ws.cond[0] = ws.kin.condition();
+        refuse(ws.cond[0], "[Psi_w] (eq. 8)")?;
+        self.input_rhs(s.speeds, &mut ws.speed);
+        ws.kin.solve(&mut ws.speed);
+        if what == Compute::Kinematics {
+            return Ok(());
+        }
+        self.input_rhs(s.accelerations, &mut ws.accel);
+        ws.kin.solve(&mut ws.accel);
+        self.mass.fill(s.inertia, s.mass, &mut ws.m);
+        self.force_rhs(&ws.m, s.torques, &ws.accel, &mut ws.rhs);
+        ws.tau.copy_from_slice(s.ratios);
+        self.solve_forces(ws, true)?;
+        if what == Compute::Power {
+            self.power(ws, s)?;
+        }
+        debug_assert!(self.residual_of_motion(ws, s) < 1e-8);
+        Ok(())
+    }
+
+    /// Solve eq. (10) with the force ratios in `ws.tau` and the right-hand side
+    /// in `ws.rhs`; `ideal` when `ws.tau` equals the kinematic ratios.
+    fn solve_forces(&self, ws: &mut Workspace, ideal: bool) -> Result<()> {
+        let c = self.constraints();
+        ws.x.copy_from_slice(&ws.rhs);
+        if ideal && self.shared {
+            // F = D K with D = diag(1, .., 1, -1, .., -1): x = D K^-T r.
+            ws.kin.solve_transpose(&mut ws.x);
+            ws.x[c..].iter_mut().for_each(|v| *v = -*v);
+            ws.cond[1] = ws.cond[0];
+            return Ok(());
+        }
+        self.force_matrix(&ws.tau, ws.force.matrix_mut());
+        ws.force.factor().map_err(|_| {
+            singular(
+                "the force system (eq. 10)",
+                "the driving links cannot balance the loads",
+            )
+        })?;
+        ws.cond[1] = ws.force.condition();
+        refuse(ws.cond[1], "the force system (eq. 10)")?;
+        ws.force.solve_transpose(&mut ws.x);
+        Ok(())
+    }
+
+    /// Speed of a link given by its column (the frame is at rest).
+    fn w(ws: &Workspace, k: Option<usize>) -> f64 {
+        k.map_or(0.0, |k| ws.speed[k])
+    }
+
+    /// Mesh losses: find the direction of rolling power in every lossy mesh
+    /// (iteration, then enumeration, as `power.rs`), then the power balance.
+    fn power(&self, ws: &mut Workspace, s: &Scenario<'_>) -> Result<()> {
+        let g = self.circuits.len();
+        let wscale = ws.speed.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        ws.lossy.clear();
+        for (m, cols) in self.circuits.iter().enumerate() {
+            ws.rolling[m] = Self::w(ws, cols[1]) - Self::w(ws, cols[2]);
+            if ws.rolling[m].abs() > ZERO_REL * wscale && s.efficiency[m] < 1.0 {
+                ws.lossy.push(m);
+            }
+            ws.dirs[m] = Driver::None;
+        }
+        let mut iterations = 0;
+        if !ws.lossy.is_empty() {
+            let mut converged = false;
+            for _ in 0..(2 * ws.lossy.len() + 4) {
+                iterations += 1;
+                for m in 0..g {
+                    ws.next[m] = self.implied(ws, s, m, wscale);
+                }
+                if ws.next == ws.dirs && iterations > 1 {
+                    converged = true;
+                    break;
+                }
+                ws.dirs.copy_from_slice(&ws.next);
+                self.lossy_ratios(ws, s);
+                self.solve_forces(ws, false)?;
+            }
+            if !converged {
+                self.enumerate_directions(ws, s, wscale)?;
+            }
+        }
+        // The balance.
+        let (mut input, mut output, mut kinetic_rate) = (0.0, 0.0, 0.0);
+        let c = self.constraints();
+        let n = self.n;
+        for k in 0..n {
+            let mut torque = s.torques[k];
+            if let Some(r) = self.driving.iter().position(|&d| d == k) {
+                torque += ws.x[c + r];
+            }
+            let p = torque * ws.speed[k];
+            if p > 0.0 {
+                input += p;
+            } else {
+                output -= p;
+            }
+            let mw: f64 = (0..n).map(|j| ws.m[k * n + j] * ws.accel[j]).sum();
+            kinetic_rate += mw * ws.speed[k];
+        }
+        let loss = (0..g)
+            .map(|m| ws.x[m] * (s.ratios[m] - ws.tau[m]) * ws.rolling[m])
+            .sum();
+        ws.power = PowerSummary {
+            input,
+            output,
+            loss,
+            kinetic_rate,
+            iterations,
+        };
+        Ok(())
+    }
+
+    /// Force ratios for the directions in `ws.dirs`: tau eta when gear i drives, tau / eta when gear j does.
+    fn lossy_ratios(&self, ws: &mut Workspace, s: &Scenario<'_>) {
+        for (m, t) in ws.tau.iter_mut().enumerate() {
+            let (tau, eta) = (s.ratios[m], s.efficiency[m]);
+            *t = match ws.dirs[m] {
+                Driver::GearI => tau * eta,
+                Driver::GearJ => tau / eta,
+                Driver::None => tau,
+            };
+        }
+    }
+
+    /// The driver implied by the current multipliers: gear i drives when lambda tau (w_j - w_k) > 0.
+    fn implied(&self, ws: &Workspace, s: &Scenario<'_>, m: usize, wscale: f64) -> Driver {
+        let lam = ws.x[m];
+        let x = lam * s.ratios[m] * ws.rolling[m];
+        let scale = lam.abs() * s.ratios[m].abs() * wscale;
+        if ws.rolling[m].abs() <= ZERO_REL * wscale
+            || x.abs() <= ZERO_REL * scale.max(f64::MIN_POSITIVE)
+        {
+            Driver::None
+        } else if x > 0.0 {
+            Driver::GearI
+        } else {
+            Driver::GearJ
+        }
+    }
+
+    /// Try every assignment of directions to the lossy meshes; keep the first consistent one.
+    fn enumerate_directions(
+        &self,
+        ws: &mut Workspace,
+        s: &Scenario<'_>,
+        wscale: f64,
+    ) -> Result<()> {
+        let k = ws.lossy.len();
+        if k > MAX_ENUMERATED_MESHES {
+            return Err(AnalysisError::Other(format!(
+                "power-flow directions did not settle and {k} lossy meshes are too many to enumerate"
+            ))
+            .into());
+        }
+        for bits in 0..(1u32 << k) {
+            ws.dirs.iter_mut().for_each(|d| *d = Driver::None);
+            for b in 0..k {
+                let m = ws.lossy[b];
+                ws.dirs[m] = if bits >> b & 1 == 1 {
+                    Driver::GearJ
+                } else {
+                    Driver::GearI
+                };
+            }
+            self.lossy_ratios(ws, s);
+            if self.solve_forces(ws, false).is_err() {
+                continue;
+            }
+            let consistent = (0..k).all(|b| {
+                let m = ws.lossy[b];
+                let d = self.implied(ws, s, m, wscale);
+                d == ws.dirs[m] || d == Driver::None
+            });
+            if consistent {
+                return Ok(());
+            }
+        }
+        Err(AnalysisError::Other(
+            "no consistent direction of power flow exists through the lossy meshes: the train self-locks under these loads (or the driving torque cannot overcome friction)".into(),
+        )
+        .into())
+    }
+
+    /// max |M w' + psi~^T lambda - Q - D^T T_d| relative to the largest torque (eq. 6).
+    fn residual_of_motion(&self, ws: &Workspace, s: &Scenario<'_>) -> f64 {
+        let n = self.n;
+        let c = self.constraints();
+        let mut worst = 0.0_f64;
+        let mut scale = 1e-300_f64;
+        for k in 0..n {
+            let mut r: f64 = (0..n).map(|j| ws.m[k * n + j] * ws.accel[j]).sum();
+            r -= s.torques[k];
+            scale = scale.max(s.torques[k].abs());
+            for (m, cols) in self.circuits.iter().enumerate() {
+                let t = ws.tau[m];
+                for (col, v) in cols.iter().zip([1.0, -t, t - 1.0]) {
+                    if *col == Some(k) {
+                        r += v * ws.x[m];
+                        scale = scale.max((v * ws.x[m]).abs());
+                    }
+                }
+            }
+            for (e, row) in self.extras.iter().enumerate() {
+                for &(col, v) in row {
+                    if col == Some(k) {
+                        r += v * ws.x[self.circuits.len() + e];
+                    }
+                }
+            }
+            if let Some(r_d) = self.driving.iter().position(|&d| d == k) {
+                r -= ws.x[c + r_d];
+                scale = scale.max(ws.x[c + r_d].abs());
+            }
+            worst = worst.max(r.abs());
+        }
+        worst / scale
+    }
+}
+
+impl Workspace {
+    /// Speeds of the coordinates (every link but the frame, in link order).
+    pub fn speeds(&self) -> &[f64] {
+        &self.speed
+    }
+    /// Accelerations of the coordinates.
+    pub fn accelerations(&self) -> &[f64] {
+        &self.accel
+    }
+    /// Lagrange multipliers: Willis rows, then extra rows (element reaction torques).
+    pub fn multipliers(&self, plan: &PreparedTrain) -> &[f64] {
+        &self.x[..plan.constraints()]
+    }
+    /// Driving torques, in the order of the driving links.
+    pub fn driving_torques(&self, plan: &PreparedTrain) -> &[f64] {
+        &self.x[plan.constraints()..]
+    }
+    /// The mass matrix of the last scenario (row-major).
+    pub fn mass_matrix(&self) -> &[f64] {
+        &self.m
+    }
+    /// The force ratios of the last scenario (the Willis ratios unless losses applied).
+    pub fn force_ratios(&self) -> &[f64] {
+        &self.tau
+    }
+    /// 1-norm condition estimates of eq. (8) and of eq. (10).
+    pub fn conditions(&self) -> [f64; 2] {
+        self.cond
+    }
+    /// The power balance of the last [`Compute::Power`] scenario.
+    pub fn power(&self) -> PowerSummary {
+        self.power
+    }
+}
+
+fn singular(what: &str, detail: &str) -> Error {
+    AnalysisError::Singular {
+        what: what.into(),
+        detail: detail.into(),
+    }
+    .into()
+}
+
+fn refuse(cond: f64, what: &str) -> Result<()> {
+    if cond > COND_REFUSE {
+        return Err(AnalysisError::IllConditioned {
+            what: what.into(),
+            condition: cond,
+            threshold: COND_REFUSE,
+        }
+        .into());
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::parse::Format;
+
+    const FIG3: &str = include_str!("../../../examples/fig3_example61.toml");
+
+    #[test]
+    fn mass_model_reproduces_mass_matrix() {
+        let t = Train::from_str(FIG3, Format::Toml, "fig3").expect("valid");
+        let mm = MassModel::new(&t).expect("mass data");
+        let (i, m) = mm.train_values(&t);
+        let mut buf = vec![0.0; mm.n() * mm.n()];
+        mm.fill(&i, &m, &mut buf);
+        let reference = t.mass_matrix().expect("mass data");
+        let n = mm.n();
+        for r in 0..n {
+            for c in 0..n {
+                assert_eq!(buf[r * n + c], reference.matrix[(r, c)], "({r}, {c})");
+            }
+        }
+    }
+}
