@@ -568,3 +568,47 @@ fn cli_dynamics_asks_only_for_what_it_uses() {
     assert!(err.contains("tooth count of planet `P.planet`"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A high-reduction compound epicyclic (w2/w4 = 31) with 90 % meshes: driven
+/// from the carrier it works at low efficiency; back-driven from the output it
+/// self-locks, and egt says so instead of printing a number.
+#[test]
+fn self_locking_is_reported() {
+    let t = train(
+        r#"
+        frame = "1"
+        links = [{ name = "2" }, { name = "3", wheels = 2 }, { name = "4" }]
+        revolutes = [{ links = ["1", "2"], level = "a" }, { links = ["2", "3"], level = "b" }, { links = ["1", "4"], level = "a" }]
+        gears = [{ links = ["1", "3"], teeth = [30, 20], mesh = "external", efficiency = 0.9 },
+                 { links = ["3", "4"], teeth = [20, 31], mesh = "external", efficiency = 0.9 }]
+        "#,
+    );
+    let (l2, l4) = (id(&t, "2"), id(&t, "4"));
+    let run = |driving: LinkId, loaded: LinkId| {
+        t.power_flow(
+            &PowerRequest {
+                speeds: vec![SpeedInput::from((l2, 31.0))],
+                dynamics: DynamicsRequest {
+                    torques: vec![(loaded, -10.0)],
+                    accelerations: vec![],
+                    driving: vec![driving],
+                    extras: vec![],
+                },
+                losses: true,
+            },
+            None,
+        )
+    };
+    let forward = run(l2, l4).unwrap();
+    // Forward it runs, at the low efficiency typical of such reductions, and
+    // balances power: input = output + mesh losses.
+    let eff = forward.efficiency.unwrap();
+    assert!(eff > 0.0 && eff < 0.5, "{eff}");
+    assert!(close(
+        forward.input_power,
+        forward.output_power + forward.loss,
+        1e-12
+    ));
+    let err = run(l4, l2).unwrap_err().to_string();
+    assert!(err.contains("self-locks"), "{err}");
+}

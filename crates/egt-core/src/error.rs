@@ -12,7 +12,7 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 pub enum Error {
     /// The text is not valid TOML/JSON, or a value has the wrong type.
     #[error("{0}")]
-    Syntax(#[from] SyntaxError),
+    Syntax(SyntaxError),
     /// The spec parses but says something invalid at `path`.
     #[error("{path}: {kind}")]
     Spec {
@@ -23,10 +23,39 @@ pub enum Error {
     },
     /// The graph is not a valid geared kinematic chain (paper section 2).
     #[error("topology: {0}")]
-    Topology(#[from] TopologyError),
+    Topology(TopologyError),
     /// The analysis was asked something the train cannot answer as posed.
     #[error("{0}")]
-    Analysis(#[from] AnalysisError),
+    Analysis(AnalysisError),
+    /// A transmission's gear state cannot be analysed as written.
+    #[error("{0}")]
+    Transmission(crate::transmission::TransmissionError),
+}
+
+// Written out rather than `#[from]`, which would also make the inner error the
+// `source()` and print every message twice in an error chain.
+impl From<SyntaxError> for Error {
+    fn from(e: SyntaxError) -> Self {
+        Error::Syntax(e)
+    }
+}
+
+impl From<TopologyError> for Error {
+    fn from(e: TopologyError) -> Self {
+        Error::Topology(e)
+    }
+}
+
+impl From<AnalysisError> for Error {
+    fn from(e: AnalysisError) -> Self {
+        Error::Analysis(e)
+    }
+}
+
+impl From<crate::transmission::TransmissionError> for Error {
+    fn from(e: crate::transmission::TransmissionError) -> Self {
+        Error::Transmission(e)
+    }
 }
 
 impl Error {
