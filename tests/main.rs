@@ -1,3 +1,23 @@
-//! egt's integration tests: one binary, one module per concern.
+//! The workspace's one integration-test binary (registered by `crates/egt-cli`).
+//! It drives the core library and the built `egt` binary on the bundled examples.
 
-mod dynamics; // issue 3: inverse dynamics, forces, power flow, efficiency vs independent relations
+// Shared helpers: example paths, building trains from text, exact numbers.
+mod util;
+
+// The paper's printed Willis Jacobians (examples 6.1, 6.2) and Table 2.
+mod paper;
+
+// Exact rational kinematics: closed forms of 6.1/6.2, Ford AOD and C4 ratios from teeth.
+mod exact;
+
+// Property tests on random chains and nests of planetary sets (residuals, float vs exact).
+mod properties;
+
+// One test per class of bad input: the error variant and what it names.
+mod errors;
+
+// The `egt` binary: exit codes, stdin, JSON fields, table and snapshot output.
+mod cli;
+
+// Issue 3: inverse dynamics, meshing forces, power flow and efficiency against independent relations.
+mod dynamics;

@@ -121,7 +121,15 @@ pub fn exact(q: &Q) -> String {
 /// # Errors
 /// I/O errors (a closed pipe among them).
 pub fn json(out: &mut dyn Write, value: &impl Serialize) -> anyhow::Result<()> {
-    serde_json::to_writer_pretty(&mut *out, value)?;
+    // An I/O failure inside serde_json becomes the io::Error again, so that a
+    // closed pipe is recognised in `main`.
+    serde_json::to_writer_pretty(&mut *out, value).map_err(|e| {
+        if e.is_io() {
+            anyhow::Error::from(std::io::Error::from(e))
+        } else {
+            e.into()
+        }
+    })?;
     writeln!(out)?;
     Ok(())
 }

@@ -337,7 +337,8 @@ fn subtree(tree: &Tree, top: LinkId) -> Vec<LinkId> {
         .collect()
 }
 
-/// Connected components of the graph with `cut` removed, each with whether it holds a gear edge.
+/// Connected components of the graph with `cut` removed, each with whether it
+/// holds a gear edge (meshes with `cut` itself included).
 fn components_without(graph: &UnGraph<LinkId, Edge>, cut: NodeIndex) -> Vec<(Vec<LinkId>, bool)> {
     let mut seen = vec![false; graph.node_count()];
     seen[cut.index()] = true;
@@ -358,11 +359,13 @@ fn components_without(graph: &UnGraph<LinkId, Edge>, cut: NodeIndex) -> Vec<(Vec
                 } else {
                     e.source()
                 };
-                if w == cut {
-                    continue;
-                }
+                // A mesh with the cut link itself counts too: a planet meshing
+                // only the fixed ring still moves independently of the rest.
                 if matches!(e.weight(), Edge::Gear(_)) {
                     has_gear = true;
+                }
+                if w == cut {
+                    continue;
                 }
                 if !seen[w.index()] {
                     seen[w.index()] = true;
