@@ -119,7 +119,7 @@ fn nest_toml(depth: usize, teeth: &[[i64; 4]], ground_ring: bool) -> String {
     rev("F", "K", "L0");
     let mut carrier = "K".to_string();
     let mut carrier_parent = "F".to_string();
-    for d in 0..=depth {
+    for (d, &[zs, zp, zp2, zr]) in teeth.iter().enumerate().take(depth + 1) {
         let (sun, ring, planet) = (format!("S{d}"), format!("R{d}"), format!("P{d}"));
         let axis = format!("L{d}");
         rev(&carrier_parent, &sun, &axis);
@@ -132,7 +132,6 @@ fn nest_toml(depth: usize, teeth: &[[i64; 4]], ground_ring: bool) -> String {
             rev(&carrier_parent, &ring, &axis);
         }
         rev(&carrier, &planet, &format!("L{}", d + 1));
-        let [zs, zp, zp2, zr] = teeth[d];
         let zr = if zr == zp2 { zr + 1 } else { zr };
         gears.push_str(&format!("[[gears]]\nlinks = [\"{sun}\", \"{planet}\"]\nteeth = [{zs}, {zp}]\nmesh = \"external\"\n"));
         gears.push_str(&format!("[[gears]]\nlinks = [\"{planet}\", \"{ring}\"]\nteeth = [{zp2}, {zr}]\nmesh = \"internal\"\n"));
