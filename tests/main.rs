@@ -19,5 +19,8 @@ mod errors;
 // The `egt` binary: exit codes, stdin, JSON fields, table and snapshot output.
 mod cli;
 
+// The complete spec examples in docs/spec.md validate.
+mod docs;
+
 // Issue 3: inverse dynamics, meshing forces, power flow and efficiency against independent relations.
 mod dynamics;
