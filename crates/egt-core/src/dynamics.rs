@@ -311,7 +311,9 @@ pub struct InverseDynamics {
     pub driving_torques: Vec<(LinkId, f64)>,
     /// Multipliers of the Willis rows then the extra rows.
     pub multipliers: Vec<f64>,
-    /// Torques the extra constraints apply to the train (brake or clutch reaction: on the first link).
+    /// Multipliers of the extra rows: the torque the first link of each brake or
+    /// clutch spends on it (eq. 7). The element applies minus this to its first
+    /// link (and, for a clutch, plus this to the second).
     pub element_torques: Vec<f64>,
     /// Per gear pair: multiplier, torques, tangential forces.
     pub meshes: Vec<MeshLoad>,

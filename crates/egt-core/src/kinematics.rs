@@ -388,7 +388,7 @@ impl Train {
     /// Speeds of floating links relative to their carriers: every link whose
     /// turning pair to its tree parent (not the frame) is at another level than
     /// the parent's own axis.
-    fn relative_speeds(
+    pub(crate) fn relative_speeds(
         &self,
         speed: &[f64],
         exact: Option<&[Q]>,

@@ -47,6 +47,7 @@ pub mod prepared;
 pub mod spec;
 pub mod topology;
 pub mod train;
+pub mod transmission;
 
 pub use circuits::FundamentalCircuit;
 pub use dynamics::{DynamicsRequest, Extra, InverseDynamics, InverseDynamicsPlan, MeshLoad};
@@ -57,3 +58,8 @@ pub use parse::{Format, parse_spec, spec_schema};
 pub use power::{Driver, LinkPower, MeshPower, PowerFlow, PowerRequest};
 pub use spec::Spec;
 pub use train::{Edge, GearId, GearPair, LevelId, Link, LinkId, Ratio, RevoluteId, Train};
+pub use train::{ElementId, GearState, ShiftElement, Transmission};
+pub use transmission::{
+    ElementLoad, Freewheel, GearAnalysis, GearPower, Shift, ShiftKind, ShiftTable, Slip, Spread,
+    Step, TransmissionError,
+};
