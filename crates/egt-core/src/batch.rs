@@ -5,7 +5,7 @@
 //! `accel.<link>`, `torque.<link>`, `inertia.<link>`, `mass.<link>`,
 //! `efficiency.<gear>`) and its output columns (`speed.<link>`, `accel.<link>`,
 //! `lambda.<gear or element>`, `torque.<driving link>`, `force.<gear>`,
-//! `power.*`, `cond.*`), and gives a base row holding the spec's own values.
+//! `power.*`, `cond.speeds`, `cond.accelerations`, `cond.forces`), and gives a base row holding the spec's own values.
 //! A caller copies the base row, overrides the columns it varies, and calls
 //! [`BatchPlan::run`] (all rows, in parallel with rayon) or a [`Worker`]
 //! (one row at a time, on one thread). Rows are independent: a bad row (a
@@ -25,14 +25,16 @@ use crate::train::{LinkId, Train};
 /// Rows solved by one worker before rayon may hand the rest to another thread.
 const ROWS_PER_TASK: usize = 256;
 
-/// What a batch asks: which links are driven at a prescribed speed and
-/// acceleration, which carry the unknown torques, which shift elements are
-/// engaged, and what to compute.
+/// What a batch asks: which links are driven at a prescribed speed, which at a
+/// prescribed acceleration, which carry the unknown torques, which shift
+/// elements are engaged, and what to compute.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct BatchSpec {
-    /// Links with prescribed speed and acceleration (one per DOF left by the constraints).
+    /// Links with prescribed speed (one per DOF left by the constraints).
     pub inputs: Vec<LinkId>,
-    /// Links whose torque is solved (as many as `inputs`; often the same links).
+    /// Links with prescribed acceleration (as many; usually the inputs).
+    pub accelerated: Vec<LinkId>,
+    /// Links whose torque is solved (as many; usually the inputs).
     pub driving: Vec<LinkId>,
     /// Engaged brakes and clutches, each with the name its reaction column takes.
     pub extras: Vec<(String, Extra)>,
@@ -42,7 +44,7 @@ pub struct BatchSpec {
 
 impl BatchSpec {
     /// The batch the spec's `[analysis]` section describes: its speed inputs,
-    /// its driving links (default: the inputs), no engaged elements.
+    /// its accelerated and driving links (default: the inputs), no engaged elements.
     ///
     /// # Errors
     /// [`AnalysisError::MissingData`] when the section gives no input speeds.
@@ -62,8 +64,14 @@ impl BatchSpec {
         } else {
             a.driving.clone()
         };
+        let accelerated = if a.accelerations.is_empty() {
+            inputs.clone()
+        } else {
+            a.accelerations.iter().map(|s| s.0).collect()
+        };
         Ok(BatchSpec {
             inputs,
+            accelerated,
             driving,
             extras: Vec::new(),
             compute,
@@ -116,7 +124,13 @@ impl BatchPlan {
     /// mass data with unknown offsets.
     pub fn new(train: &Train, spec: &BatchSpec) -> Result<Self> {
         let extras: Vec<Extra> = spec.extras.iter().map(|e| e.1).collect();
-        let prepared = PreparedTrain::new(train, &spec.inputs, &spec.driving, &extras)?;
+        let prepared = PreparedTrain::new(
+            train,
+            &spec.inputs,
+            &spec.accelerated,
+            &spec.driving,
+            &extras,
+        )?;
         let dynamic = spec.compute != Compute::Kinematics;
         let a = train.analysis();
         let name = |l: LinkId| train.link_name(l).to_string();
@@ -141,7 +155,7 @@ impl BatchPlan {
         groups.mass = groups.accel;
         groups.efficiency = groups.accel;
         if dynamic {
-            for &l in &spec.inputs {
+            for &l in &spec.accelerated {
                 let v = a
                     .accelerations
                     .iter()
@@ -149,7 +163,7 @@ impl BatchPlan {
                     .map_or(0.0, |s| s.1);
                 push(format!("accel.{}", name(l)), v);
             }
-            groups.torque = groups.accel + spec.inputs.len();
+            groups.torque = groups.accel + spec.accelerated.len();
             for &l in train.coordinates() {
                 let v: f64 = a.torques.iter().filter(|s| s.0 == l).map(|s| s.1).sum();
                 push(format!("torque.{}", name(l)), v);
@@ -203,8 +217,9 @@ impl BatchPlan {
                 outputs.push(format!("power.{p}"));
             }
         }
-        outputs.push("cond.kinematics".into());
+        outputs.push("cond.speeds".into());
         if dynamic {
+            outputs.push("cond.accelerations".into());
             outputs.push("cond.forces".into());
         }
         Ok(BatchPlan {
@@ -378,9 +393,11 @@ impl Worker<'_> {
                 f64::NAN
             });
         }
-        put(ws.conditions()[0]);
+        let cond = ws.conditions();
+        put(cond[0]);
         if plan.compute != Compute::Kinematics {
-            put(ws.conditions()[1]);
+            put(cond[1]);
+            put(cond[2]);
         }
         Ok(())
     }

@@ -38,6 +38,7 @@ pub mod dynamics;
 pub mod error;
 pub mod exact;
 mod expand;
+pub mod families;
 pub mod kinematics;
 pub mod linalg;
 pub mod mass;

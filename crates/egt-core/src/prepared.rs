@@ -10,9 +10,11 @@
 //!   torques from the transposed system (eq. 10); with mesh losses, the
 //!   power-flow directions found as in `power.rs`.
 //!
-//! When the driving links are the input links and the meshes are ideal, the
-//! force matrix of eq. (10) is the matrix of eq. (8) with the input rows negated,
-//! so one LU factorisation serves speeds, accelerations and torques alike.
+//! When the accelerated links are the input links, one LU factorisation serves
+//! speeds and accelerations; when the driving links are the accelerated links
+//! and the meshes are ideal, the force matrix of eq. (10) is the matrix of
+//! eq. (8) with those rows negated, so the same factorisation also gives the
+//! torques. In the common case (one set of input links) a scenario costs one LU.
 
 use std::ops::Range;
 
@@ -184,7 +186,7 @@ pub struct Scenario<'a> {
     pub ratios: &'a [f64],
     /// Speeds of the input links, in input order.
     pub speeds: &'a [f64],
-    /// Accelerations of the input links (ignored for `Kinematics`).
+    /// Accelerations of the accelerated links, in their order (ignored for `Kinematics`).
     pub accelerations: &'a [f64],
     /// Known applied torque on every coordinate (ignored for `Kinematics`).
     pub torques: &'a [f64],
@@ -219,8 +221,12 @@ pub struct PreparedTrain {
     circuits: Vec<[Option<usize>; 3]>,
     extras: Vec<[(Option<usize>, f64); 2]>,
     inputs: Vec<usize>,
+    accelerated: Vec<usize>,
     driving: Vec<usize>,
-    shared: bool,
+    /// Accelerated links = inputs: eq. (8) is the speed system.
+    accel_shared: bool,
+    /// Driving links = accelerated links: eq. (10) is eq. (8) transposed, rows negated.
+    force_shared: bool,
     mass: MassModel,
     radii: Vec<Option<f64>>,
 }
@@ -229,6 +235,7 @@ pub struct PreparedTrain {
 #[derive(Debug, Clone)]
 pub struct Workspace {
     kin: Lu,
+    acc: Lu,
     force: Lu,
     speed: Vec<f64>,
     accel: Vec<f64>,
@@ -240,14 +247,15 @@ pub struct Workspace {
     dirs: Vec<Driver>,
     next: Vec<Driver>,
     lossy: Vec<usize>,
-    cond: [f64; 2],
+    cond: [f64; 3],
     power: PowerSummary,
 }
 
 impl PreparedTrain {
-    /// Prepare. `inputs` are the links whose speed (and acceleration) each
-    /// scenario prescribes; `driving` those whose torque is solved; both hold
-    /// F = coordinates - gear pairs - extras links.
+    /// Prepare. `inputs` are the links whose speed each scenario prescribes,
+    /// `accelerated` those whose acceleration it prescribes (eq. 8), `driving`
+    /// those whose torque is solved (eq. 10); each holds F = coordinates -
+    /// gear pairs - extras links.
     ///
     /// # Errors
     /// Wrong counts, the frame or a repeated link among them; the mass-matrix
@@ -255,6 +263,7 @@ impl PreparedTrain {
     pub fn new(
         train: &Train,
         inputs: &[LinkId],
+        accelerated: &[LinkId],
         driving: &[LinkId],
         extras: &[Extra],
     ) -> Result<Self> {
@@ -293,6 +302,7 @@ impl PreparedTrain {
             Ok(out)
         };
         let inputs = coords(inputs, "input links")?;
+        let accelerated = coords(accelerated, "prescribed accelerations")?;
         let driving = coords(driving, "driving (unknown-torque) links")?;
         let col = |l: LinkId| train.coordinate(l);
         Ok(PreparedTrain {
@@ -309,8 +319,10 @@ impl PreparedTrain {
                     Extra::Join(a, b) => [(col(a), 1.0), (col(b), -1.0)],
                 })
                 .collect(),
-            shared: inputs == driving,
+            accel_shared: inputs == accelerated,
+            force_shared: accelerated == driving,
             inputs,
+            accelerated,
             driving,
             mass: MassModel::new(train)?,
             radii: train
@@ -345,9 +357,9 @@ impl PreparedTrain {
     pub fn radii(&self) -> &[Option<f64>] {
         &self.radii
     }
-    /// True when one factorisation serves eq. (8) and eq. (10) (driving links = inputs).
-    pub fn shares_factorisation(&self) -> bool {
-        self.shared
+    /// How many LU factorisations an ideal scenario costs (1 to 3).
+    pub fn factorisations(&self) -> usize {
+        1 + usize::from(!self.accel_shared) + usize::from(!self.force_shared)
     }
 
     /// Buffers for one thread.
@@ -355,6 +367,7 @@ impl PreparedTrain {
         let (n, g) = (self.n, self.circuits.len());
         Workspace {
             kin: Lu::new(n),
+            acc: Lu::new(n),
             force: Lu::new(n),
             speed: vec![0.0; n],
             accel: vec![0.0; n],
@@ -366,7 +379,7 @@ impl PreparedTrain {
             dirs: vec![Driver::None; g],
             next: vec![Driver::None; g],
             lossy: Vec::with_capacity(g),
-            cond: [1.0, 1.0],
+            cond: [1.0; 3],
             power: PowerSummary::default(),
         }
     }
@@ -392,13 +405,22 @@ impl PreparedTrain {
         }
     }
 
-    /// The matrix of eq. (8) (and of the speeds): constraint rows, then a unit
-    /// row per input link. Row-major n x n into `out`.
+    /// The speed system: constraint rows, then a unit row per input link.
+    /// Row-major n x n into `out`.
     pub fn kinematic_matrix(&self, ratios: &[f64], out: &mut [f64]) {
+        self.unit_rows(ratios, &self.inputs, out);
+    }
+
+    /// [Psi_w] of eq. (8): constraint rows, then a unit row per accelerated link.
+    pub fn acceleration_matrix(&self, ratios: &[f64], out: &mut [f64]) {
+        self.unit_rows(ratios, &self.accelerated, out);
+    }
+
+    fn unit_rows(&self, ratios: &[f64], links: &[usize], out: &mut [f64]) {
         out.iter_mut().for_each(|v| *v = 0.0);
         self.fill_constraints(ratios, out);
         let c = self.constraints();
-        for (r, &k) in self.inputs.iter().enumerate() {
+        for (r, &k) in links.iter().enumerate() {
             out[(c + r) * self.n + k] = 1.0;
         }
     }
@@ -414,7 +436,7 @@ impl PreparedTrain {
         }
     }
 
-    /// The right-hand side of the speed (or acceleration) solve: zeros, then the inputs.
+    /// The right-hand side of the speed (or acceleration) solve: zeros, then the prescribed values.
     pub fn input_rhs(&self, values: &[f64], out: &mut [f64]) {
         let c = self.constraints();
         out.iter_mut().for_each(|v| *v = 0.0);
@@ -437,20 +459,38 @@ impl PreparedTrain {
     /// [`COND_REFUSE`]) for eq. (8) or eq. (10); with losses, no consistent
     /// direction of power flow (self-locking).
     pub fn solve(&self, ws: &mut Workspace, s: &Scenario<'_>, what: Compute) -> Result<()> {
-        // Speeds and accelerations: one factorisation of eq. (8).
+        // Speeds: the Willis equations (eq. 2) completed by the input rows.
         self.kinematic_matrix(s.ratios, ws.kin.matrix_mut());
-        ws.kin
-            .factor()
-            .map_err(|_| singular("[Psi_w] (eq. 8)", "the inputs do not determine the motion"))?;
+        ws.kin.factor().map_err(|_| {
+            singular(
+                "the speed system (eq. 2)",
+                "the inputs do not determine the motion",
+            )
+        })?;
         ws.cond[0] = ws.kin.condition();
-        refuse(ws.cond[0], "[Psi_w] (eq. 8)")?;
+        refuse(ws.cond[0], "the speed system (eq. 2)")?;
         self.input_rhs(s.speeds, &mut ws.speed);
         ws.kin.solve(&mut ws.speed);
         if what == Compute::Kinematics {
             return Ok(());
         }
+        // Accelerations: eq. (8), the same factorisation when the links are the same.
         self.input_rhs(s.accelerations, &mut ws.accel);
-        ws.kin.solve(&mut ws.accel);
+        if self.accel_shared {
+            ws.cond[1] = ws.cond[0];
+            ws.kin.solve(&mut ws.accel);
+        } else {
+            self.acceleration_matrix(s.ratios, ws.acc.matrix_mut());
+            ws.acc.factor().map_err(|_| {
+                singular(
+                    "[Psi_w] (eq. 8)",
+                    "the prescribed accelerations do not determine the motion",
+                )
+            })?;
+            ws.cond[1] = ws.acc.condition();
+            refuse(ws.cond[1], "[Psi_w] (eq. 8)")?;
+            ws.acc.solve(&mut ws.accel);
+        }
         self.mass.fill(s.inertia, s.mass, &mut ws.m);
         self.force_rhs(&ws.m, s.torques, &ws.accel, &mut ws.rhs);
         ws.tau.copy_from_slice(s.ratios);
@@ -467,11 +507,12 @@ impl PreparedTrain {
     fn solve_forces(&self, ws: &mut Workspace, ideal: bool) -> Result<()> {
         let c = self.constraints();
         ws.x.copy_from_slice(&ws.rhs);
-        if ideal && self.shared {
-            // F = D K with D = diag(1, .., 1, -1, .., -1): x = D K^-T r.
-            ws.kin.solve_transpose(&mut ws.x);
+        if ideal && self.force_shared {
+            // F = D [Psi_w] with D = diag(1, .., 1, -1, .., -1): x = D [Psi_w]^-T r.
+            let lu = if self.accel_shared { &ws.kin } else { &ws.acc };
+            lu.solve_transpose(&mut ws.x);
             ws.x[c..].iter_mut().for_each(|v| *v = -*v);
-            ws.cond[1] = ws.cond[0];
+            ws.cond[2] = ws.cond[1];
             return Ok(());
         }
         self.force_matrix(&ws.tau, ws.force.matrix_mut());
@@ -481,8 +522,8 @@ impl PreparedTrain {
                 "the driving links cannot balance the loads",
             )
         })?;
-        ws.cond[1] = ws.force.condition();
-        refuse(ws.cond[1], "the force system (eq. 10)")?;
+        ws.cond[2] = ws.force.condition();
+        refuse(ws.cond[2], "the force system (eq. 10)")?;
         ws.force.solve_transpose(&mut ws.x);
         Ok(())
     }
@@ -688,8 +729,9 @@ impl Workspace {
     pub fn force_ratios(&self) -> &[f64] {
         &self.tau
     }
-    /// 1-norm condition estimates of eq. (8) and of eq. (10).
-    pub fn conditions(&self) -> [f64; 2] {
+    /// 1-norm condition estimates of the speed system, of [Psi_w] (eq. 8)
+    /// and of the force system (eq. 10), from the last scenario.
+    pub fn conditions(&self) -> [f64; 3] {
         self.cond
     }
     /// The power balance of the last [`Compute::Power`] scenario.

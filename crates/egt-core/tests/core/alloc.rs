@@ -1,0 +1,131 @@
+//! A counting global allocator, and proofs that the per-scenario paths
+//! allocate nothing: `Worker::eval` for kinematics, dynamics and lossy power
+//! flow on every test train, `PreparedTrain::solve`, `MassModel::fill`,
+//! `KinematicsPlan::solve` and `InverseDynamicsPlan::solve`.
+//!
+//! The count is per thread (the test harness runs tests on several threads),
+//! kept in a `const`-initialised thread-local `Cell`, which itself never allocates.
+
+// Implementing `GlobalAlloc` is unsafe by definition; this is the only unsafe
+// code in the workspace and it only forwards to the system allocator.
+#![allow(unsafe_code)]
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+use egt_core::prepared::{Compute, MassModel};
+use egt_core::KinematicsPlan;
+
+use crate::util::{self, one_dof_trains, plan};
+
+struct Counting;
+
+thread_local! {
+    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
+}
+
+// SAFETY: every call is forwarded unchanged to `System`; the counter is a
+// plain thread-local integer.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        // SAFETY: same contract as the caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// Allocations made by this thread while running `f`.
+pub fn allocations<R>(f: impl FnOnce() -> R) -> (u64, R) {
+    let before = ALLOCATIONS.with(Cell::get);
+    let r = f();
+    (ALLOCATIONS.with(Cell::get) - before, r)
+}
+
+#[test]
+fn the_counter_sees_allocations() {
+    // Guards the guard: a test that cannot fail proves nothing.
+    let (n, v) = allocations(|| vec![1.0_f64; 64]);
+    assert_eq!(v.len(), 64);
+    assert!(n >= 1);
+}
+
+/// Vary every parameter a little around the base row, deterministically.
+fn perturbed(base: &[f64], k: usize) -> Vec<f64> {
+    base.iter()
+        .enumerate()
+        .map(|(c, &v)| v * (1.0 + 0.01 * (((k * 7 + c * 3) % 11) as f64 - 5.0) / 5.0))
+        .collect()
+}
+
+#[test]
+fn batch_rows_allocate_nothing() {
+    for (name, t) in one_dof_trains() {
+        for compute in [Compute::Kinematics, Compute::Dynamics, Compute::Power] {
+            let p = plan(&t, compute);
+            let rows: Vec<Vec<f64>> = (0..50).map(|k| perturbed(p.base(), k)).collect();
+            let mut out = vec![0.0; p.outputs().len()];
+            let mut w = p.worker();
+            w.eval(&rows[0], &mut out)
+                .unwrap_or_else(|e| panic!("{name} {compute:?}: {e}"));
+            let (n, ok) = allocations(|| rows.iter().all(|r| w.eval(r, &mut out).is_ok()));
+            assert!(ok, "{name} {compute:?}: a row failed");
+            assert_eq!(n, 0, "{name} {compute:?}: {n} allocations in 50 rows");
+        }
+    }
+}
+
+#[test]
+fn prepared_solves_and_mass_fill_allocate_nothing() {
+    for (name, t) in one_dof_trains() {
+        let mm = MassModel::new(&t).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let (inertia, mass) = mm.train_values(&t);
+        let mut m = vec![0.0; mm.n() * mm.n()];
+        let (n, ()) = allocations(|| mm.fill(&inertia, &mass, &mut m));
+        assert_eq!(n, 0, "{name}: MassModel::fill");
+
+        // The pre-existing plans claim the same; check them here too.
+        let ratios = t.ratios().unwrap_or_else(|e| panic!("{e}"));
+        let inputs: Vec<_> = t.analysis().speeds.iter().map(|s| s.0).collect();
+        let speeds: Vec<f64> = t.analysis().speeds.iter().map(|s| s.1).collect();
+        let mut kin = KinematicsPlan::new(&t, &inputs).unwrap_or_else(|e| panic!("{e}"));
+        let mut w = vec![0.0; t.links().len()];
+        kin.solve(&ratios, &speeds, &mut w)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let (n, r) = allocations(|| kin.solve(&ratios, &speeds, &mut w));
+        assert!(r.is_ok());
+        assert_eq!(n, 0, "{name}: KinematicsPlan::solve");
+
+        let req = util::request(&t);
+        let mut id = t
+            .inverse_dynamics_plan(&req)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let nc = t.coordinates().len();
+        let mut q = vec![0.0; nc];
+        for &(l, v) in &req.torques {
+            q[t.coordinate(l).unwrap_or(0)] += v;
+        }
+        let alpha: Vec<f64> = req.accelerations.iter().map(|a| a.1).collect();
+        id.solve(&ratios, &ratios, &m, &q, &alpha)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let (n, r) = allocations(|| id.solve(&ratios, &ratios, &m, &q, &alpha));
+        assert!(r.is_ok());
+        assert_eq!(n, 0, "{name}: InverseDynamicsPlan::solve");
+    }
+}

@@ -1,0 +1,261 @@
+//! The batch API against the single-scenario analyses: every output column of
+//! a row equals what `Train::kinematics`, `Train::inverse_dynamics` and
+//! `Train::power_flow` give for a train written with that row's values;
+//! parallel runs equal row-by-row runs; bad rows are reported and the rest go on.
+
+use egt_core::batch::BatchPlan;
+use egt_core::prepared::Compute;
+use egt_core::{AnalysisError, Error, LinkId, Train};
+use proptest::prelude::*;
+
+use crate::util::{close, one_dof_trains, plan, power_request, request, train};
+
+const REL: f64 = 1e-11;
+
+/// Compare a plan's row for `t`'s own values with the single-scenario analyses of `t`.
+fn check_against_single(name: &str, t: &Train, p: &BatchPlan, row: &[f64]) {
+    let mut out = vec![0.0; p.outputs().len()];
+    p.worker()
+        .eval(row, &mut out)
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    let col = |s: String| {
+        p.output(&s)
+            .unwrap_or_else(|| panic!("{name}: no column {s}"))
+    };
+    let link = |l: LinkId| t.link_name(l).to_string();
+    let tol = |a: f64, b: f64, what: &str| {
+        assert!(
+            close(a, b, REL, 1e-9),
+            "{name}: {what}: batch {a} vs single {b}"
+        );
+    };
+
+    let mass = t.mass_matrix().unwrap_or_else(|e| panic!("{e}"));
+    let pf = t
+        .power_flow(
+            &power_request(t, p.compute() == Compute::Power),
+            Some(&mass),
+        )
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    for &l in t.coordinates() {
+        if t.link(l).sized {
+            tol(
+                out[col(format!("speed.{}", link(l)))],
+                pf.speeds.speed[l.index()],
+                "speed",
+            );
+        }
+    }
+    if p.compute() == Compute::Kinematics {
+        return;
+    }
+    let d = &pf.dynamics;
+    for &l in t.coordinates() {
+        if t.link(l).sized {
+            tol(
+                out[col(format!("accel.{}", link(l)))],
+                d.acceleration[l.index()],
+                "accel",
+            );
+        }
+    }
+    // Multipliers: compared relative to the largest one (a mesh may carry ~0).
+    let scale = d.multipliers.iter().fold(1e-300_f64, |m, v| m.max(v.abs()));
+    for (m, (g, lam)) in t.gears().iter().zip(&d.multipliers).enumerate() {
+        let b = out[col(format!("lambda.{}", g.name))];
+        assert!(
+            (b - lam).abs() <= REL * scale,
+            "{name}: lambda {}: {b} vs {lam}",
+            g.name
+        );
+        // eq. (11) with the plan's pitch radius (radii are fixed when a plan is prepared).
+        if let Some(c) = p.output(&format!("force.{}", g.name)) {
+            let r = p.prepared().radii()[m].unwrap_or(f64::NAN);
+            assert!((out[c] - lam / r).abs() <= REL * scale / r, "{name}: force");
+        }
+    }
+    for &(l, td) in &d.driving_torques {
+        tol(
+            out[col(format!("torque.{}", link(l)))],
+            td,
+            "driving torque",
+        );
+    }
+    let single = t
+        .inverse_dynamics(&request(t), Some(&mass))
+        .unwrap_or_else(|e| panic!("{e}"));
+    // Same matrix, same LU, same estimator: the condition of eq. (8) is identical
+    // (the single analysis skips eq. 8 when every acceleration is zero).
+    if t.analysis().accelerations.iter().any(|a| a.1 != 0.0) {
+        assert_eq!(
+            out[col("cond.accelerations".into())],
+            single.conditions[0],
+            "{name}"
+        );
+    }
+    if p.compute() == Compute::Power {
+        let scale = pf.input_power.abs().max(pf.output_power.abs()).max(1e-9);
+        for (c, v) in [
+            ("power.input", pf.input_power),
+            ("power.output", pf.output_power),
+            ("power.loss", pf.loss),
+            ("power.kinetic_rate", pf.kinetic_rate),
+        ] {
+            assert!(
+                (out[col(c.into())] - v).abs() <= REL * scale,
+                "{name}: {c}: {} vs {v}",
+                out[col(c.into())]
+            );
+        }
+    }
+}
+
+#[test]
+fn base_rows_equal_single_scenario_analyses() {
+    for (name, t) in one_dof_trains() {
+        for compute in [Compute::Kinematics, Compute::Dynamics, Compute::Power] {
+            let p = plan(&t, compute);
+            check_against_single(&format!("{name} {compute:?}"), &t, &p, p.base());
+        }
+    }
+}
+
+/// The paper's Fig. 3 train with the given values (as in tests of issue 3).
+#[allow(clippy::too_many_arguments)]
+fn fig3(
+    r11: f64,
+    r31: f64,
+    r32: f64,
+    i: [f64; 3],
+    m: [f64; 3],
+    eta: f64,
+    w: f64,
+    a: f64,
+    tr: f64,
+) -> String {
+    let r42 = r11 + r31 - r32;
+    let (t1, t2) = (-r31 / r11, -r42 / r32);
+    format!(
+        r#"
+        frame = "1"
+        links = [{{ name = "2", inertia = {:e}, mass = {:e} }},
+                 {{ name = "3", inertia = {:e}, mass = {:e}, copies = 3, wheels = 2 }},
+                 {{ name = "4", inertia = {:e}, mass = {:e} }}]
+        revolutes = [{{ links = ["1", "2"], level = "a" }},
+                     {{ links = ["2", "3"], level = "b" }},
+                     {{ links = ["1", "4"], level = "a" }}]
+        gears = [{{ links = ["1", "3"], ratio = {t1:e}, radii = [{r11:e}, {r31:e}], efficiency = {eta} }},
+                 {{ links = ["3", "4"], ratio = {t2:e}, radii = [{r32:e}, {r42:e}], efficiency = {eta} }}]
+        [analysis]
+        speeds = {{ "2" = {w:e} }}
+        accelerations = {{ "2" = {a:e} }}
+        torques = {{ "4" = {tr:e} }}
+        driving = ["2"]
+        "#,
+        i[0], m[0], i[1], m[1], i[2], m[2]
+    )
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    /// A plan prepared on one Fig. 3 train, fed another train's values by
+    /// column name, gives that other train's single-scenario results: the
+    /// parameter columns map to the right slots.
+    #[test]
+    fn overridden_rows_equal_single_calls_on_the_train_they_describe(
+        r11 in 0.02..0.08f64, r31 in 0.01..0.05f64, frac in 0.2..0.8f64,
+        i in prop::array::uniform3(1e-4..1.0f64), m in prop::array::uniform3(0.05..5.0f64),
+        eta in 0.9..1.0f64, w in -300.0..300.0f64, a in -50.0..50.0f64, tr in -200.0..200.0f64,
+        lossy in any::<bool>(),
+    ) {
+        let target = train(&fig3(r11, r31, frac * (r11 + r31), i, m, eta, w, a, tr));
+        let compute = if lossy { Compute::Power } else { Compute::Dynamics };
+        // Prepared on a train with other values (same offsets: the radii of pair 1 fix delta_ab).
+        let other = train(&fig3(r11, r31, 0.5 * (r11 + r31), [0.1; 3], [1.0; 3], 0.95, 10.0, 1.0, 5.0));
+        let p = plan(&other, compute);
+        let truth = plan(&target, compute);
+        let row: Vec<f64> = p.parameters().iter().map(|name| {
+            truth.base()[truth.parameter(name).unwrap_or_else(|| panic!("{name}"))]
+        }).collect();
+        check_against_single("fig3", &target, &p, &row);
+    }
+}
+
+#[test]
+fn parallel_run_equals_row_by_row_and_reports_bad_rows() {
+    let t = train(&egt_core::families::planetary_chain(2));
+    let p = plan(&t, Compute::Power);
+    let np = p.parameters().len();
+    let nq = p.outputs().len();
+    let ratio = p
+        .parameter("ratio.P1/sun-planet")
+        .unwrap_or_else(|| panic!("{:?}", p.parameters()));
+    let inertia = p
+        .parameter("inertia.c1")
+        .unwrap_or_else(|| panic!("{:?}", p.parameters()));
+    let rows = 3000;
+    let mut params = Vec::with_capacity(rows * np);
+    for r in 0..rows {
+        let mut row = p.base().to_vec();
+        row[ratio] *= 1.0 + 0.5 * (r as f64 / rows as f64);
+        params.extend(row);
+    }
+    // Bad rows: a NaN, a negative inertia, a zero ratio.
+    params[17 * np + ratio] = f64::NAN;
+    params[1234 * np + inertia] = -1.0;
+    params[2999 * np + ratio] = 0.0;
+    let mut out = vec![0.0; rows * nq];
+    let errors = p.run(&params, &mut out);
+    let bad: Vec<usize> = errors.iter().map(|e| e.row).collect();
+    assert_eq!(bad, vec![17, 1234, 2999]);
+    assert!(errors.iter().all(|e| matches!(e.error, Error::Spec { .. })));
+    let mut w = p.worker();
+    let mut one = vec![0.0; nq];
+    for r in 0..rows {
+        let res = w.eval(&params[r * np..(r + 1) * np], &mut one);
+        assert_eq!(res.is_err(), bad.contains(&r));
+        for (a, b) in one.iter().zip(&out[r * nq..(r + 1) * nq]) {
+            assert!(a == b || (a.is_nan() && b.is_nan()), "row {r}: {a} vs {b}");
+        }
+    }
+}
+
+#[test]
+fn ill_conditioned_rows_are_refused_not_returned() {
+    // Fig. 3 near lock: tau_1 tau_2 -> 1 makes [Psi_w] singular.
+    let t = train(&egt_core::families::near_locked(0.1));
+    let p = plan(&t, Compute::Dynamics);
+    let c2 = p
+        .parameter("ratio.G2")
+        .unwrap_or_else(|| panic!("{:?}", p.parameters()));
+    let t1 = p.base()[p.parameter("ratio.G1").unwrap_or(0)];
+    let mut out = vec![0.0; p.outputs().len()];
+    let mut w = p.worker();
+    let mut refused = 0;
+    for eps in [1e-3, 1e-6, 1e-9, 1e-12, 1e-14, 1e-15] {
+        let mut row = p.base().to_vec();
+        row[c2] = (1.0 + eps) / t1;
+        match w.eval(&row, &mut out) {
+            Ok(()) => {
+                let cond = out[p.output("cond.speeds").unwrap_or(0)];
+                assert!(
+                    cond <= egt_core::linalg::COND_REFUSE,
+                    "eps {eps}: returned at cond {cond}"
+                );
+                assert!(out.iter().all(|v| v.is_finite()));
+            }
+            Err(Error::Analysis(AnalysisError::IllConditioned { condition, .. })) => {
+                assert!(condition > egt_core::linalg::COND_REFUSE);
+                assert!(
+                    out.iter().all(|v| v.is_nan()),
+                    "refused rows carry no numbers"
+                );
+                refused += 1;
+            }
+            Err(Error::Analysis(AnalysisError::Singular { .. })) => refused += 1,
+            Err(e) => panic!("eps {eps}: {e}"),
+        }
+    }
+    assert!(refused >= 2, "near-lock rows must be refused");
+}

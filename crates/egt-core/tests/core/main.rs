@@ -1,0 +1,13 @@
+//! egt-core's integration tests: one binary, one module per concern.
+//!
+//! The binary installs a counting global allocator (see `alloc.rs`) so that the
+//! per-scenario hot paths can be shown to allocate nothing.
+
+// Counting allocator and the zero-allocation proofs for every prepared solve.
+mod alloc;
+
+// The batch API against the single-scenario analyses (kinematics, inverse dynamics, power flow).
+mod batch;
+
+// Trains used across modules: the bundled examples, generated families, random parameters.
+mod util;
