@@ -35,6 +35,9 @@ pub struct CircuitRow {
     pub ratio: Option<f64>,
     /// Exact ratio as `p/q`, when known.
     pub ratio_exact: Option<String>,
+    /// For a mesh with a planet given without teeth: the ratio in terms of
+    /// its unknown tooth count, e.g. `-z(P.planet)/30` (`ratio` is then null).
+    pub ratio_symbolic: Option<String>,
     /// Level of the turning pairs on gear i's side of the carrier.
     pub level_i: String,
     /// Level of the turning pairs on gear j's side.
@@ -49,23 +52,57 @@ pub fn rows(train: &Train) -> Vec<CircuitRow> {
         .enumerate()
         .map(|(m, c)| {
             let g = &train.gears()[c.gear.index()];
+            let symbolic = unsized_ratio(train, g);
             CircuitRow {
                 m: m + 1,
                 gear_pair: g.name.clone(),
                 gear_i: train.link_name(c.gear_i).to_string(),
                 gear_j: train.link_name(c.gear_j).to_string(),
                 carrier: train.link_name(c.carrier).to_string(),
-                ratio: g.ratio.as_ref().map(|r| r.value),
+                ratio: g
+                    .ratio
+                    .as_ref()
+                    .map(|r| r.value)
+                    .filter(|_| symbolic.is_none()),
                 ratio_exact: g
                     .ratio
                     .as_ref()
                     .and_then(|r| r.exact.as_ref())
-                    .map(report::exact),
+                    .map(report::exact)
+                    .filter(|_| symbolic.is_none()),
+                ratio_symbolic: symbolic,
                 level_i: train.level_name(c.level_i).to_string(),
                 level_j: train.level_name(c.level_j).to_string(),
             }
         })
         .collect()
+}
+
+/// A mesh of a planet created without a tooth count carries one virtual tooth
+/// on that side; show the true ratio in terms of the unknown count instead.
+fn unsized_ratio(train: &Train, g: &egt_core::GearPair) -> Option<String> {
+    let (si, sj) = (train.link(g.gear_i).sized, train.link(g.gear_j).sized);
+    if si && sj {
+        return None;
+    }
+    let [zi, zj] = g.teeth?;
+    let z = |sized: bool, l: egt_core::LinkId, z: u32| {
+        if sized {
+            z.to_string()
+        } else {
+            format!("z({})", train.link_name(l))
+        }
+    };
+    let sign = if g.mesh == Some(egt_core::spec::MeshKind::External) {
+        "-"
+    } else {
+        ""
+    };
+    Some(format!(
+        "{sign}{}/{}",
+        z(sj, g.gear_j, zj),
+        z(si, g.gear_i, zi)
+    ))
 }
 
 /// Write the circuit table, indented by `indent`.
@@ -91,7 +128,11 @@ pub fn write_table(out: &mut dyn Write, rows: &[CircuitRow], indent: usize) -> i
             r.gear_i.clone(),
             r.gear_j.clone(),
             r.carrier.clone(),
-            r.ratio.map_or_else(|| "?".to_string(), report::float),
+            match (&r.ratio_symbolic, r.ratio) {
+                (Some(sym), _) => sym.clone(),
+                (None, Some(x)) => report::float(x),
+                (None, None) => "?".to_string(),
+            },
             r.ratio_exact.clone().unwrap_or_else(|| "-".to_string()),
             format!("{}, {}", r.level_i, r.level_j),
         ]);
