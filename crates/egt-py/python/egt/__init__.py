@@ -1,0 +1,87 @@
+"""egt: graph-based kinematics and dynamics of epicyclic gear trains.
+
+After E. Pennestri, "Dynamic Analysis of Epicyclic Gear Train by Means of
+Computer Algebra". A gear train is written as a spec (TOML, JSON or a dict),
+validated once into a :class:`Train`, and then analysed::
+
+    import egt
+    train = egt.load("examples/fig3_example61.toml")
+    train.kinematics({"2": 100.0})["4"]        # speed of link 4
+    train.dynamics().driving_torques            # eq. (10)
+    train.batch_kinematics({"2": 100.0}, teeth=teeth_rows)   # screening
+    train.to_sympy().mass_matrix                # eq. (3)-(6) symbolically
+
+The native part lives in ``egt._egt`` (Rust, via pyo3); this package adds the
+Pythonic surface. Every error is an :class:`EgtError`.
+"""
+
+from __future__ import annotations
+
+from ._batch import BatchDynamics, BatchKinematics, RowError
+from ._egt import (
+    AnalysisError,
+    EgtError,
+    IllConditionedError,
+    InconsistentError,
+    InputError,
+    InternalError,
+    MissingDataError,
+    SingularError,
+    SpecError,
+    SpecSyntaxError,
+    TopologyError,
+    UnderdeterminedError,
+    __version__,
+)
+from ._results import (
+    Circuit,
+    Dynamics,
+    GearPair,
+    Kinematics,
+    Link,
+    LinkPower,
+    MassMatrix,
+    MeshLoad,
+    MeshPower,
+    Offset,
+    PowerFlow,
+    RelativeSpeed,
+)
+from ._train import Speed, Train, load, loads
+
+__all__ = [
+    "__version__",
+    "Train",
+    "load",
+    "loads",
+    "Speed",
+    # results
+    "Link",
+    "GearPair",
+    "Circuit",
+    "Offset",
+    "RelativeSpeed",
+    "Kinematics",
+    "MassMatrix",
+    "MeshLoad",
+    "Dynamics",
+    "MeshPower",
+    "LinkPower",
+    "PowerFlow",
+    "BatchKinematics",
+    "BatchDynamics",
+    "RowError",
+    # errors
+    "EgtError",
+    "SpecError",
+    "SpecSyntaxError",
+    "TopologyError",
+    "AnalysisError",
+    "InputError",
+    "UnderdeterminedError",
+    "InconsistentError",
+    "SingularError",
+    "IllConditionedError",
+    "MissingDataError",
+    "InternalError",
+]

@@ -1,0 +1,407 @@
+"""Records and result classes returned by :class:`egt.Train`.
+
+Every class is a frozen dataclass of plain Python values and NumPy arrays,
+with ``to_dict()`` (JSON-ready: arrays become lists, fractions strings) and,
+where a table is natural, ``to_pandas()`` (pandas is optional and imported
+only there).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import TYPE_CHECKING, Any, Dict, Iterator, Mapping, Optional, Tuple
+
+import numpy as np
+
+if TYPE_CHECKING:  # pragma: no cover
+    import pandas
+
+__all__ = [
+    "Link",
+    "GearPair",
+    "Circuit",
+    "Offset",
+    "RelativeSpeed",
+    "Kinematics",
+    "MassMatrix",
+    "MeshLoad",
+    "Dynamics",
+    "MeshPower",
+    "LinkPower",
+    "PowerFlow",
+]
+
+
+def _pandas() -> Any:
+    try:
+        import pandas
+    except ImportError as e:  # pragma: no cover - depends on the environment
+        raise ImportError(
+            "to_pandas() needs pandas: pip install 'egt[pandas]'"
+        ) from e
+    return pandas
+
+
+def _frac(text: Optional[str]) -> Optional[Fraction]:
+    return None if text is None else Fraction(text)
+
+
+def _fstr(x: Optional[Fraction]) -> Optional[str]:
+    return None if x is None else str(x)
+
+
+@dataclass(frozen=True)
+class Link:
+    """A link (rigid body) with its optional physical data."""
+
+    name: str
+    inertia: Optional[float]
+    """Moment of inertia of one copy about its own axis [kg m^2]."""
+    mass: Optional[float]
+    """Mass of one copy [kg]."""
+    copies: int
+    """Identical satellites this link stands for (the paper's n_s)."""
+    wheels: Optional[int]
+    sized: bool
+    """False for a planet given without a tooth count (its own speed is unknown)."""
+    frame: bool
+
+    def to_dict(self) -> Dict[str, Any]:
+        return dict(self.__dict__)
+
+
+@dataclass(frozen=True)
+class GearPair:
+    """A gear pair (geared edge) and its data."""
+
+    name: str
+    gear_i: str
+    gear_j: str
+    ratio: Optional[float]
+    """Willis ratio tau = (w_i - w_k) / (w_j - w_k)."""
+    ratio_exact: Optional[Fraction]
+    teeth: Optional[Tuple[int, int]]
+    mesh: Optional[str]
+    radii: Optional[Tuple[float, float]]
+    efficiency: float
+
+    def to_dict(self) -> Dict[str, Any]:
+        d = dict(self.__dict__)
+        d["ratio_exact"] = _fstr(self.ratio_exact)
+        return d
+
+
+@dataclass(frozen=True)
+class Circuit:
+    """One row of the fundamental-circuit table (paper Table 1)."""
+
+    index: int
+    """m, counting from 1 (circuit m is gear pair m)."""
+    gear: str
+    gear_i: str
+    gear_j: str
+    carrier: str
+    """The transfer vertex k."""
+    levels: Tuple[str, str]
+    """Turning-pair levels: gear i side, gear j side."""
+    ratio: Optional[float]
+    ratio_exact: Optional[Fraction]
+    path: Tuple[str, ...]
+    """The circuit's links from gear i through the tree to gear j."""
+
+    def to_dict(self) -> Dict[str, Any]:
+        d = dict(self.__dict__)
+        d["ratio_exact"] = _fstr(self.ratio_exact)
+        d["levels"] = list(self.levels)
+        d["path"] = list(self.path)
+        return d
+
+
+@dataclass(frozen=True)
+class Offset:
+    """The distance between two axis levels (the paper's delta_xy)."""
+
+    levels: Tuple[str, str]
+    distance: float
+    source: str
+
+
+@dataclass(frozen=True)
+class RelativeSpeed:
+    """A floating link's speed relative to the link carrying it."""
+
+    link: str
+    carrier: str
+    speed: float
+    exact: Optional[Fraction]
+
+
+@dataclass(frozen=True, eq=False)
+class Kinematics(Mapping[str, float]):
+    """Speeds of every link for one set of inputs.
+
+    A read-only mapping link name -> speed [rad/s]; the arrays follow
+    ``links`` (link order, the frame's speed is 0).
+    """
+
+    links: Tuple[str, ...]
+    speeds: np.ndarray
+    known: np.ndarray
+    """False where a speed is unknown (a planet given without teeth)."""
+    exact: Optional[Dict[str, Fraction]]
+    """Exact speeds, when every ratio and input is exact."""
+    relative: Tuple[RelativeSpeed, ...]
+    residual: float
+    """Largest Willis residual |psi_m| relative to the largest speed (eq. 2)."""
+    condition: float
+    warnings: Tuple[str, ...]
+
+    @classmethod
+    def _from_raw(cls, links: Tuple[str, ...], d: Mapping[str, Any]) -> "Kinematics":
+        exact = d["exact"]
+        return cls(
+            links=links,
+            speeds=d["speed"],
+            known=d["known"],
+            exact=None if exact is None else {n: Fraction(x) for n, x in zip(links, exact)},
+            relative=tuple(
+                RelativeSpeed(link, carrier, speed, _frac(ex))
+                for link, carrier, speed, ex in d["relative"]
+            ),
+            residual=d["residual"],
+            condition=d["condition"],
+            warnings=tuple(d["warnings"]),
+        )
+
+    def __getitem__(self, name: str) -> float:
+        try:
+            return float(self.speeds[self.links.index(name)])
+        except ValueError:
+            raise KeyError(name) from None
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.links)
+
+    def __len__(self) -> int:
+        return len(self.links)
+
+    def to_dict(self) -> Dict[str, Any]:
+        return {
+            "speeds": {n: float(v) for n, v in zip(self.links, self.speeds)},
+            "known": {n: bool(v) for n, v in zip(self.links, self.known)},
+            "exact": None
+            if self.exact is None
+            else {n: str(v) for n, v in self.exact.items()},
+            "relative": [
+                {
+                    "link": r.link,
+                    "carrier": r.carrier,
+                    "speed": r.speed,
+                    "exact": _fstr(r.exact),
+                }
+                for r in self.relative
+            ],
+            "residual": self.residual,
+            "condition": self.condition,
+            "warnings": list(self.warnings),
+        }
+
+    def to_pandas(self) -> "pandas.DataFrame":
+        pd = _pandas()
+        return pd.DataFrame(
+            {
+                "speed": self.speeds,
+                "known": self.known,
+                "exact": [None if self.exact is None else self.exact[n] for n in self.links],
+            },
+            index=pd.Index(self.links, name="link"),
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class MassMatrix:
+    """The mass matrix [M] of eq. (6) over the coordinates (every link but the frame)."""
+
+    coordinates: Tuple[str, ...]
+    matrix: np.ndarray
+    offsets: Tuple[Offset, ...]
+    notes: Tuple[str, ...]
+
+    def to_dict(self) -> Dict[str, Any]:
+        return {
+            "coordinates": list(self.coordinates),
+            "matrix": self.matrix.tolist(),
+            "offsets": [
+                {"levels": list(o.levels), "distance": o.distance, "source": o.source}
+                for o in self.offsets
+            ],
+            "notes": list(self.notes),
+        }
+
+    def to_pandas(self) -> "pandas.DataFrame":
+        pd = _pandas()
+        return pd.DataFrame(self.matrix, index=list(self.coordinates), columns=list(self.coordinates))
+
+
+@dataclass(frozen=True)
+class MeshLoad:
+    """The multiplier, torques and tangential forces of one gear pair (eq. 7, 11)."""
+
+    gear: str
+    multiplier: float
+    torque_i: float
+    """Torque gear i spends on the mesh, lambda_m psi_w[m, i]."""
+    torque_j: float
+    torque_carrier: float
+    force: Optional[Tuple[float, float]]
+    """F_im, F_jm of eq. (11) (all copies together), when pitch radii are known."""
+
+
+@dataclass(frozen=True, eq=False)
+class Dynamics:
+    """Inverse dynamics (eq. 6-11): accelerations, torques, multipliers, mesh loads."""
+
+    links: Tuple[str, ...]
+    accelerations: np.ndarray
+    """Angular acceleration of every link (link order)."""
+    torques: np.ndarray
+    """Applied torque on every link, known and solved; the frame's entry is the housing torque."""
+    driving_torques: Dict[str, float]
+    multipliers: np.ndarray
+    """Lagrange multipliers: Willis rows, then engaged shift elements."""
+    element_torques: np.ndarray
+    meshes: Tuple[MeshLoad, ...]
+    conditions: Tuple[float, float]
+    warnings: Tuple[str, ...]
+
+    @classmethod
+    def _from_raw(cls, links: Tuple[str, ...], d: Mapping[str, Any]) -> "Dynamics":
+        return cls(
+            links=links,
+            accelerations=d["acceleration"],
+            torques=d["torque"],
+            driving_torques=dict(d["driving_torques"]),
+            multipliers=d["multipliers"],
+            element_torques=d["element_torques"],
+            meshes=tuple(
+                MeshLoad(
+                    gear=m["gear"],
+                    multiplier=m["multiplier"],
+                    torque_i=m["torque_i"],
+                    torque_j=m["torque_j"],
+                    torque_carrier=m["torque_carrier"],
+                    force=m["force"],
+                )
+                for m in d["meshes"]
+            ),
+            conditions=tuple(d["conditions"]),  # type: ignore[arg-type]
+            warnings=tuple(d["warnings"]),
+        )
+
+    def to_dict(self) -> Dict[str, Any]:
+        return {
+            "accelerations": {n: float(v) for n, v in zip(self.links, self.accelerations)},
+            "torques": {n: float(v) for n, v in zip(self.links, self.torques)},
+            "driving_torques": dict(self.driving_torques),
+            "multipliers": self.multipliers.tolist(),
+            "element_torques": self.element_torques.tolist(),
+            "meshes": [
+                {**m.__dict__, "force": None if m.force is None else list(m.force)}
+                for m in self.meshes
+            ],
+            "conditions": list(self.conditions),
+            "warnings": list(self.warnings),
+        }
+
+    def to_pandas(self) -> "pandas.DataFrame":
+        pd = _pandas()
+        return pd.DataFrame(
+            {"acceleration": self.accelerations, "torque": self.torques},
+            index=pd.Index(self.links, name="link"),
+        )
+
+
+@dataclass(frozen=True)
+class MeshPower:
+    """Power in one mesh."""
+
+    gear: str
+    absolute: Tuple[float, float, float]
+    """Power sent into the mesh by gear i, gear j and the carrier (absolute frame)."""
+    rolling: float
+    """The power the driving gear sends in the carrier's frame."""
+    driver: Optional[str]
+    """``"gear_i"``, ``"gear_j"`` or None (no rolling power)."""
+    efficiency: float
+    loss: float
+
+
+@dataclass(frozen=True)
+class LinkPower:
+    """Power of one link: from its external torque, and stored in its inertia."""
+
+    link: str
+    external: float
+    inertial: float
+
+
+@dataclass(frozen=True, eq=False)
+class PowerFlow:
+    """Power flow through every mesh, with or without mesh losses."""
+
+    speeds: Kinematics
+    dynamics: Dynamics
+    meshes: Tuple[MeshPower, ...]
+    links: Tuple[LinkPower, ...]
+    input_power: float
+    output_power: float
+    loss: float
+    kinetic_rate: float
+    """dK/dt = w^T M w'."""
+    efficiency: Optional[float]
+    circulation_ratio: float
+    """Largest branch power over the input power (> 1: power circulates)."""
+    circulating: Optional[Tuple[Tuple[str, ...], Tuple[str, ...]]]
+    """The meshes and shafts carrying more than the input power."""
+    iterations: int
+    notes: Tuple[str, ...] = field(default_factory=tuple)
+
+    @property
+    def balance(self) -> float:
+        """input - output - loss - dK/dt: zero up to round-off (energy balance)."""
+        return self.input_power - self.output_power - self.loss - self.kinetic_rate
+
+    def to_dict(self) -> Dict[str, Any]:
+        return {
+            "speeds": self.speeds.to_dict(),
+            "dynamics": self.dynamics.to_dict(),
+            "meshes": [{**m.__dict__, "absolute": list(m.absolute)} for m in self.meshes],
+            "links": [dict(p.__dict__) for p in self.links],
+            "input_power": self.input_power,
+            "output_power": self.output_power,
+            "loss": self.loss,
+            "kinetic_rate": self.kinetic_rate,
+            "efficiency": self.efficiency,
+            "circulation_ratio": self.circulation_ratio,
+            "circulating": None
+            if self.circulating is None
+            else [list(self.circulating[0]), list(self.circulating[1])],
+            "iterations": self.iterations,
+            "notes": list(self.notes),
+        }
+
+    def to_pandas(self) -> "pandas.DataFrame":
+        pd = _pandas()
+        return pd.DataFrame(
+            {
+                "p_gear_i": [m.absolute[0] for m in self.meshes],
+                "p_gear_j": [m.absolute[1] for m in self.meshes],
+                "p_carrier": [m.absolute[2] for m in self.meshes],
+                "rolling": [m.rolling for m in self.meshes],
+                "driver": [m.driver for m in self.meshes],
+                "efficiency": [m.efficiency for m in self.meshes],
+                "loss": [m.loss for m in self.meshes],
+            },
+            index=pd.Index([m.gear for m in self.meshes], name="gear"),
+        )

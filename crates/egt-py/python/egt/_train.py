@@ -1,0 +1,505 @@
+"""The :class:`Train`: a validated epicyclic gear train and its analyses.
+
+A thin Pythonic layer over the native ``TrainCore``: it accepts mappings of
+link names, fractions and NumPy arrays, fills omitted arguments from the
+spec's ``[analysis]`` section (as the CLI does), and wraps the native results
+in the classes of :mod:`egt._results` and :mod:`egt._batch`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from fractions import Fraction
+from numbers import Rational, Real
+from typing import (
+    TYPE_CHECKING,
+    Any,
+    Dict,
+    List,
+    Mapping,
+    Optional,
+    Sequence,
+    Tuple,
+    Union,
+)
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from . import _batch
+from ._batch import BatchDynamics, BatchKinematics
+from ._egt import TrainCore, batch_dynamics, batch_kinematics
+from ._results import (
+    Circuit,
+    Dynamics,
+    GearPair,
+    Kinematics,
+    Link,
+    LinkPower,
+    MassMatrix,
+    MeshPower,
+    Offset,
+    PowerFlow,
+)
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .sympy_export import SymbolicTrain
+
+__all__ = ["Train", "load", "loads", "Speed"]
+
+Speed = Union[float, int, Fraction, str]
+"""An input speed: a number, a Fraction, or exact text such as ``"-162/77"``."""
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+def _speed_arg(name: str, v: Speed) -> Tuple[str, float, Optional[str]]:
+    """(link, float value, exact text) for the native side.
+
+    Floats are taken as the decimal they print as (0.1 means 1/10), as a user
+    writes them; Fractions, ints and ``"p/q"`` text are exact.
+    """
+    if isinstance(v, bool):
+        raise TypeError(f"speed of {name!r} must be a number, not bool")
+    if isinstance(v, str):
+        q = Fraction(v.strip())
+        return (name, float(q), f"{q.numerator}/{q.denominator}")
+    if isinstance(v, Rational):
+        q = Fraction(int(v.numerator), int(v.denominator))
+        return (name, float(q), f"{q.numerator}/{q.denominator}")
+    if isinstance(v, Real):
+        x = float(v)
+        return (name, x, repr(x) if math.isfinite(x) else None)
+    raise TypeError(f"speed of {name!r} must be a number, got {type(v).__name__}")
+
+
+def _pairs(values: Mapping[str, float], what: str) -> List[Tuple[str, float]]:
+    out = []
+    for name, v in values.items():
+        if isinstance(v, bool) or not isinstance(v, Real):
+            raise TypeError(f"{what}[{name!r}] must be a number, got {type(v).__name__}")
+        out.append((str(name), float(v)))
+    return out
+
+
+def _names(values: Sequence[str], what: str) -> List[str]:
+    if isinstance(values, str):
+        raise TypeError(f"`{what}` must be a sequence of link names, not a single string")
+    return [str(v) for v in values]
+
+
+class Train:
+    """A validated geared kinematic chain (paper section 2) and its analyses.
+
+    Build one with :func:`egt.load`, :func:`egt.loads` or :meth:`Train.from_dict`.
+    Per-link arrays follow :attr:`link_names`; matrices over the coordinates
+    (every link but the frame) follow :attr:`coordinates`.
+    """
+
+    __slots__ = ("_core", "_links")
+
+    def __init__(self, core: TrainCore) -> None:
+        if not isinstance(core, TrainCore):
+            raise TypeError("use egt.load, egt.loads or Train.from_dict to build a Train")
+        self._core = core
+        self._links: Tuple[str, ...] = tuple(core.link_names)
+
+    # -- construction ------------------------------------------------------
+
+    @classmethod
+    def from_str(cls, text: str, format: str = "toml", source: str = "<string>") -> "Train":
+        """Parse and validate a spec written in TOML or JSON."""
+        return cls(TrainCore.from_text(text, format, source))
+
+    @classmethod
+    def from_file(cls, path: PathLike) -> "Train":
+        """Read a spec file (``.json`` is JSON, anything else TOML)."""
+        p = os.fspath(path)
+        with open(p, encoding="utf-8") as f:
+            text = f.read()
+        fmt = "json" if p.lower().endswith(".json") else "toml"
+        return cls(TrainCore.from_text(text, fmt, p))
+
+    @classmethod
+    def from_dict(cls, spec: Mapping[str, Any]) -> "Train":
+        """Validate a spec given as a dict (the JSON form of the spec format)."""
+        try:
+            text = json.dumps(spec, indent=1, allow_nan=True)
+        except TypeError as e:
+            raise TypeError(f"the spec dict is not JSON-serialisable: {e}") from e
+        return cls(TrainCore.from_text(text, "json", "<dict>"))
+
+    # -- structure ---------------------------------------------------------
+
+    @property
+    def name(self) -> Optional[str]:
+        """Title from the spec."""
+        return self._core.name
+
+    @property
+    def frame(self) -> str:
+        """The frame (ground) link."""
+        return self._core.frame
+
+    @property
+    def dof(self) -> int:
+        """Degree of freedom."""
+        return self._core.dof
+
+    @property
+    def link_names(self) -> Tuple[str, ...]:
+        """Link names in link order (the order of every per-link array)."""
+        return self._links
+
+    @property
+    def coordinates(self) -> Tuple[str, ...]:
+        """Every link but the frame: the rows/columns of [M], the columns of [psi_w]."""
+        return tuple(self._core.coordinates)
+
+    @property
+    def levels(self) -> Tuple[str, ...]:
+        """Axis level names (a, b, c, ...)."""
+        return tuple(self._core.levels)
+
+    @property
+    def links(self) -> Tuple[Link, ...]:
+        """The links with their data."""
+        return tuple(Link(**d) for d in self._core.links())
+
+    @property
+    def gears(self) -> Tuple[GearPair, ...]:
+        """The gear pairs with their data (gear pair m is circuit m)."""
+        out = []
+        for d in self._core.gears():
+            d = dict(d)
+            d.pop("path")
+            ex = d["ratio_exact"]
+            d["ratio_exact"] = None if ex is None else Fraction(ex)
+            out.append(GearPair(**d))
+        return tuple(out)
+
+    @property
+    def circuits(self) -> Tuple[Circuit, ...]:
+        """The fundamental-circuit table (paper Table 1), one row per gear pair."""
+        gears = self._core.gears()
+        return tuple(
+            Circuit(
+                index=m + 1,
+                gear=c["gear"],
+                gear_i=c["gear_i"],
+                gear_j=c["gear_j"],
+                carrier=c["carrier"],
+                levels=(c["level_i"], c["level_j"]),
+                ratio=g["ratio"],
+                ratio_exact=None if g["ratio_exact"] is None else Fraction(g["ratio_exact"]),
+                path=tuple(c["path"]),
+            )
+            for m, (c, g) in enumerate(zip(self._core.circuits(), gears))
+        )
+
+    @property
+    def elements(self) -> Dict[str, Tuple[str, Tuple[str, ...]]]:
+        """Shift elements: name -> (kind, links)."""
+        return {n: (k, tuple(ls)) for n, k, ls in self._core.elements()}
+
+    def check(self) -> List[str]:
+        """The topology checks the train passed, in words (section 2)."""
+        return list(self._core.checks())
+
+    def __repr__(self) -> str:
+        return (
+            f"<egt.Train {self.name or ''!r}: {len(self._links)} links, "
+            f"{len(self._core.gears())} gear pairs, dof={self.dof}>"
+        )
+
+    # -- defaults from the spec's [analysis] section -----------------------
+
+    def _spec_speeds(self) -> List[Tuple[str, float, Optional[str]]]:
+        # A decimal written in the spec reaches us as the exact binary value of
+        # the double; the user meant the decimal they wrote (as the CLI reads it).
+        out = []
+        for n, v, ex in self._core.analysis()["speeds"]:
+            if ex is None or Fraction(ex) == Fraction(v):
+                ex = _speed_arg(n, v)[2]
+            out.append((n, v, ex))
+        return out
+
+    def _speeds(self, inputs: Optional[Mapping[str, Speed]]) -> List[Tuple[str, float, Optional[str]]]:
+        if inputs is None:
+            return self._spec_speeds()
+        return [_speed_arg(str(n), v) for n, v in inputs.items()]
+
+    def _loads(
+        self,
+        torques: Optional[Mapping[str, float]],
+        accelerations: Optional[Mapping[str, float]],
+        driving: Optional[Sequence[str]],
+    ) -> Tuple[List[Tuple[str, float]], List[Tuple[str, float]], List[str]]:
+        a = self._core.analysis()
+        t = list(a["torques"]) if torques is None else _pairs(torques, "torques")
+        acc = list(a["accelerations"]) if accelerations is None else _pairs(accelerations, "accelerations")
+        d = list(a["driving"]) if driving is None else _names(driving, "driving")
+        return t, acc, d
+
+    def _inputs(self, inputs: Optional[Sequence[str]]) -> List[str]:
+        if inputs is not None:
+            return _names(inputs, "inputs")
+        a = self._core.analysis()
+        if a["speeds"]:
+            return [n for n, _, _ in a["speeds"]]
+        return list(a["driving"])
+
+    # -- analyses ----------------------------------------------------------
+
+    def kinematics(self, inputs: Optional[Mapping[str, Speed]] = None) -> Kinematics:
+        """Speeds of every link (Willis equations, eq. 2).
+
+        ``inputs`` maps one link per DOF to its speed [rad/s]; default: the
+        spec's ``[analysis] speeds``. The exact rational solution is included
+        when every ratio and input is exact.
+        """
+        return Kinematics._from_raw(self._links, self._core.kinematics(self._speeds(inputs)))
+
+    def willis_jacobian(self) -> np.ndarray:
+        """[psi_w] of eq. (2): rows are circuits, columns the :attr:`coordinates`."""
+        return self._core.willis_jacobian()
+
+    def mass_matrix(self) -> MassMatrix:
+        """The mass matrix [M] (eq. 3-5) from inertias, masses, copies and axis offsets."""
+        d = self._core.mass_matrix()
+        return MassMatrix(
+            coordinates=self.coordinates,
+            matrix=d["matrix"],
+            offsets=tuple(Offset((a, b), dist, src) for a, b, dist, src in d["offsets"]),
+            notes=tuple(d["notes"]),
+        )
+
+    def dynamics(
+        self,
+        torques: Optional[Mapping[str, float]] = None,
+        accelerations: Optional[Mapping[str, float]] = None,
+        driving: Optional[Sequence[str]] = None,
+        *,
+        engaged: Sequence[str] = (),
+        inertia: bool = True,
+    ) -> Dynamics:
+        """Inverse dynamics (eq. 6-11): driving torques, multipliers, mesh forces.
+
+        ``torques``: known applied torques (positive along positive rotation);
+        ``accelerations``: one prescribed acceleration per DOF (omit for the
+        static analysis); ``driving``: the DOF links whose torque is solved for;
+        ``engaged``: shift elements in force. Omitted arguments come from the
+        spec's ``[analysis]`` section. ``inertia=False`` ignores [M].
+        """
+        t, a, d = self._loads(torques, accelerations, driving)
+        raw = self._core.dynamics(t, a, d, _names(engaged, "engaged"), inertia)
+        return Dynamics._from_raw(self._links, raw)
+
+    def power(
+        self,
+        speeds: Optional[Mapping[str, Speed]] = None,
+        torques: Optional[Mapping[str, float]] = None,
+        accelerations: Optional[Mapping[str, float]] = None,
+        driving: Optional[Sequence[str]] = None,
+        *,
+        engaged: Sequence[str] = (),
+        losses: bool = True,
+        inertia: bool = True,
+    ) -> PowerFlow:
+        """Power flow through every mesh, with the gear pairs' mesh losses unless ``losses=False``."""
+        t, a, d = self._loads(torques, accelerations, driving)
+        raw = self._core.power(
+            self._speeds(speeds), t, a, d, _names(engaged, "engaged"), losses, inertia
+        )
+        return PowerFlow(
+            speeds=Kinematics._from_raw(self._links, raw["speeds"]),
+            dynamics=Dynamics._from_raw(self._links, raw["dynamics"]),
+            meshes=tuple(
+                MeshPower(
+                    gear=m["gear"],
+                    absolute=tuple(m["absolute"]),  # type: ignore[arg-type]
+                    rolling=m["rolling"],
+                    driver=m["driver"],
+                    efficiency=m["efficiency"],
+                    loss=m["loss"],
+                )
+                for m in raw["meshes"]
+            ),
+            links=tuple(LinkPower(n, e, i) for n, e, i in raw["links"]),
+            input_power=raw["input_power"],
+            output_power=raw["output_power"],
+            loss=raw["loss"],
+            kinetic_rate=raw["kinetic_rate"],
+            efficiency=raw["efficiency"],
+            circulation_ratio=raw["circulation_ratio"],
+            circulating=None
+            if raw["circulating"] is None
+            else (tuple(raw["circulating"][0]), tuple(raw["circulating"][1])),
+            iterations=raw["iterations"],
+            notes=tuple(raw["notes"]),
+        )
+
+    def velocity_matrix(
+        self, inputs: Optional[Sequence[str]] = None, *, engaged: Sequence[str] = ()
+    ) -> np.ndarray:
+        """[V] of eq. (23): coordinate speeds per unit speed of each input (columns)."""
+        return self._core.velocity_matrix(self._inputs(inputs), _names(engaged, "engaged"))
+
+    def reduced_mass_matrix(
+        self, inputs: Optional[Sequence[str]] = None, *, engaged: Sequence[str] = ()
+    ) -> np.ndarray:
+        """The reduced mass matrix V^T M V (eq. 25) for the independent ``inputs``."""
+        return self._core.reduced_mass_matrix(self._inputs(inputs), _names(engaged, "engaged"))
+
+    def equivalent_inertia(self, link: Optional[str] = None) -> float:
+        """Inertia of a 1-DOF train reduced to ``link`` (default: the spec's ``reduce_to``)."""
+        if link is None:
+            link = self._core.analysis()["reduce_to"]
+            if link is None:
+                link = self._inputs(None)[0] if self._inputs(None) else ""
+        return self._core.equivalent_inertia(str(link))
+
+    def willis_residual(self, speeds: ArrayLike) -> float:
+        """max |psi_m| / max |w| for per-link ``speeds`` under the train's ratios (eq. 2)."""
+        a = np.ascontiguousarray(_batch._numeric(speeds, "speeds"), dtype=np.float64)
+        return self._core.willis_residual(a)
+
+    # -- batches -----------------------------------------------------------
+
+    def batch_kinematics(
+        self,
+        inputs: Mapping[str, ArrayLike],
+        *,
+        ratios: Optional[ArrayLike] = None,
+        teeth: Optional[ArrayLike] = None,
+        threads: Optional[int] = None,
+    ) -> BatchKinematics:
+        """Speeds of every link for many scenarios, in parallel.
+
+        ``inputs`` maps each input link to a speed or an array of one speed
+        per row; ``ratios`` is ``(gears,)`` or ``(rows, gears)`` Willis ratios,
+        or ``teeth`` ``(gears, 2)`` or ``(rows, gears, 2)`` tooth counts
+        ``[z_i, z_j]`` (signs from each pair's mesh kind); default: the train's
+        ratios. Failed rows are flagged in ``ok`` / ``errors`` and hold 0.0.
+        """
+        names, cols = _batch.columns(inputs, "inputs")
+        jg = len(self._core.gears())
+        per_row: List[Tuple[str, np.ndarray, int]] = [(f"inputs[{n!r}]", c, 0) for n, c in zip(names, cols)]
+        r_arr = None if ratios is None else _batch._numeric(ratios, "ratios")
+        if r_arr is not None:
+            per_row.append(("ratios", r_arr, 1))
+        t_arr = None if teeth is None else _batch._numeric(teeth, "teeth")
+        if t_arr is not None:
+            per_row.append(("teeth", t_arr, 2))
+        rows = _batch.common_rows(per_row)
+        raw = batch_kinematics(
+            self._core,
+            names,
+            _batch.stack_columns(cols, rows),
+            None if r_arr is None else _batch.rows_matrix(r_arr, rows, jg, "ratios"),
+            None if t_arr is None else _batch.teeth_array(t_arr, rows, jg),
+            threads,
+        )
+        return BatchKinematics._from_raw(self._links, raw)
+
+    def batch_dynamics(
+        self,
+        driving: Optional[Sequence[str]] = None,
+        *,
+        torques: Optional[Mapping[str, ArrayLike]] = None,
+        accelerations: Optional[Mapping[str, ArrayLike]] = None,
+        ratios: Optional[ArrayLike] = None,
+        teeth: Optional[ArrayLike] = None,
+        inertias: Optional[Mapping[str, ArrayLike]] = None,
+        masses: Optional[Mapping[str, ArrayLike]] = None,
+        engaged: Sequence[str] = (),
+        threads: Optional[int] = None,
+    ) -> BatchDynamics:
+        """Inverse dynamics for many scenarios, in parallel.
+
+        Every mapping takes per link a scalar (the same for all rows) or one
+        value per row; ``inertias`` / ``masses`` override the links' data
+        (one copy; ``copies`` still multiplies). Omitted ``driving``,
+        ``torques`` and ``accelerations`` come from the spec. Failed rows are
+        flagged in ``ok`` / ``errors`` and hold 0.0.
+        """
+        a = self._core.analysis()
+        drv = list(a["driving"]) if driving is None else _names(driving, "driving")
+        tq: Mapping[str, ArrayLike] = dict(a["torques"]) if torques is None else torques
+        acc: Mapping[str, ArrayLike] = dict(a["accelerations"]) if accelerations is None else accelerations
+        t_names, t_cols = _batch.columns(tq, "torques")
+        a_names, a_cols = _batch.columns(acc, "accelerations")
+        i_names, i_cols = _batch.columns(inertias or {}, "inertias")
+        m_names, m_cols = _batch.columns(masses or {}, "masses")
+        per_row: List[Tuple[str, np.ndarray, int]] = []
+        for what, ns, cs in (
+            ("torques", t_names, t_cols),
+            ("accelerations", a_names, a_cols),
+            ("inertias", i_names, i_cols),
+            ("masses", m_names, m_cols),
+        ):
+            per_row += [(f"{what}[{n!r}]", c, 0) for n, c in zip(ns, cs)]
+        jg = len(self._core.gears())
+        r_arr = None if ratios is None else _batch._numeric(ratios, "ratios")
+        if r_arr is not None:
+            per_row.append(("ratios", r_arr, 1))
+        t_arr = None if teeth is None else _batch._numeric(teeth, "teeth")
+        if t_arr is not None:
+            per_row.append(("teeth", t_arr, 2))
+        rows = _batch.common_rows(per_row)
+        if not a_names:  # static analysis: the driving links are the accelerated ones, at rest
+            a_names, alpha = list(drv), np.zeros((rows, len(drv)))
+        else:
+            alpha = _batch.stack_columns(a_cols, rows)
+        raw = batch_dynamics(
+            self._core,
+            drv,
+            a_names,
+            alpha,
+            t_names,
+            _batch.stack_columns(t_cols, rows),
+            None if r_arr is None else _batch.rows_matrix(r_arr, rows, jg, "ratios"),
+            None if t_arr is None else _batch.teeth_array(t_arr, rows, jg),
+            i_names,
+            _batch.stack_columns(i_cols, rows) if i_names else None,
+            m_names,
+            _batch.stack_columns(m_cols, rows) if m_names else None,
+            _names(engaged, "engaged"),
+            threads,
+        )
+        return BatchDynamics._from_raw(self._links, tuple(drv), raw)
+
+    # -- computer algebra --------------------------------------------------
+
+    def to_sympy(self, inputs: Optional[Sequence[str]] = None) -> "SymbolicTrain":
+        """The equations of this train as SymPy objects in named symbols.
+
+        Willis equations and Jacobian (eq. 2), kinetic energy and mass matrix
+        (eq. 3-5), and for the independent ``inputs`` (default: the spec's
+        input links) the velocity matrix [V] and the reduced matrices (eq.
+        23-26). Needs SymPy (``pip install 'egt[sympy]'``).
+        """
+        from .sympy_export import SymbolicTrain
+
+        ins = self._inputs(inputs)
+        return SymbolicTrain._from_structure(
+            _structure(self._core), self._core.analysis(), ins if ins else None
+        )
+
+
+def _structure(core: TrainCore) -> Dict[str, Any]:
+    from ._egt import structure
+
+    return structure(core)
+
+
+def load(path: PathLike) -> Train:
+    """Read and validate a spec file (``.json`` is JSON, anything else TOML)."""
+    return Train.from_file(path)
+
+
+def loads(text: str, format: str = "toml", *, source: str = "<string>") -> Train:
+    """Parse and validate a spec from text (``format``: ``"toml"`` or ``"json"``)."""
+    return Train.from_str(text, format, source)

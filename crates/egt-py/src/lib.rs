@@ -1,0 +1,26 @@
+//! The native module `egt._egt`: thin pyo3 bindings over egt-core.
+//!
+//! Every binding converts names to ids, calls the core and converts back; the
+//! Pythonic surface (result classes, NumPy argument handling, SymPy export)
+//! lives in the `egt` package (`python/egt`). Errors map to Python exceptions
+//! in exactly one place, [`errors`].
+
+mod batch;
+mod convert;
+mod errors;
+mod structure;
+mod train;
+
+use pyo3::prelude::*;
+
+/// The native part of the `egt` package.
+#[pymodule]
+fn _egt(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_class::<train::TrainCore>()?;
+    m.add_function(wrap_pyfunction!(structure::structure, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::batch_kinematics, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::batch_dynamics, m)?)?;
+    errors::register(m)?;
+    Ok(())
+}

@@ -1,0 +1,552 @@
+//! `TrainCore`: the validated train behind `egt.Train`. Every method converts
+//! names to ids, calls egt-core, and returns plain Python values (dicts, lists,
+//! NumPy arrays); the Python package wraps them in result classes.
+
+use egt_core::dynamics::{DynamicsRequest, Extra};
+use egt_core::mass::MassMatrix;
+use egt_core::power::{Driver, PowerRequest};
+use egt_core::{Format, SpeedInput, Train};
+use numpy::PyArray2;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use crate::convert::{self, dmatrix, vec1};
+use crate::errors::{Result, guard, value_error};
+
+/// A validated gear train (see `egt.Train` for the documented API).
+#[pyclass(frozen, module = "egt._egt", name = "TrainCore")]
+#[derive(Debug)]
+pub struct TrainCore {
+    pub(crate) train: Train,
+}
+
+/// One prescribed input speed as the Python side passes it: link, float, exact text.
+type InputArg = (String, f64, Option<String>);
+
+fn format_of(format: &str) -> Result<Format> {
+    match format.to_ascii_lowercase().as_str() {
+        "toml" => Ok(Format::Toml),
+        "json" => Ok(Format::Json),
+        other => Err(value_error(format!(
+            "format must be \"toml\" or \"json\", got {other:?}"
+        ))),
+    }
+}
+
+impl TrainCore {
+    fn speed_inputs(&self, inputs: &[InputArg]) -> Result<Vec<SpeedInput>> {
+        inputs
+            .iter()
+            .map(|(name, v, exact)| {
+                let link = convert::link(&self.train, name, &format!("inputs.{name}"))?;
+                let exact = match exact {
+                    Some(t) => Some(convert::rational(t, &format!("inputs.{name}"))?),
+                    None => egt_core::exact::from_f64(*v),
+                };
+                Ok(SpeedInput {
+                    link,
+                    speed: *v,
+                    exact,
+                })
+            })
+            .collect()
+    }
+
+    fn request(
+        &self,
+        torques: &[(String, f64)],
+        accelerations: &[(String, f64)],
+        driving: &[String],
+        engaged: &[String],
+    ) -> Result<DynamicsRequest> {
+        Ok(DynamicsRequest {
+            torques: convert::valued(&self.train, torques, "torques")?,
+            accelerations: convert::valued(&self.train, accelerations, "accelerations")?,
+            driving: convert::links(&self.train, driving, "driving")?,
+            extras: convert::engaged(&self.train, engaged)?,
+        })
+    }
+
+    /// The mass matrix when asked for and when accelerations make it matter;
+    /// a static analysis never demands inertia data.
+    fn mass_for(&self, req: &DynamicsRequest, inertia: bool) -> Result<Option<MassMatrix>> {
+        if !inertia || req.accelerations.iter().all(|a| a.1 == 0.0) {
+            return Ok(None);
+        }
+        Ok(Some(self.train.mass_matrix()?))
+    }
+
+    fn link_name(&self, l: egt_core::LinkId) -> &str {
+        self.train.link_name(l)
+    }
+
+    fn names(&self, ls: impl IntoIterator<Item = egt_core::LinkId>) -> Vec<String> {
+        ls.into_iter()
+            .map(|l| self.link_name(l).to_string())
+            .collect()
+    }
+}
+
+fn speeds_dict<'py>(
+    py: Python<'py>,
+    core: &TrainCore,
+    s: &egt_core::Speeds,
+) -> Result<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("speed", vec1(py, s.speed.clone()))?;
+    d.set_item("known", vec1(py, s.known.clone()))?;
+    d.set_item(
+        "exact",
+        s.exact
+            .as_ref()
+            .map(|e| e.iter().map(convert::q_text).collect::<Vec<_>>()),
+    )?;
+    let rel = PyList::empty(py);
+    for r in &s.relative {
+        rel.append((
+            core.link_name(r.link),
+            core.link_name(r.carrier),
+            r.speed,
+            r.exact.as_ref().map(convert::q_text),
+        ))?;
+    }
+    d.set_item("relative", rel)?;
+    d.set_item("residual", s.residual)?;
+    d.set_item("condition", s.condition)?;
+    d.set_item("warnings", s.warnings.clone())?;
+    Ok(d)
+}
+
+fn dynamics_dict<'py>(
+    py: Python<'py>,
+    core: &TrainCore,
+    r: &egt_core::InverseDynamics,
+) -> Result<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("acceleration", vec1(py, r.acceleration.clone()))?;
+    d.set_item("torque", vec1(py, r.torque.clone()))?;
+    d.set_item(
+        "driving_torques",
+        r.driving_torques
+            .iter()
+            .map(|(l, t)| (core.link_name(*l).to_string(), *t))
+            .collect::<Vec<_>>(),
+    )?;
+    d.set_item("multipliers", vec1(py, r.multipliers.clone()))?;
+    d.set_item("element_torques", vec1(py, r.element_torques.clone()))?;
+    let meshes = PyList::empty(py);
+    for m in &r.meshes {
+        let g = &core.train.gears()[m.gear.index()];
+        let md = PyDict::new(py);
+        md.set_item("gear", g.name.as_str())?;
+        md.set_item("multiplier", m.multiplier)?;
+        md.set_item("torque_i", m.torque_i)?;
+        md.set_item("torque_j", m.torque_j)?;
+        md.set_item("torque_carrier", m.torque_carrier)?;
+        md.set_item("force", m.force.map(|f| (f[0], f[1])))?;
+        meshes.append(md)?;
+    }
+    d.set_item("meshes", meshes)?;
+    d.set_item("conditions", (r.conditions[0], r.conditions[1]))?;
+    d.set_item("warnings", r.warnings.clone())?;
+    Ok(d)
+}
+
+#[pymethods]
+impl TrainCore {
+    /// Parse and validate a spec from text.
+    #[staticmethod]
+    #[pyo3(signature = (text, format = "toml", source = "<string>"))]
+    fn from_text(py: Python<'_>, text: &str, format: &str, source: &str) -> Result<Self> {
+        let format = format_of(format)?;
+        guard(|| {
+            let train = py.detach(|| Train::from_str(text, format, source))?;
+            Ok(TrainCore { train })
+        })
+    }
+
+    /// Title from the spec.
+    #[getter]
+    fn name(&self) -> Option<String> {
+        self.train.name().map(str::to_string)
+    }
+
+    /// The frame's name.
+    #[getter]
+    fn frame(&self) -> String {
+        self.link_name(self.train.frame()).to_string()
+    }
+
+    /// Degree of freedom.
+    #[getter]
+    fn dof(&self) -> usize {
+        self.train.dof()
+    }
+
+    /// Link names in link order (the order of every per-link array).
+    #[getter]
+    fn link_names(&self) -> Vec<String> {
+        self.train.links().iter().map(|l| l.name.clone()).collect()
+    }
+
+    /// Coordinate names: every link but the frame (rows/columns of [M], columns of [psi_w]).
+    #[getter]
+    fn coordinates(&self) -> Vec<String> {
+        self.names(self.train.coordinates().iter().copied())
+    }
+
+    /// Axis level names.
+    #[getter]
+    fn levels(&self) -> Vec<String> {
+        self.train.levels().to_vec()
+    }
+
+    /// The topology checks that passed, in words.
+    fn checks(&self) -> Vec<String> {
+        self.train.checks().to_vec()
+    }
+
+    /// Links with their data, as dicts.
+    fn links<'py>(&self, py: Python<'py>) -> Result<Bound<'py, PyList>> {
+        let out = PyList::empty(py);
+        for (i, l) in self.train.links().iter().enumerate() {
+            let d = PyDict::new(py);
+            d.set_item("name", l.name.as_str())?;
+            d.set_item("inertia", l.inertia)?;
+            d.set_item("mass", l.mass)?;
+            d.set_item("copies", l.copies)?;
+            d.set_item("wheels", l.wheels)?;
+            d.set_item("sized", l.sized)?;
+            d.set_item("frame", i == self.train.frame().index())?;
+            out.append(d)?;
+        }
+        Ok(out)
+    }
+
+    /// Gear pairs with their data, as dicts.
+    fn gears<'py>(&self, py: Python<'py>) -> Result<Bound<'py, PyList>> {
+        let out = PyList::empty(py);
+        for g in self.train.gears() {
+            let d = PyDict::new(py);
+            d.set_item("name", g.name.as_str())?;
+            d.set_item("gear_i", self.link_name(g.gear_i))?;
+            d.set_item("gear_j", self.link_name(g.gear_j))?;
+            d.set_item("ratio", g.ratio.as_ref().map(|r| r.value))?;
+            d.set_item(
+                "ratio_exact",
+                g.ratio
+                    .as_ref()
+                    .and_then(|r| r.exact.as_ref())
+                    .map(convert::q_text),
+            )?;
+            d.set_item("teeth", g.teeth.map(|t| (t[0], t[1])))?;
+            d.set_item(
+                "mesh",
+                g.mesh.map(|m| match m {
+                    egt_core::spec::MeshKind::External => "external",
+                    egt_core::spec::MeshKind::Internal => "internal",
+                }),
+            )?;
+            d.set_item("radii", g.radii.map(|r| (r[0], r[1])))?;
+            d.set_item("efficiency", g.efficiency)?;
+            d.set_item("path", g.path.as_str())?;
+            out.append(d)?;
+        }
+        Ok(out)
+    }
+
+    /// The fundamental-circuit table (Table 1), as dicts.
+    fn circuits<'py>(&self, py: Python<'py>) -> Result<Bound<'py, PyList>> {
+        let out = PyList::empty(py);
+        for c in self.train.circuits() {
+            let g = &self.train.gears()[c.gear.index()];
+            let d = PyDict::new(py);
+            d.set_item("gear", g.name.as_str())?;
+            d.set_item("gear_i", self.link_name(c.gear_i))?;
+            d.set_item("gear_j", self.link_name(c.gear_j))?;
+            d.set_item("carrier", self.link_name(c.carrier))?;
+            d.set_item("level_i", self.train.level_name(c.level_i))?;
+            d.set_item("level_j", self.train.level_name(c.level_j))?;
+            d.set_item("path", self.names(c.path.iter().copied()))?;
+            out.append(d)?;
+        }
+        Ok(out)
+    }
+
+    /// Shift elements as (name, kind, links).
+    fn elements(&self) -> Vec<(String, String, Vec<String>)> {
+        self.train
+            .elements()
+            .iter()
+            .map(|e| {
+                let kind = match e.kind {
+                    egt_core::spec::ElementKind::Brake => "brake",
+                    egt_core::spec::ElementKind::Clutch => "clutch",
+                    egt_core::spec::ElementKind::OneWayBrake => "one_way_brake",
+                    egt_core::spec::ElementKind::OneWayClutch => "one_way_clutch",
+                };
+                (
+                    e.name.clone(),
+                    kind.to_string(),
+                    self.names(e.links.iter().copied()),
+                )
+            })
+            .collect()
+    }
+
+    /// The spec's `[analysis]` data (defaults for the analyses), as a dict.
+    fn analysis<'py>(&self, py: Python<'py>) -> Result<Bound<'py, PyDict>> {
+        let a = self.train.analysis();
+        let d = PyDict::new(py);
+        d.set_item(
+            "speeds",
+            a.speeds
+                .iter()
+                .map(|(l, v, q)| {
+                    (
+                        self.link_name(*l).to_string(),
+                        *v,
+                        q.as_ref().map(convert::q_text),
+                    )
+                })
+                .collect::<Vec<_>>(),
+        )?;
+        let pairs = |v: &[(egt_core::LinkId, f64)]| -> Vec<(String, f64)> {
+            v.iter()
+                .map(|(l, x)| (self.link_name(*l).to_string(), *x))
+                .collect()
+        };
+        d.set_item("torques", pairs(&a.torques))?;
+        d.set_item("accelerations", pairs(&a.accelerations))?;
+        d.set_item("driving", self.names(a.driving.iter().copied()))?;
+        d.set_item(
+            "reduce_to",
+            a.reduce_to.map(|l| self.link_name(l).to_string()),
+        )?;
+        d.set_item(
+            "curves",
+            a.curves
+                .iter()
+                .map(|c| {
+                    (
+                        self.link_name(c.link).to_string(),
+                        c.torque,
+                        c.slope,
+                        c.speed,
+                    )
+                })
+                .collect::<Vec<_>>(),
+        )?;
+        Ok(d)
+    }
+
+    /// Speeds of every link for the inputs `[(link, speed, exact text or None)]`.
+    fn kinematics<'py>(
+        &self,
+        py: Python<'py>,
+        inputs: Vec<InputArg>,
+    ) -> Result<Bound<'py, PyDict>> {
+        guard(|| {
+            let inputs = self.speed_inputs(&inputs)?;
+            let s = self.train.kinematics(&inputs)?;
+            speeds_dict(py, self, &s)
+        })
+    }
+
+    /// The Willis Jacobian [psi_w] (circuits x coordinates).
+    fn willis_jacobian<'py>(&self, py: Python<'py>) -> Result<Bound<'py, PyArray2<f64>>> {
+        guard(|| dmatrix(py, &self.train.willis_jacobian()?))
+    }
+
+    /// The mass matrix with the offsets used and notes.
+    fn mass_matrix<'py>(&self, py: Python<'py>) -> Result<Bound<'py, PyDict>> {
+        guard(|| {
+            let m = self.train.mass_matrix()?;
+            let d = PyDict::new(py);
+            d.set_item("matrix", dmatrix(py, &m.matrix)?)?;
+            d.set_item(
+                "offsets",
+                m.offsets
+                    .iter()
+                    .map(|o| {
+                        (
+                            self.train.level_name(o.levels[0]).to_string(),
+                            self.train.level_name(o.levels[1]).to_string(),
+                            o.distance,
+                            o.source.clone(),
+                        )
+                    })
+                    .collect::<Vec<_>>(),
+            )?;
+            d.set_item("notes", m.notes.clone())?;
+            Ok(d)
+        })
+    }
+
+    /// Inverse dynamics (eq. 6-11).
+    #[pyo3(signature = (torques, accelerations, driving, engaged, inertia = true))]
+    fn dynamics<'py>(
+        &self,
+        py: Python<'py>,
+        torques: Vec<(String, f64)>,
+        accelerations: Vec<(String, f64)>,
+        driving: Vec<String>,
+        engaged: Vec<String>,
+        inertia: bool,
+    ) -> Result<Bound<'py, PyDict>> {
+        guard(|| {
+            let req = self.request(&torques, &accelerations, &driving, &engaged)?;
+            let mass = self.mass_for(&req, inertia)?;
+            let r = self.train.inverse_dynamics(&req, mass.as_ref())?;
+            dynamics_dict(py, self, &r)
+        })
+    }
+
+    /// Power flow, ideal or with mesh losses.
+    #[pyo3(signature = (speeds, torques, accelerations, driving, engaged, losses = true, inertia = true))]
+    #[allow(clippy::too_many_arguments)]
+    fn power<'py>(
+        &self,
+        py: Python<'py>,
+        speeds: Vec<InputArg>,
+        torques: Vec<(String, f64)>,
+        accelerations: Vec<(String, f64)>,
+        driving: Vec<String>,
+        engaged: Vec<String>,
+        losses: bool,
+        inertia: bool,
+    ) -> Result<Bound<'py, PyDict>> {
+        guard(|| {
+            let dynamics = self.request(&torques, &accelerations, &driving, &engaged)?;
+            let mass = self.mass_for(&dynamics, inertia)?;
+            let req = PowerRequest {
+                speeds: self.speed_inputs(&speeds)?,
+                dynamics,
+                losses,
+            };
+            let p = self.train.power_flow(&req, mass.as_ref())?;
+            let d = PyDict::new(py);
+            d.set_item("speeds", speeds_dict(py, self, &p.speeds)?)?;
+            d.set_item("dynamics", dynamics_dict(py, self, &p.dynamics)?)?;
+            let meshes = PyList::empty(py);
+            for m in &p.meshes {
+                let md = PyDict::new(py);
+                md.set_item("gear", self.train.gears()[m.gear.index()].name.as_str())?;
+                md.set_item("absolute", (m.absolute[0], m.absolute[1], m.absolute[2]))?;
+                md.set_item("rolling", m.rolling)?;
+                md.set_item(
+                    "driver",
+                    match m.driver {
+                        Driver::GearI => Some("gear_i"),
+                        Driver::GearJ => Some("gear_j"),
+                        Driver::None => None,
+                    },
+                )?;
+                md.set_item("efficiency", m.efficiency)?;
+                md.set_item("loss", m.loss)?;
+                meshes.append(md)?;
+            }
+            d.set_item("meshes", meshes)?;
+            d.set_item(
+                "links",
+                p.links
+                    .iter()
+                    .map(|l| (self.link_name(l.link).to_string(), l.external, l.inertial))
+                    .collect::<Vec<_>>(),
+            )?;
+            d.set_item("input_power", p.input_power)?;
+            d.set_item("output_power", p.output_power)?;
+            d.set_item("loss", p.loss)?;
+            d.set_item("kinetic_rate", p.kinetic_rate)?;
+            d.set_item("efficiency", p.efficiency)?;
+            d.set_item("circulation_ratio", p.circulation_ratio)?;
+            d.set_item(
+                "circulating",
+                p.circulating.as_ref().map(|(g, l)| {
+                    (
+                        g.iter()
+                            .map(|g| self.train.gears()[g.index()].name.clone())
+                            .collect::<Vec<_>>(),
+                        self.names(l.iter().copied()),
+                    )
+                }),
+            )?;
+            d.set_item("iterations", p.iterations)?;
+            d.set_item("notes", p.notes.clone())?;
+            Ok(d)
+        })
+    }
+
+    /// [V] of eq. (23) for the independent inputs.
+    #[pyo3(signature = (inputs, engaged = Vec::new()))]
+    fn velocity_matrix<'py>(
+        &self,
+        py: Python<'py>,
+        inputs: Vec<String>,
+        engaged: Vec<String>,
+    ) -> Result<Bound<'py, PyArray2<f64>>> {
+        guard(|| {
+            let ids = convert::links(&self.train, &inputs, "inputs")?;
+            let extras: Vec<Extra> = convert::engaged(&self.train, &engaged)?;
+            dmatrix(py, &self.train.velocity_matrix(&ids, &extras)?)
+        })
+    }
+
+    /// V^T M V (eq. 25).
+    #[pyo3(signature = (inputs, engaged = Vec::new()))]
+    fn reduced_mass_matrix<'py>(
+        &self,
+        py: Python<'py>,
+        inputs: Vec<String>,
+        engaged: Vec<String>,
+    ) -> Result<Bound<'py, PyArray2<f64>>> {
+        guard(|| {
+            let ids = convert::links(&self.train, &inputs, "inputs")?;
+            let extras: Vec<Extra> = convert::engaged(&self.train, &engaged)?;
+            dmatrix(py, &self.train.reduced_mass_matrix(&ids, &extras)?)
+        })
+    }
+
+    /// Equivalent inertia of a 1-DOF train reduced to `link`.
+    fn equivalent_inertia(&self, link: &str) -> Result<f64> {
+        guard(|| {
+            let l = convert::link(&self.train, link, "link")?;
+            Ok(self.train.equivalent_inertia(l)?)
+        })
+    }
+
+    /// Willis residual max|psi_m| / max|w| of per-link speeds under the train's ratios.
+    fn willis_residual(&self, speeds: numpy::PyReadonlyArray1<'_, f64>) -> Result<f64> {
+        guard(|| {
+            let s = speeds.as_slice().map_err(|e| value_error(e.to_string()))?;
+            if s.len() != self.train.links().len() {
+                return Err(value_error(format!(
+                    "speeds has {} entries, the train has {} links",
+                    s.len(),
+                    self.train.links().len()
+                )));
+            }
+            let ratios = self.train.ratios()?;
+            Ok(egt_core::kinematics::willis_residual(
+                &self.train,
+                &ratios,
+                s,
+            ))
+        })
+    }
+
+    /// A deliberate panic, to test that panics reach Python as `egt.InternalError`.
+    fn _panic(&self) -> Result<()> {
+        guard(|| panic!("deliberate panic from TrainCore._panic"))
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "TrainCore({:?}, links={}, gears={}, dof={})",
+            self.train.name().unwrap_or(""),
+            self.train.links().len(),
+            self.train.gears().len(),
+            self.train.dof()
+        )
+    }
+}
