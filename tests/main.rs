@@ -24,3 +24,6 @@ mod docs;
 
 // Issue 3: inverse dynamics, meshing forces, power flow and efficiency against independent relations.
 mod dynamics;
+
+// Issue 5: automatic transmissions: published ratios from teeth, element torques, bad gear states, egt shift/graph.
+mod transmission;

@@ -30,6 +30,10 @@ pub enum Command {
     Dynamics(commands::dynamics::Args),
     /// Power flow: per-mesh power, mesh losses, efficiency, circulating power.
     Power(commands::power::Args),
+    /// Automatic transmission: per-gear ratios, element torques, efficiency, steps and shifts.
+    Shift(commands::shift::Args),
+    /// Write the train's graph as Graphviz DOT (links, turning and gear pairs, shift elements).
+    Graph(commands::graph::Args),
     /// Print the JSON Schema of the spec format.
     Schema(commands::schema::Args),
 }

@@ -8,9 +8,11 @@ use crate::cli::Command;
 pub mod check;
 pub mod circuits;
 pub mod dynamics;
+pub mod graph;
 pub mod kinematics;
 pub mod power;
 pub mod schema;
+pub mod shift;
 
 /// Run one subcommand, writing its report to `out`.
 ///
@@ -23,6 +25,8 @@ pub fn run(command: &Command, out: &mut dyn Write) -> anyhow::Result<()> {
         Command::Kinematics(args) => kinematics::run(args, out),
         Command::Dynamics(args) => dynamics::run(args, out),
         Command::Power(args) => power::run(args, out),
+        Command::Shift(args) => shift::run(args, out),
+        Command::Graph(args) => graph::run(args, out),
         Command::Schema(args) => schema::run(args, out),
     }
 }

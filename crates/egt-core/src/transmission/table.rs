@@ -5,7 +5,7 @@
 
 use serde::Serialize;
 
-use crate::exact::Q;
+use crate::exact::{self, Q};
 use crate::train::{ElementId, Train, Transmission};
 
 use super::GearAnalysis;
@@ -128,7 +128,7 @@ pub(super) fn build(train: &Train, t: &Transmission, gears: Vec<GearAnalysis>) -
             Step {
                 from: w[0],
                 to: w[1],
-                value: a.ratio / b.ratio,
+                value: exact.as_ref().map_or(a.ratio / b.ratio, exact::to_f64),
                 exact,
             }
         })
@@ -144,15 +144,20 @@ pub(super) fn build(train: &Train, t: &Transmission, gears: Vec<GearAnalysis>) -
         })
     };
     let spread = match (by_ratio(true), by_ratio(false)) {
-        (Some(lo), Some(hi)) if forward.len() >= 2 => Some(Spread {
-            lowest: lo,
-            highest: hi,
-            value: gears[lo].ratio / gears[hi].ratio,
-            exact: match (ratio_q(&gears[lo]), ratio_q(&gears[hi])) {
+        (Some(lo), Some(hi)) if forward.len() >= 2 => {
+            let exact = match (ratio_q(&gears[lo]), ratio_q(&gears[hi])) {
                 (Some(x), Some(y)) => Some(x / y),
                 _ => None,
-            },
-        }),
+            };
+            Some(Spread {
+                lowest: lo,
+                highest: hi,
+                value: exact
+                    .as_ref()
+                    .map_or(gears[lo].ratio / gears[hi].ratio, exact::to_f64),
+                exact,
+            })
+        }
         _ => None,
     };
     let mut shifts: Vec<Shift> = forward
