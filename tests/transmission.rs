@@ -789,3 +789,15 @@ fn cli_graph_writes_dot_with_every_pair_and_element() {
     .expect("json");
     assert_eq!(v["nodes"].as_array().unwrap().len(), train.links().len());
 }
+
+/// The gear table pasted in `docs/transmission.md` is what the command prints.
+#[test]
+fn docs_transmission_md_table_is_current() {
+    let doc = std::fs::read_to_string(root().join("docs/transmission.md")).expect("docs");
+    let start = doc
+        .find("$ egt shift examples/zf_8hp70.toml\n")
+        .expect("the pasted run");
+    let block = &doc[start..];
+    let block = &block[block.find('\n').unwrap() + 1..block.find("```").unwrap()];
+    assert_eq!(block, stdout(&["shift", "examples/zf_8hp70.toml"]));
+}

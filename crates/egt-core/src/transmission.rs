@@ -361,6 +361,41 @@ impl Train {
 
     /// Analyse every gear state and the table across them.
     ///
+    /// ```
+    /// use egt_core::{Format, Train, exact};
+    ///
+    /// // One simple set (sun 30, ring 72): brake the ring for low, lock the set for direct.
+    /// let spec = r#"
+    ///     frame = "case"
+    ///     [[planetary]]
+    ///     name = "P"
+    ///     sun = "sun"
+    ///     ring = "ring"
+    ///     carrier = "carrier"
+    ///     teeth = { sun = 30, ring = 72 }
+    ///     [[elements]]
+    ///     name = "B"
+    ///     kind = "brake"
+    ///     links = ["ring"]
+    ///     [[elements]]
+    ///     name = "C"
+    ///     kind = "clutch"
+    ///     links = ["sun", "carrier"]
+    ///     [transmission]
+    ///     input = "sun"
+    ///     output = "carrier"
+    ///     states = { low = ["B"], direct = ["C"] }
+    /// "#;
+    /// let train = Train::from_str(spec, Format::Toml, "example").unwrap();
+    /// let table = train.shift_table().unwrap();
+    /// let low = &table.gears[0];
+    /// assert_eq!(exact::display(low.ratio_exact.as_ref().unwrap()), "17/5"); // 1 + 72/30
+    /// // The brake holds the ring against z_r/z_s of the input torque.
+    /// assert!((low.elements[0].torque - 72.0 / 30.0).abs() < 1e-12);
+    /// assert_eq!(table.steps[0].exact.as_ref().map(exact::display).as_deref(), Some("17/5"));
+    /// assert!(table.shifts[0].single_swap);
+    /// ```
+    ///
     /// # Errors
     /// Missing ratios; [`TransmissionError`] for the first state that does not
     /// leave exactly one DOF with input and output turning, or whose analysis fails.

@@ -154,13 +154,18 @@ fn write_dot(out: &mut dyn Write, g: &Graph) -> anyhow::Result<()> {
     )?;
     writeln!(out, "  edge [fontname=\"Helvetica\", fontsize=10];")?;
     for n in &g.nodes {
-        let attrs = match n.role {
+        let mut attrs = match n.role {
             "frame" => "shape=box, fillcolor=\"#cccccc\"",
-            "input" => "shape=doublecircle, fillcolor=\"#cfe8ff\", xlabel=\"input\"",
-            "output" => "shape=doublecircle, fillcolor=\"#ffe0c2\", xlabel=\"output\"",
+            "input" => "shape=doublecircle, fillcolor=\"#cfe8ff\"",
+            "output" => "shape=doublecircle, fillcolor=\"#ffe0c2\"",
             "planet" => "fillcolor=\"#ffffff\", style=\"filled,dotted\"",
             _ => "",
-        };
+        }
+        .to_string();
+        // Name the role beside the node unless the link is already named so.
+        if matches!(n.role, "input" | "output") && n.link != n.role {
+            attrs.push_str(&format!(", xlabel={}", id(n.role)));
+        }
         writeln!(out, "  {} [{attrs}];", id(&n.link))?;
     }
     for e in &g.edges {
