@@ -27,3 +27,6 @@ mod dynamics;
 
 // Issue 5: automatic transmissions: published ratios from teeth, element torques, bad gear states, egt shift/graph.
 mod transmission;
+
+// Issue 4: stability (example 6.2, eigenvalues vs simulation) and forward dynamics, with the failure edges.
+mod stability;

@@ -45,7 +45,9 @@ pub mod mass;
 pub mod parse;
 pub mod power;
 pub mod prepared;
+pub mod simulate;
 pub mod spec;
+pub mod stability;
 pub mod topology;
 pub mod train;
 pub mod transmission;
@@ -57,7 +59,15 @@ pub use kinematics::{KinematicsPlan, RelativeSpeed, SpeedInput, Speeds};
 pub use mass::{MassMatrix, Offset};
 pub use parse::{Format, parse_spec, spec_schema};
 pub use power::{Driver, LinkPower, MeshPower, PowerFlow, PowerRequest};
+pub use simulate::{
+    LinearCurves, Method, ReducedDynamics, Sample, Simulation, SimulationOptions,
+    SimulationRequest, TorqueFn, TorqueModel,
+};
 pub use spec::Spec;
+pub use stability::{
+    CoordinateSource, Mode, OperatingPoint, ReducedModel, Stability, StabilityReport,
+    StabilityRequest, Verdict,
+};
 pub use train::{Edge, GearId, GearPair, LevelId, Link, LinkId, Ratio, RevoluteId, Train};
 pub use train::{ElementId, GearState, ShiftElement, Transmission};
 pub use transmission::{

@@ -1,0 +1,979 @@
+//! Stability of a train with any number F of degrees of freedom (paper
+//! section 5, eq. 12-27, which stops at F = 2).
+//!
+//! The reduced model. Choose F independent driving links; [V] of eq. (23)
+//! gives every link speed from theirs, w = V w_d, and [psi_w][V] = 0 (eq. 24)
+//! removes the Willis multipliers from eq. (6) when it is premultiplied by
+//! V^T:
+//!
+//!   V^T M V w_d' = V^T T(V w_d)                                  (eq. 12, 25)
+//!
+//! With the linearised torque-speed curves T_l = T0_l + K_l (w_l - w0_l) on
+//! any links (eq. 13-15, K_l = dT_l/dw_l of the *applied* torque),
+//!
+//!   [M] dw_d' = [K] dw_d,   [M] = V^T M V,   [K] = V^T diag(K_l) V.
+//!
+//! The paper's eq. (26), [K] = [V]^T {T}, is the reduced torque vector
+//! [K] dw_d (eq. 27 already holds the speed deviations), not the matrix; and
+//! its eq. (16)-(18) carry the opposite sign: dw_d = X e^(lambda t) gives
+//! (lambda [M] - [K]) X = 0, so a motor whose torque falls as it speeds up
+//! (K_l < 0) is stabilising. `docs/stability.md` and `docs/errata.md` give the
+//! argument, and `tests/stability.rs` proves it by simulation.
+//!
+//! [M] is symmetric positive semi-definite and [K] is symmetric (each curve
+//! acts on one link's own speed), so every eigenvalue is real: a rigid train
+//! under speed-dependent torques creeps or runs away, it never oscillates.
+//! The pencil is solved as a symmetric eigenproblem: [M] = Q diag(mu) Q^T;
+//! directions with zero inertia are algebraic (their torques balance at every
+//! instant) and are eliminated by a Schur complement before scaling by
+//! mu^(-1/2).
+
+use nalgebra::{DMatrix, DVector, SymmetricEigen};
+use serde::{Serialize, Serializer};
+
+use crate::error::{AnalysisError, Error, Result, SpecErrorKind};
+use crate::kinematics::SpeedInput;
+use crate::linalg::{COND_REFUSE, COND_WARN, Lu};
+use crate::train::{Curve, LinkId, Train};
+
+/// Largest relative ||psi_w V|| (eq. 24) accepted without a warning.
+pub const ORTHOGONALITY_TOL: f64 = 1e-10;
+/// A direction of the reduced mass matrix whose inertia is below this
+/// fraction of the largest is massless: indistinguishable from the rounding
+/// of V^T M V, so it is treated as exactly zero (an algebraic equation).
+pub const MASSLESS_REL: f64 = 1e-12;
+/// Below this fraction of the largest inertia (but above [`MASSLESS_REL`]) a
+/// direction is nearly massless: kept, but reported, since it makes the model stiff.
+pub const NEARLY_MASSLESS_REL: f64 = 1e-8;
+/// Eigenvalues within this fraction of the largest |eigenvalue| of zero
+/// count as zero (marginal): below the resolution of the double-precision
+/// eigenproblem.
+pub const MARGINAL_REL: f64 = 1e-10;
+/// The operating point is steady when |V^T T| is below this fraction of the
+/// torques that enter it.
+pub const STEADY_REL: f64 = 1e-9;
+/// The classical RK4 is stable on the negative real axis for |lambda| dt up to
+/// this value (the real root of 1 + z + z^2/2 + z^3/6 + z^4/24 = 1 besides 0).
+pub const RK4_REAL_LIMIT: f64 = 2.785_293_563_405_282;
+/// Smallest relative residual of a row of the null-space basis for a link to
+/// be picked as an independent driving coordinate.
+const SELECT_REL: f64 = 1e-6;
+
+/// Serialize a matrix as a list of rows.
+pub(crate) fn rows<S: Serializer>(m: &DMatrix<f64>, s: S) -> std::result::Result<S::Ok, S::Error> {
+    let rows: Vec<Vec<f64>> = (0..m.nrows())
+        .map(|i| m.row(i).iter().copied().collect())
+        .collect();
+    rows.serialize(s)
+}
+
+/// How the driving coordinates were chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CoordinateSource {
+    /// Given by the caller.
+    Given,
+    /// The links of the spec's `[analysis] speeds` (F of them).
+    SpecSpeeds,
+    /// Picked for conditioning, preferring the spec's driving links, then
+    /// links carrying a curve.
+    Automatic,
+}
+
+/// The reduced model of eq. (23)-(27) for one choice of driving links.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ReducedModel {
+    /// The F driving links (columns of [V]).
+    pub coordinates: Vec<LinkId>,
+    /// Where they came from.
+    pub source: CoordinateSource,
+    /// [V] (eq. 23) by link: row `LinkId::index()`, the frame's row zero.
+    #[serde(serialize_with = "rows")]
+    pub velocity: DMatrix<f64>,
+    /// 1-norm condition estimate of [Gamma_w] (eq. 22-23).
+    pub gamma_condition: f64,
+    /// max |psi_w V| / (max |psi_w| max |V|): eq. (24), zero in exact arithmetic.
+    pub orthogonality: f64,
+    /// The full mass matrix [M] over `Train::coordinates()` (eq. 3-6).
+    #[serde(serialize_with = "rows")]
+    pub full_mass: DMatrix<f64>,
+    /// Reduced mass matrix V^T M V (eq. 25).
+    #[serde(serialize_with = "rows")]
+    pub mass: DMatrix<f64>,
+    /// Reduced slope matrix V^T diag(K) V (eq. 26-27, corrected).
+    #[serde(serialize_with = "rows")]
+    pub slope: DMatrix<f64>,
+    /// An orthonormal basis N of the motions the Willis equations allow, by
+    /// link (psi_w N = 0, N^T N = 1): [V] = N N_S^-1, with N_S the rows of the
+    /// driving links. The eigenproblem and the simulation use it, so their
+    /// conditioning does not depend on which links drive.
+    #[serde(skip)]
+    pub basis: DMatrix<f64>,
+    /// N^T M N: the mass matrix in the basis.
+    #[serde(skip)]
+    pub basis_mass: DMatrix<f64>,
+    /// N^T diag(K) N: the slope matrix in the basis.
+    #[serde(skip)]
+    pub basis_slope: DMatrix<f64>,
+    /// K_l per link (sum of the slopes of the curves on it).
+    pub link_slope: Vec<f64>,
+    /// T0_l - K_l w0_l per link, so that T_l(w) = offset_l + K_l w_l.
+    pub link_offset: Vec<f64>,
+    /// True for links carrying at least one curve.
+    pub has_curve: Vec<bool>,
+    /// Link names (by link index), for messages.
+    #[serde(skip)]
+    pub link_names: Vec<String>,
+    /// Warnings (conditioning, curves on the frame, mass-matrix notes).
+    pub warnings: Vec<String>,
+}
+
+/// Where the operating point came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OperatingSource {
+    /// Input speeds (the spec's `[analysis] speeds`, or given).
+    Speeds,
+    /// The equilibrium of the linearised curves, V^T T(w) = 0.
+    Equilibrium,
+}
+
+/// The operating point and whether it is a steady state.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OperatingPoint {
+    /// Where it came from.
+    pub source: OperatingSource,
+    /// Every link's speed (by link index).
+    pub speed: Vec<f64>,
+    /// The applied torque of the curves on every link at these speeds.
+    pub torque: Vec<f64>,
+    /// V^T T: the reduced torque that accelerates the driving links (the
+    /// right-hand side of eq. 16); zero at a steady state.
+    pub reduced_torque: Vec<f64>,
+    /// |V^T T| relative to the torques entering it.
+    pub residual: f64,
+    /// True when `residual` <= [`STEADY_REL`].
+    pub steady: bool,
+    /// The equilibrium of the linearised curves (link speeds), when [K] is regular.
+    pub equilibrium: Option<Vec<f64>>,
+    /// Condition estimate of [K] for the equilibrium solve.
+    pub equilibrium_condition: Option<f64>,
+}
+
+/// Stable, unstable or marginal.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// Every eigenvalue is negative: perturbations decay.
+    Stable,
+    /// An eigenvalue is positive (or a massless direction runs away).
+    Unstable,
+    /// The largest eigenvalue is zero within the resolution: perturbations neither grow nor decay.
+    Marginal,
+}
+
+/// One eigenvalue of (lambda [M] - [K]) X = 0 and its mode.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Mode {
+    /// lambda [1/s]: the perturbation grows as e^(lambda t).
+    pub eigenvalue: f64,
+    /// 1/|lambda| [s], when lambda is not zero.
+    pub time_constant: Option<f64>,
+    /// X in the driving coordinates, scaled so that the largest link speed is 1.
+    pub coordinates: Vec<f64>,
+    /// V X: every link's speed in the mode (by link index).
+    pub speeds: Vec<f64>,
+}
+
+/// A direction of the driving coordinates with no inertia.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MasslessDirection {
+    /// The direction in the driving coordinates (largest link speed 1).
+    pub coordinates: Vec<f64>,
+    /// The link speeds along it (by link index).
+    pub speeds: Vec<f64>,
+    /// Links that move along it.
+    pub links: Vec<LinkId>,
+    /// The torque slope along it (eigenvalue of the massless block of [K]):
+    /// negative, it is an attracting algebraic equilibrium; positive, any
+    /// parasitic inertia makes it run away infinitely fast.
+    pub slope: f64,
+}
+
+/// Eigenvalues, modes and the verdict.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Stability {
+    /// Eigenvalues, largest first.
+    pub eigenvalues: Vec<f64>,
+    /// Modes, in the order of `eigenvalues`.
+    pub modes: Vec<Mode>,
+    /// The verdict.
+    pub verdict: Verdict,
+    /// Why, in words.
+    pub reason: String,
+    /// The largest eigenvalue (positive: unstable, by how much).
+    pub margin: f64,
+    /// Eigenvalues with |lambda| below this count as zero.
+    pub tolerance: f64,
+    /// Directions without inertia, eliminated as algebraic equations.
+    pub massless: Vec<MasslessDirection>,
+    /// Largest fixed step for which RK4 is stable on this model
+    /// ([`RK4_REAL_LIMIT`] / |most negative eigenvalue|).
+    pub rk4_step_limit: Option<f64>,
+    /// max |lambda| / min |lambda| over the non-zero eigenvalues.
+    pub stiffness: Option<f64>,
+    /// Largest relative residual ||K X - lambda M X|| of the modes.
+    pub residual: f64,
+}
+
+/// What a stability analysis asks.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StabilityRequest {
+    /// Driving links; default: the spec's speeds, else chosen automatically.
+    pub coordinates: Option<Vec<LinkId>>,
+    /// Curves; default: the spec's `[analysis] curves`.
+    pub curves: Option<Vec<Curve>>,
+    /// Operating speeds (F links); default: the spec's speeds, else the equilibrium.
+    pub speeds: Option<Vec<(LinkId, f64)>>,
+}
+
+/// Everything `egt stability` prints.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StabilityReport {
+    /// The reduced model.
+    pub model: ReducedModel,
+    /// The operating point.
+    pub operating: OperatingPoint,
+    /// Eigenvalues and the verdict.
+    pub stability: Stability,
+    /// Warnings gathered on the way.
+    pub warnings: Vec<String>,
+}
+
+/// [M] = Q diag(mu) Q^T split into directions with inertia (first `r`
+/// columns of `q`, inertias `mu`) and massless ones (the rest).
+#[derive(Debug, Clone)]
+pub(crate) struct InertiaSplit {
+    pub q: DMatrix<f64>,
+    pub mu: Vec<f64>,
+    pub r: usize,
+    pub nearly_massless: bool,
+}
+
+impl InertiaSplit {
+    /// Split a reduced mass matrix.
+    pub(crate) fn new(m: &DMatrix<f64>) -> Result<Self> {
+        let f = m.nrows();
+        if m.iter().any(|v| !v.is_finite()) {
+            return Err(
+                AnalysisError::Other("the reduced mass matrix is not finite".into()).into(),
+            );
+        }
+        let eig = SymmetricEigen::new(m.clone());
+        let mut order: Vec<usize> = (0..f).collect();
+        order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
+        let top = order.first().map_or(0.0, |&i| eig.eigenvalues[i]);
+        if top <= 0.0 {
+            return Err(AnalysisError::MissingData {
+                what: "an inertia or mass on a moving link".into(),
+                analysis: "the dynamics (the reduced mass matrix V^T M V is zero)".into(),
+                hint: "give `inertia` (and `mass` for floating links) in [[links]]".into(),
+            }
+            .into());
+        }
+        let low = eig.eigenvalues[order[f - 1]];
+        if low < -MASSLESS_REL * top {
+            return Err(AnalysisError::Other(format!(
+                "the reduced mass matrix is indefinite (eigenvalue {low:.3e} against {top:.3e}); inertias and masses must be non-negative"
+            ))
+            .into());
+        }
+        let mut q = DMatrix::zeros(f, f);
+        let mut mu = Vec::new();
+        for (c, &i) in order.iter().enumerate() {
+            q.set_column(c, &eig.eigenvectors.column(i));
+            if eig.eigenvalues[i] > MASSLESS_REL * top {
+                mu.push(eig.eigenvalues[i]);
+            }
+        }
+        let r = mu.len();
+        let nearly_massless = mu.iter().any(|&v| v < NEARLY_MASSLESS_REL * top);
+        Ok(InertiaSplit {
+            q,
+            mu,
+            r,
+            nearly_massless,
+        })
+    }
+
+    /// Directions with inertia (F x r).
+    pub(crate) fn q1(&self) -> DMatrix<f64> {
+        self.q.columns(0, self.r).into_owned()
+    }
+    /// Massless directions (F x (F - r)).
+    pub(crate) fn q0(&self) -> DMatrix<f64> {
+        let f = self.q.ncols();
+        self.q.columns(self.r, f - self.r).into_owned()
+    }
+}
+
+/// Symmetric eigen-decomposition of a small matrix, eigenvalues largest first.
+fn sorted_eigen(a: DMatrix<f64>) -> (Vec<f64>, DMatrix<f64>) {
+    let n = a.nrows();
+    if n == 0 {
+        return (Vec::new(), a);
+    }
+    let e = SymmetricEigen::new(a);
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&x, &y| e.eigenvalues[y].total_cmp(&e.eigenvalues[x]));
+    let mut vecs = DMatrix::zeros(n, n);
+    for (c, &i) in order.iter().enumerate() {
+        vecs.set_column(c, &e.eigenvectors.column(i));
+    }
+    (order.iter().map(|&i| e.eigenvalues[i]).collect(), vecs)
+}
+
+fn sym(a: &DMatrix<f64>) -> DMatrix<f64> {
+    (a + a.transpose()) * 0.5
+}
+
+/// A^T diag(k) A = sum_l k_l a_l a_l^T over the rows a_l of `a`, formed so
+/// that it is exactly symmetric (eq. 26-27 corrected).
+pub(crate) fn slope_matrix(a: &DMatrix<f64>, k: &[f64]) -> DMatrix<f64> {
+    let f = a.ncols();
+    let mut s = DMatrix::zeros(f, f);
+    for (l, &kl) in k.iter().enumerate() {
+        if kl == 0.0 {
+            continue;
+        }
+        for i in 0..f {
+            for j in 0..f {
+                s[(i, j)] += kl * (a[(l, i)] * a[(l, j)]);
+            }
+        }
+    }
+    s
+}
+
+impl Train {
+    /// The F driving links for the reduced model: `given`, else the links of
+    /// the spec's `[analysis] speeds` when there are F of them, else a
+    /// well-conditioned choice preferring the spec's `driving` links, then
+    /// links carrying a curve, then the rest in link order.
+    ///
+    /// # Errors
+    /// Missing ratios.
+    pub fn driving_coordinates(
+        &self,
+        given: Option<&[LinkId]>,
+    ) -> Result<(Vec<LinkId>, CoordinateSource)> {
+        if let Some(g) = given {
+            return Ok((g.to_vec(), CoordinateSource::Given));
+        }
+        let f = self.dof();
+        let speeds: Vec<LinkId> = self.analysis().speeds.iter().map(|s| s.0).collect();
+        let distinct = speeds
+            .iter()
+            .enumerate()
+            .all(|(i, l)| !speeds[..i].contains(l) && *l != self.frame());
+        if speeds.len() == f && distinct {
+            return Ok((speeds, CoordinateSource::SpecSpeeds));
+        }
+        Ok((self.automatic_coordinates()?, CoordinateSource::Automatic))
+    }
+
+    /// F driving links picked greedily for a well-conditioned [Gamma_w] (the
+    /// largest residual of their rows of the null-space basis), preferring
+    /// the spec's `driving` links, then links carrying a curve.
+    ///
+    /// # Errors
+    /// Missing ratios; Willis equations that lose rank.
+    pub fn automatic_coordinates(&self) -> Result<Vec<LinkId>> {
+        let f = self.dof();
+        let basis = self.null_basis()?;
+        let n = self.coordinates().len();
+        let scale = (0..n)
+            .map(|i| basis.row(i).norm())
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE);
+        let mut tiers: Vec<Vec<LinkId>> = vec![
+            self.analysis().driving.clone(),
+            self.analysis().curves.iter().map(|c| c.link).collect(),
+            self.coordinates().to_vec(),
+        ];
+        for t in &mut tiers {
+            t.retain(|&l| l != self.frame());
+        }
+        let mut chosen: Vec<LinkId> = Vec::new();
+        let mut ortho: Vec<DVector<f64>> = Vec::new();
+        for tier in &tiers {
+            while chosen.len() < f {
+                let mut best: Option<(f64, LinkId, DVector<f64>)> = None;
+                for &l in tier {
+                    if chosen.contains(&l) {
+                        continue;
+                    }
+                    let Some(k) = self.coordinate(l) else {
+                        continue;
+                    };
+                    let mut r: DVector<f64> = basis.row(k).transpose();
+                    for b in &ortho {
+                        let d = r.dot(b);
+                        r -= b * d;
+                    }
+                    let norm = r.norm() / scale;
+                    if best.as_ref().is_none_or(|(bn, _, _)| norm > *bn) {
+                        best = Some((norm, l, r));
+                    }
+                }
+                match best {
+                    Some((norm, l, r)) if norm > SELECT_REL => {
+                        ortho.push(r.normalize());
+                        chosen.push(l);
+                    }
+                    _ => break,
+                }
+            }
+        }
+        if chosen.len() < f {
+            return Err(AnalysisError::Singular {
+                what: "the Willis equations".into(),
+                detail: format!("no {f} links are independent (only {} found)", chosen.len()),
+            }
+            .into());
+        }
+        Ok(chosen)
+    }
+
+    /// An orthonormal basis N (`coordinates()` x F) of the null space of
+    /// [psi_w]: every motion the Willis equations allow is w = N u (eq. 24
+    /// holds with N for [V]). The last F columns of the Householder QR of
+    /// [psi_w^T | 0].
+    ///
+    /// # Errors
+    /// Missing ratios; [`AnalysisError::Singular`] when the Willis equations
+    /// lose rank at these ratios.
+    pub fn null_basis(&self) -> Result<DMatrix<f64>> {
+        let psi = self.willis_jacobian()?;
+        let (jg, n) = psi.shape();
+        let f = self.dof();
+        if n != jg + f {
+            return Err(AnalysisError::Other(format!(
+                "{jg} Willis equations on {n} speeds do not leave {f} degrees of freedom"
+            ))
+            .into());
+        }
+        let mut a = DMatrix::zeros(n, n);
+        a.view_mut((0, 0), (n, jg)).copy_from(&psi.transpose());
+        let q = a.qr().q();
+        let basis = q.columns(jg, f).into_owned();
+        let res = (&psi * &basis).amax() / psi.amax().max(f64::MIN_POSITIVE);
+        // NaN fails too.
+        if res.is_nan() || res > ORTHOGONALITY_TOL {
+            return Err(AnalysisError::Singular {
+                what: "the Willis equations".into(),
+                detail: format!(
+                    "they lose rank at these ratios (null-space residual {res:.2e}): the train gains a degree of freedom"
+                ),
+            }
+            .into());
+        }
+        Ok(basis)
+    }
+
+    /// The reduced model (eq. 23-27) for the driving links `coordinates` and
+    /// the linearised torque-speed `curves` on any links.
+    ///
+    /// # Errors
+    /// As [`Train::velocity_matrix`] (wrong count, links that do not determine
+    /// the train, [`AnalysisError::IllConditioned`] past [`COND_REFUSE`]) and
+    /// [`Train::mass_matrix`]; a non-finite curve.
+    pub fn reduced_model(&self, coordinates: &[LinkId], curves: &[Curve]) -> Result<ReducedModel> {
+        self.reduced_model_from(coordinates, CoordinateSource::Given, curves)
+    }
+
+    fn reduced_model_from(
+        &self,
+        coordinates: &[LinkId],
+        source: CoordinateSource,
+        curves: &[Curve],
+    ) -> Result<ReducedModel> {
+        let nl = self.links().len();
+        let mut warnings = Vec::new();
+        let mut link_slope = vec![0.0; nl];
+        let mut link_offset = vec![0.0; nl];
+        let mut has_curve = vec![false; nl];
+        for c in curves {
+            let name = self.link_name(c.link);
+            for (what, v) in [("torque", c.torque), ("slope", c.slope), ("speed", c.speed)] {
+                if !v.is_finite() {
+                    return Err(Error::spec(
+                        format!("curve on `{name}`: {what}"),
+                        SpecErrorKind::NonFinite { value: v },
+                    ));
+                }
+            }
+            if c.link == self.frame() {
+                warnings.push(format!(
+                    "a curve acts on the frame `{name}`: it does no work and is ignored"
+                ));
+                continue;
+            }
+            link_slope[c.link.index()] += c.slope;
+            link_offset[c.link.index()] += c.torque - c.slope * c.speed;
+            has_curve[c.link.index()] = true;
+        }
+        let (v, gamma_condition) = self.velocity_matrix_cond(coordinates, &[])?;
+        if gamma_condition > COND_WARN {
+            warnings.push(format!(
+                "[Gamma_w] (eq. 23) with driving links {} is ill-conditioned (condition {gamma_condition:.2e}): expect about {:.0} correct digits in [V], [M] and [K]",
+                self.names(coordinates),
+                (16.0 - gamma_condition.log10()).max(0.0)
+            ));
+        }
+        let f = coordinates.len();
+        let mut velocity = DMatrix::zeros(nl, f);
+        for (k, l) in self.coordinates().iter().enumerate() {
+            velocity.set_row(l.index(), &v.row(k));
+        }
+        let psi = self.willis_jacobian()?;
+        let orthogonality = (&psi * &v).amax() / (psi.amax() * v.amax()).max(f64::MIN_POSITIVE);
+        if orthogonality > ORTHOGONALITY_TOL {
+            warnings.push(format!(
+                "the orthogonality [psi_w][V] = 0 (eq. 24) holds only to {orthogonality:.2e}"
+            ));
+        }
+        let mm = self.mass_matrix()?;
+        warnings.extend(mm.notes.iter().cloned());
+        let mass = sym(&(v.transpose() * &mm.matrix * &v));
+        let slope = slope_matrix(&velocity, &link_slope);
+        let nb = self.null_basis()?;
+        let mut basis = DMatrix::zeros(nl, f);
+        for (k, l) in self.coordinates().iter().enumerate() {
+            basis.set_row(l.index(), &nb.row(k));
+        }
+        let basis_mass = sym(&(nb.transpose() * &mm.matrix * &nb));
+        let basis_slope = slope_matrix(&basis, &link_slope);
+        Ok(ReducedModel {
+            coordinates: coordinates.to_vec(),
+            source,
+            velocity,
+            gamma_condition,
+            orthogonality,
+            full_mass: mm.matrix,
+            mass,
+            slope,
+            basis,
+            basis_mass,
+            basis_slope,
+            link_slope,
+            link_offset,
+            has_curve,
+            link_names: self.links().iter().map(|l| l.name.clone()).collect(),
+            warnings,
+        })
+    }
+
+    /// Link names as `` `a`, `b` ``.
+    pub(crate) fn names(&self, links: &[LinkId]) -> String {
+        links
+            .iter()
+            .map(|&l| format!("`{}`", self.link_name(l)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    /// Every link's speed from F input speeds (as [`Train::kinematics`]).
+    ///
+    /// # Errors
+    /// As [`Train::kinematics`].
+    pub(crate) fn speeds_from(&self, inputs: &[(LinkId, f64)]) -> Result<Vec<f64>> {
+        let ins: Vec<SpeedInput> = inputs.iter().map(|&i| SpeedInput::from(i)).collect();
+        Ok(self.kinematics(&ins)?.speed)
+    }
+
+    /// The operating point: every link's speed from `speeds` (F input speeds),
+    /// else the equilibrium of the linearised curves; the reduced torque
+    /// V^T T there, and the equilibrium.
+    ///
+    /// # Errors
+    /// As [`Train::kinematics`]; without speeds, a singular [K] (no equilibrium).
+    pub fn operating_point(
+        &self,
+        model: &ReducedModel,
+        speeds: Option<&[(LinkId, f64)]>,
+    ) -> Result<OperatingPoint> {
+        let equilibrium = model.equilibrium();
+        let (source, speed) = match speeds {
+            Some(s) => (OperatingSource::Speeds, self.speeds_from(s)?),
+            None => match &equilibrium {
+                Ok((e, _)) => (OperatingSource::Equilibrium, e.clone()),
+                Err(e) => {
+                    return Err(AnalysisError::MissingData {
+                        what: "operating speeds".into(),
+                        analysis: format!("the operating point ({e})"),
+                        hint: "give `[analysis] speeds`, one per degree of freedom".into(),
+                    }
+                    .into());
+                }
+            },
+        };
+        let torque = model.torques(&speed);
+        let reduced_torque: Vec<f64> = model
+            .velocity
+            .tr_mul(&DVector::from_vec(torque.clone()))
+            .iter()
+            .copied()
+            .collect();
+        let scale = (0..model.coordinates.len())
+            .map(|k| {
+                (0..speed.len())
+                    .map(|l| (model.velocity[(l, k)] * torque[l]).abs())
+                    .sum::<f64>()
+            })
+            .fold(0.0, f64::max);
+        let big = reduced_torque.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let residual = if scale > 0.0 { big / scale } else { 0.0 };
+        let (equilibrium, equilibrium_condition) = match equilibrium {
+            Ok((e, c)) => (Some(e), Some(c)),
+            Err(_) => (None, None),
+        };
+        Ok(OperatingPoint {
+            source,
+            speed,
+            torque,
+            reduced_torque,
+            residual,
+            steady: residual <= STEADY_REL,
+            equilibrium,
+            equilibrium_condition,
+        })
+    }
+
+    /// The whole stability analysis for a request (defaults from the spec).
+    ///
+    /// # Errors
+    /// As [`Train::driving_coordinates`], [`Train::reduced_model`],
+    /// [`Train::operating_point`] and [`ReducedModel::stability`].
+    pub fn stability(&self, req: &StabilityRequest) -> Result<StabilityReport> {
+        let (coords, source) = self.driving_coordinates(req.coordinates.as_deref())?;
+        let curves = req
+            .curves
+            .clone()
+            .unwrap_or_else(|| self.analysis().curves.clone());
+        if curves.is_empty() {
+            return Err(AnalysisError::MissingData {
+                what: "torque-speed curves".into(),
+                analysis: "the stability analysis".into(),
+                hint: "give [[analysis.curves]] with link, torque, slope and speed".into(),
+            }
+            .into());
+        }
+        let model = self.reduced_model_from(&coords, source, &curves)?;
+        let spec_speeds: Vec<(LinkId, f64)> =
+            self.analysis().speeds.iter().map(|s| (s.0, s.1)).collect();
+        let speeds = match &req.speeds {
+            Some(s) => Some(s.as_slice()),
+            None if !spec_speeds.is_empty() => Some(spec_speeds.as_slice()),
+            None => None,
+        };
+        let operating = self.operating_point(&model, speeds)?;
+        let stability = model.stability()?;
+        let mut warnings = model.warnings.clone();
+        if !operating.steady {
+            let r: Vec<String> = operating
+                .reduced_torque
+                .iter()
+                .map(|v| format!("{v:.4e}"))
+                .collect();
+            warnings.push(format!(
+                "the operating point is not a steady state: V^T T = [{}] (relative {:.2e}) accelerates it; the eigenvalues describe deviations from the motion, which are independent of the point for linear curves",
+                r.join(", "),
+                operating.residual
+            ));
+        }
+        if !stability.massless.is_empty() {
+            warnings.push(format!(
+                "{} massless direction(s) eliminated as algebraic torque balances (links {})",
+                stability.massless.len(),
+                stability
+                    .massless
+                    .iter()
+                    .map(|m| self.names(&m.links))
+                    .collect::<Vec<_>>()
+                    .join("; ")
+            ));
+        }
+        Ok(StabilityReport {
+            model,
+            operating,
+            stability,
+            warnings,
+        })
+    }
+}
+
+impl ReducedModel {
+    /// Number of driving coordinates F.
+    pub fn dof(&self) -> usize {
+        self.coordinates.len()
+    }
+
+    /// Applied torque of the curves on every link at link speeds `speed`.
+    pub fn torques(&self, speed: &[f64]) -> Vec<f64> {
+        speed
+            .iter()
+            .enumerate()
+            .map(|(l, w)| {
+                if self.has_curve[l] {
+                    self.link_offset[l] + self.link_slope[l] * w
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    }
+
+    /// Link speeds w = V x for driving speeds `x`.
+    pub fn link_speeds(&self, x: &[f64]) -> Vec<f64> {
+        (&self.velocity * DVector::from_column_slice(x))
+            .iter()
+            .copied()
+            .collect()
+    }
+
+    /// The equilibrium of the linearised curves, [K] x = -V^T offset, as link
+    /// speeds, with the condition estimate of [K].
+    ///
+    /// # Errors
+    /// [`AnalysisError::Singular`] / [`AnalysisError::IllConditioned`] when [K]
+    /// is (nearly) singular: no unique equilibrium.
+    pub fn equilibrium(&self) -> Result<(Vec<f64>, f64)> {
+        let f = self.dof();
+        let mut lu = Lu::new(f);
+        {
+            let a = lu.matrix_mut();
+            for i in 0..f {
+                for j in 0..f {
+                    a[i * f + j] = self.basis_slope[(i, j)];
+                }
+            }
+        }
+        let what = "the reduced slope matrix [K] (equilibrium)";
+        lu.factor().map_err(|_| AnalysisError::Singular {
+            what: what.into(),
+            detail: "the curves do not fix a unique steady state".into(),
+        })?;
+        let cond = lu.condition();
+        if cond > COND_REFUSE {
+            return Err(AnalysisError::IllConditioned {
+                what: what.into(),
+                condition: cond,
+                threshold: COND_REFUSE,
+            }
+            .into());
+        }
+        let mut b: Vec<f64> = self
+            .basis
+            .tr_mul(&DVector::from_column_slice(&self.link_offset))
+            .iter()
+            .map(|v| -v)
+            .collect();
+        lu.solve(&mut b);
+        let w = (&self.basis * DVector::from_vec(b))
+            .iter()
+            .copied()
+            .collect();
+        Ok((w, cond))
+    }
+
+    /// Link speeds N u for coordinates `u` in the orthonormal basis.
+    fn basis_speeds(&self, u: &DVector<f64>) -> Vec<f64> {
+        (&self.basis * u).iter().copied().collect()
+    }
+
+    /// Scale link speeds so the largest is +1; returns the scaled speeds and
+    /// the driving-coordinate values.
+    fn normalised(&self, speeds: Vec<f64>) -> (Vec<f64>, Vec<f64>) {
+        let (mut top, mut sign) = (0.0_f64, 1.0);
+        for &v in &speeds {
+            if v.abs() > top {
+                top = v.abs();
+                sign = v.signum();
+            }
+        }
+        let s = if top > 0.0 { sign / top } else { 1.0 };
+        let speeds: Vec<f64> = speeds.iter().map(|v| v * s).collect();
+        let coords = self.coordinates.iter().map(|l| speeds[l.index()]).collect();
+        (speeds, coords)
+    }
+
+    /// Eigenvalues, modes and verdict of (lambda [M] - [K]) X = 0.
+    ///
+    /// Solved in the orthonormal basis N (the same eigenvalues: [V] = N N_S^-1
+    /// is a congruence of the pencil), so the answer does not degrade when
+    /// the driving links make [Gamma_w] ill-conditioned.
+    ///
+    /// # Errors
+    /// No inertia at all; an indefinite [M]; a massless direction without a
+    /// torque slope (its speed is undetermined).
+    pub fn stability(&self) -> Result<Stability> {
+        let f = self.dof();
+        let split = InertiaSplit::new(&self.basis_mass)?;
+        let r = split.r;
+        let kq = sym(&(split.q.transpose() * &self.basis_slope * &split.q));
+        let k11 = kq.view((0, 0), (r, r)).into_owned();
+        let k10 = kq.view((0, r), (r, f - r)).into_owned();
+        let k00 = kq.view((r, r), (f - r, f - r)).into_owned();
+        // Massless block: K00 = P diag(kappa) P^T must be regular.
+        let (kappa, p) = sorted_eigen(k00);
+        let kscale = self.basis_slope.amax();
+        let mut massless = Vec::new();
+        let q0 = split.q0();
+        for (i, &kp) in kappa.iter().enumerate() {
+            let dir: DVector<f64> = &q0 * p.column(i);
+            let (speeds, coordinates) = self.normalised(self.basis_speeds(&dir));
+            let links: Vec<LinkId> = speeds
+                .iter()
+                .enumerate()
+                .filter(|(_, v)| v.abs() > 1e-9)
+                .map(|(l, _)| LinkId::from_index(l))
+                .collect();
+            if kscale == 0.0 || kp.abs() <= MARGINAL_REL * kscale {
+                let names: Vec<String> = links
+                    .iter()
+                    .map(|&l| format!("`{}`", self.link_names[l.index()]))
+                    .collect();
+                return Err(AnalysisError::Singular {
+                    what: "the reduced model".into(),
+                    detail: format!(
+                        "a motion of links {} has neither inertia nor a torque slope, so its speed is undetermined; give one of them an inertia or a curve",
+                        names.join(", ")
+                    ),
+                }
+                .into());
+            }
+            massless.push(MasslessDirection {
+                coordinates,
+                speeds,
+                links,
+                slope: kp,
+            });
+        }
+        // Schur complement: the massless coordinates z = -K00^-1 K01 y follow the others.
+        let k00_inv =
+            &p * DMatrix::from_diagonal(&DVector::from_iterator(
+                f - r,
+                kappa.iter().map(|k| 1.0 / k),
+            )) * p.transpose();
+        let ks = sym(&(&k11 - &k10 * &k00_inv * k10.transpose()));
+        let d = DVector::from_iterator(r, split.mu.iter().map(|m| 1.0 / m.sqrt()));
+        let a = sym(&DMatrix::from_fn(r, r, |i, j| d[i] * ks[(i, j)] * d[j]));
+        let (lambda, evec) = sorted_eigen(a.clone());
+        let q1 = split.q1();
+        let mut modes = Vec::with_capacity(r);
+        let mut residual: f64 = 0.0;
+        let (mm, kk) = (&self.basis_mass, &self.basis_slope);
+        for (c, &lam) in lambda.iter().enumerate() {
+            let y = DVector::from_iterator(r, (0..r).map(|i| d[i] * evec[(i, c)]));
+            let z = -&k00_inv * k10.transpose() * &y;
+            let u: DVector<f64> = &q1 * &y + &q0 * &z;
+            let res = (kk * &u - mm * &u * lam).amax()
+                / ((kk.amax() + mm.amax() * lam.abs()) * u.amax()).max(f64::MIN_POSITIVE);
+            residual = residual.max(res);
+            let (speeds, coordinates) = self.normalised(self.basis_speeds(&u));
+            modes.push(Mode {
+                eigenvalue: lam,
+                time_constant: (lam != 0.0).then(|| 1.0 / lam.abs()),
+                coordinates,
+                speeds,
+            });
+        }
+        debug_assert!(residual < 1e-8, "eigen residual {residual}");
+        let tolerance = a.norm() * MARGINAL_REL;
+        let margin = lambda.first().copied().unwrap_or(f64::NEG_INFINITY);
+        let runaway: Vec<&MasslessDirection> = massless.iter().filter(|m| m.slope > 0.0).collect();
+        let (verdict, reason) = if !runaway.is_empty() {
+            (
+                Verdict::Unstable,
+                format!(
+                    "a massless direction has a rising torque (slope {:.4e} > 0): with any parasitic inertia it runs away infinitely fast",
+                    runaway[0].slope
+                ),
+            )
+        } else if r == 0 {
+            (
+                Verdict::Stable,
+                "every direction is massless with a falling torque: the train sits at the torque balance".into(),
+            )
+        } else if margin > tolerance {
+            (
+                Verdict::Unstable,
+                format!("eigenvalue {margin:.6e} > 0: a perturbation grows as e^({margin:.4e} t)"),
+            )
+        } else if margin < -tolerance {
+            (
+                Verdict::Stable,
+                format!(
+                    "every eigenvalue is negative (largest {margin:.6e}): perturbations decay at least as e^({margin:.4e} t)"
+                ),
+            )
+        } else {
+            (
+                Verdict::Marginal,
+                format!(
+                    "the largest eigenvalue {margin:.3e} is zero within {tolerance:.1e}: perturbations along its mode neither grow nor decay"
+                ),
+            )
+        };
+        let most_negative = lambda.last().copied().unwrap_or(0.0);
+        let rk4_step_limit = (most_negative < -tolerance).then(|| RK4_REAL_LIMIT / -most_negative);
+        let nonzero: Vec<f64> = lambda
+            .iter()
+            .map(|l| l.abs())
+            .filter(|&l| l > tolerance)
+            .collect();
+        let stiffness = (!nonzero.is_empty()).then(|| {
+            nonzero.iter().fold(0.0_f64, |m, &v| m.max(v))
+                / nonzero.iter().fold(f64::INFINITY, |m, &v| m.min(v))
+        });
+        Ok(Stability {
+            eigenvalues: lambda,
+            modes,
+            verdict,
+            reason,
+            margin,
+            tolerance,
+            massless,
+            rk4_step_limit,
+            stiffness,
+            residual,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rk4_limit_is_the_real_stability_boundary() {
+        let r = |z: f64| 1.0 + z + z * z / 2.0 + z * z * z / 6.0 + z.powi(4) / 24.0;
+        assert!((r(-RK4_REAL_LIMIT) - 1.0).abs() < 1e-14);
+        assert!(r(-RK4_REAL_LIMIT + 1e-6) < 1.0);
+        assert!(r(-RK4_REAL_LIMIT - 1e-6) > 1.0);
+    }
+
+    #[test]
+    fn inertia_split_separates_massless_and_rejects_indefinite() {
+        let m = DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 1.0, 1.0]);
+        let s = InertiaSplit::new(&m).expect("psd");
+        assert_eq!(s.r, 1);
+        assert!((s.mu[0] - 2.0).abs() < 1e-14);
+        let q0 = s.q0();
+        assert!((&m * &q0).amax() < 1e-14);
+        let bad = DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, -1.0]);
+        assert!(InertiaSplit::new(&bad).is_err());
+        assert!(InertiaSplit::new(&DMatrix::zeros(2, 2)).is_err());
+    }
+}
