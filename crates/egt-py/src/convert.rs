@@ -102,18 +102,6 @@ pub fn mat2<'py>(
     Ok(a.into_pyarray(py))
 }
 
-/// A 2-D boolean or other element array from a row-major buffer.
-pub fn mat2_of<'py, T: numpy::Element>(
-    py: Python<'py>,
-    rows: usize,
-    cols: usize,
-    data: Vec<T>,
-) -> Result<Bound<'py, PyArray2<T>>> {
-    let a = Array2::from_shape_vec((rows, cols), data)
-        .map_err(|e| crate::errors::value_error(e.to_string()))?;
-    Ok(a.into_pyarray(py))
-}
-
 /// A nalgebra matrix (column-major) as a 2-D NumPy array.
 pub fn dmatrix<'py>(py: Python<'py>, m: &DMatrix<f64>) -> Result<Bound<'py, PyArray2<f64>>> {
     let mut out = Vec::with_capacity(m.nrows() * m.ncols());

@@ -7,6 +7,7 @@
 //! ├── SpecError               path, value, suggestion
 //! │   └── SpecSyntaxError     source, line, column
 //! ├── TopologyError           links, pairs, levels, dof
+//! ├── TransmissionError       state, elements, gears, free, dof, input, output
 //! ├── AnalysisError
 //! │   ├── InputError          dof, given, what, link
 //! │   ├── UnderdeterminedError  free
@@ -17,6 +18,10 @@
 //! └── InternalError           (a Rust panic, caught before it reaches Python)
 //! ```
 //!
+//! An analysis that fails inside a gear state (`TransmissionError::InState`)
+//! raises the exception of its cause, with the state named in the message and
+//! in the `state` attribute.
+//!
 //! Every exception carries `kind` (the variant, in snake case) and `names`
 //! (the offending links, pairs, fields or levels), plus the attributes above.
 //! Attributes an exception does not use are `None` (class-level defaults).
@@ -24,6 +29,7 @@
 use std::any::Any;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
+use egt_core::TransmissionError as CoreTransmission;
 use egt_core::error::{AnalysisError as CoreAnalysis, SpecErrorKind, TopologyError as CoreTopo};
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
@@ -48,6 +54,12 @@ pyo3::create_exception!(
     TopologyError,
     EgtError,
     "The graph is not a valid geared kinematic chain (paper section 2)."
+);
+pyo3::create_exception!(
+    egt,
+    TransmissionError,
+    EgtError,
+    "A gear state of a transmission cannot be analysed as written (`state` names it)."
 );
 pyo3::create_exception!(
     egt,
@@ -200,6 +212,17 @@ pub fn kind(e: &egt_core::Error) -> &'static str {
             CoreAnalysis::MissingData { .. } => "missing_data",
             _ => "other",
         },
+        egt_core::Error::Transmission(t) => match t {
+            CoreTransmission::NoStates => "no_states",
+            CoreTransmission::UnknownState { .. } => "unknown_state",
+            CoreTransmission::Underconstrained { .. } => "underconstrained",
+            CoreTransmission::Locked { .. } => "locked_state",
+            CoreTransmission::Redundant { .. } => "redundant_elements",
+            CoreTransmission::InputHeld { .. } => "input_held",
+            CoreTransmission::OutputHeld { .. } => "output_held",
+            CoreTransmission::InState { cause, .. } => kind(cause),
+            _ => "transmission",
+        },
         _ => "other",
     }
 }
@@ -246,7 +269,11 @@ fn tuple<'py>(py: Python<'py>, items: &[String]) -> Bound<'py, PyAny> {
 
 /// Map a core error to the Python exception of its family, with its attributes.
 pub fn core_to_py(py: Python<'_>, e: &egt_core::Error) -> PyErr {
-    let msg = e.to_string();
+    map(py, e, e.to_string())
+}
+
+/// Map `e` to its exception with the message `msg`.
+fn map(py: Python<'_>, e: &egt_core::Error, msg: String) -> PyErr {
     let k = kind(e);
     match e {
         egt_core::Error::Syntax(s) => build::<SpecSyntaxError>(
@@ -332,8 +359,78 @@ pub fn core_to_py(py: Python<'_>, e: &egt_core::Error) -> PyErr {
             )
         }
         egt_core::Error::Analysis(a) => analysis_to_py(py, a, msg, k),
+        egt_core::Error::Transmission(t) => transmission_to_py(py, t, msg, k),
         _ => build::<EgtError>(py, msg, k, &[], &[]),
     }
+}
+
+fn transmission_to_py(py: Python<'_>, t: &CoreTransmission, msg: String, k: &str) -> PyErr {
+    let none: Vec<String> = Vec::new();
+    let (state, elements, gears, free, dof, input, output): (
+        Option<&String>,
+        &[String],
+        &[String],
+        &[String],
+        Option<usize>,
+        Option<&String>,
+        Option<&String>,
+    ) = match t {
+        CoreTransmission::InState { state, cause } => {
+            let err = map(py, cause, msg);
+            let _ = err.value(py).setattr("state", state.as_str());
+            return err;
+        }
+        CoreTransmission::UnknownState { state, .. } => {
+            (Some(state), &none, &none, &none, None, None, None)
+        }
+        CoreTransmission::Underconstrained { state, dof, free } => {
+            (Some(state), &none, &none, free, Some(*dof), None, None)
+        }
+        CoreTransmission::Locked { state, elements } => {
+            (Some(state), elements, &none, &none, Some(0), None, None)
+        }
+        CoreTransmission::Redundant {
+            state,
+            elements,
+            gears,
+            dof,
+        } => (Some(state), elements, gears, &none, Some(*dof), None, None),
+        CoreTransmission::InputHeld {
+            state,
+            input,
+            moving,
+        } => (Some(state), &none, &none, moving, None, Some(input), None),
+        CoreTransmission::OutputHeld { state, output } => {
+            (Some(state), &none, &none, &none, None, None, Some(output))
+        }
+        _ => (None, &none, &none, &none, None, None, None),
+    };
+    let suggestion = match t {
+        CoreTransmission::UnknownState { suggestion, .. } => suggestion.clone(),
+        _ => None,
+    };
+    let mut names: Vec<String> = state.into_iter().cloned().collect();
+    names.extend(elements.iter().cloned());
+    names.extend(gears.iter().cloned());
+    names.extend(free.iter().cloned());
+    names.extend(input.into_iter().cloned());
+    names.extend(output.into_iter().cloned());
+    build::<TransmissionError>(
+        py,
+        msg,
+        k,
+        &names,
+        &[
+            ("state", obj(py, state.map(String::as_str))),
+            ("elements", tuple(py, elements)),
+            ("gears", tuple(py, gears)),
+            ("free", tuple(py, free)),
+            ("dof", obj(py, dof)),
+            ("input", obj(py, input.map(String::as_str))),
+            ("output", obj(py, output.map(String::as_str))),
+            ("suggestion", obj(py, suggestion)),
+        ],
+    )
 }
 
 fn analysis_to_py(py: Python<'_>, a: &CoreAnalysis, msg: String, k: &str) -> PyErr {
@@ -420,8 +517,12 @@ pub fn value_error(msg: impl Into<String>) -> Error {
 /// defaults for every attribute so that each attribute exists on each class.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
-    let classes: [(&str, Bound<'_, PyType>, &[&str]); 12] = [
-        ("EgtError", py.get_type::<EgtError>(), &["kind", "names"]),
+    let classes: [(&str, Bound<'_, PyType>, &[&str]); 13] = [
+        (
+            "EgtError",
+            py.get_type::<EgtError>(),
+            &["kind", "names", "state"],
+        ),
         (
             "SpecError",
             py.get_type::<SpecError>(),
@@ -436,6 +537,19 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
             "TopologyError",
             py.get_type::<TopologyError>(),
             &["links", "pairs", "levels", "dof", "parts"],
+        ),
+        (
+            "TransmissionError",
+            py.get_type::<TransmissionError>(),
+            &[
+                "elements",
+                "gears",
+                "free",
+                "dof",
+                "input",
+                "output",
+                "suggestion",
+            ],
         ),
         ("AnalysisError", py.get_type::<AnalysisError>(), &[]),
         (

@@ -19,8 +19,8 @@ fn _egt(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<train::TrainCore>()?;
     m.add_function(wrap_pyfunction!(structure::structure, m)?)?;
-    m.add_function(wrap_pyfunction!(batch::batch_kinematics, m)?)?;
-    m.add_function(wrap_pyfunction!(batch::batch_dynamics, m)?)?;
+    m.add_class::<batch::BatchPlanCore>()?;
+    m.add_function(wrap_pyfunction!(batch::batch_plan, m)?)?;
     errors::register(m)?;
     Ok(())
 }

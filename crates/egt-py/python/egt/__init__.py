@@ -8,7 +8,7 @@ validated once into a :class:`Train`, and then analysed::
     train = egt.load("examples/fig3_example61.toml")
     train.kinematics({"2": 100.0})["4"]        # speed of link 4
     train.dynamics().driving_torques            # eq. (10)
-    train.batch_kinematics({"2": 100.0}, teeth=teeth_rows)   # screening
+    train.batch_kinematics({"2": 100.0}, teeth=teeth_rows)   # screening, in parallel
     train.to_sympy().mass_matrix                # eq. (3)-(6) symbolically
 
 The native part lives in ``egt._egt`` (Rust, via pyo3); this package adds the
@@ -17,7 +17,7 @@ Pythonic surface. Every error is an :class:`EgtError`.
 
 from __future__ import annotations
 
-from ._batch import BatchDynamics, BatchKinematics, RowError
+from ._batch import BatchDynamics, BatchKinematics, BatchPlan, BatchResult, RowError
 from ._egt import (
     AnalysisError,
     EgtError,
@@ -30,6 +30,7 @@ from ._egt import (
     SpecError,
     SpecSyntaxError,
     TopologyError,
+    TransmissionError,
     UnderdeterminedError,
     __version__,
 )
@@ -68,6 +69,8 @@ __all__ = [
     "MeshPower",
     "LinkPower",
     "PowerFlow",
+    "BatchPlan",
+    "BatchResult",
     "BatchKinematics",
     "BatchDynamics",
     "RowError",
@@ -76,6 +79,7 @@ __all__ = [
     "SpecError",
     "SpecSyntaxError",
     "TopologyError",
+    "TransmissionError",
     "AnalysisError",
     "InputError",
     "UnderdeterminedError",

@@ -1,8 +1,11 @@
-"""NumPy argument handling and results of the batch (screening) API.
+"""The batch (screening) API: a train prepared once, evaluated for many rows.
 
-Arguments are normalised here, once, into C-contiguous float64 (or int64 for
-tooth counts) arrays of one row per scenario; the native side re-checks shapes
-and solves the rows in parallel with the GIL released. Per-row failures are
+A :class:`BatchPlan` wraps egt-core's batch plan: named parameter columns
+(``ratio.<gear>``, ``speed.<link>``, ``accel.<link>``, ``torque.<link>``,
+``inertia.<link>``, ``mass.<link>``, ``efficiency.<gear>``), a base row with the
+spec's values, and named output columns. Arguments are normalised here, once,
+into a C-contiguous float64 parameter matrix (one row per scenario); the native
+side solves the rows in parallel with the GIL released. Per-row failures are
 reported in ``ok`` / ``errors``; failed rows hold 0.0, never NaN.
 """
 
@@ -14,10 +17,12 @@ from typing import TYPE_CHECKING, Any, Dict, Iterable, List, Mapping, Optional, 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ._egt import BatchPlanCore
+
 if TYPE_CHECKING:  # pragma: no cover
     import pandas
 
-__all__ = ["RowError", "BatchKinematics", "BatchDynamics"]
+__all__ = ["RowError", "BatchPlan", "BatchResult", "BatchKinematics", "BatchDynamics"]
 
 
 def _numeric(x: ArrayLike, what: str) -> np.ndarray:
@@ -108,6 +113,33 @@ def teeth_array(x: ArrayLike, rows: int, gears: int) -> np.ndarray:
     return np.ascontiguousarray(np.broadcast_to(a.astype(np.int64), (rows, gears, 2)))
 
 
+
+def ratios_from_teeth(
+    teeth: np.ndarray, signs: Sequence[float], names: Sequence[str]
+) -> Tuple[np.ndarray, Dict[int, "RowError"]]:
+    """Willis ratios tau = -/+ z_j / z_i (external/internal) from (rows, gears, 2)
+    tooth counts, and the rows whose counts are invalid (their ratios are set to
+    -1 so the batch runs; the caller marks them failed)."""
+    zi = teeth[:, :, 0].astype(np.float64)
+    zj = teeth[:, :, 1].astype(np.float64)
+    sign = np.asarray(signs, dtype=np.float64)
+    bad = (teeth[:, :, 0] <= 0) | (teeth[:, :, 1] <= 0) | ((sign > 0) & (teeth[:, :, 0] == teeth[:, :, 1]))
+    errors: Dict[int, RowError] = {}
+    for r, m in zip(*np.nonzero(bad)):
+        r, m = int(r), int(m)
+        if r in errors:
+            continue
+        z = (int(teeth[r, m, 0]), int(teeth[r, m, 1]))
+        if min(z) <= 0:
+            msg = f"teeth[{r}, {m}]: tooth counts of gear pair `{names[m]}` must be positive integers, got {list(z)}"
+        else:
+            msg = f"teeth[{r}, {m}]: gear pair `{names[m]}` is an internal mesh and needs different tooth counts, got {list(z)}"
+        errors[r] = RowError(r, "invalid_teeth", msg)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tau = np.where(bad, -1.0, sign * zj / np.where(zi == 0, 1.0, zi))
+    return np.ascontiguousarray(tau), errors
+
+
 @dataclass(frozen=True)
 class RowError:
     """Why one row of a batch failed."""
@@ -118,8 +150,188 @@ class RowError:
     message: str
 
 
-def _errors(raw: Sequence[Tuple[int, str, str]]) -> Dict[int, RowError]:
-    return {r: RowError(r, k, m) for r, k, m in raw}
+def _pandas() -> Any:
+    from ._results import _pandas as p
+
+    return p()
+
+
+@dataclass(frozen=True, eq=False)
+class BatchResult:
+    """The outputs of a batch: one row per scenario, one named column per output.
+
+    Failed rows hold 0.0 in every column (never NaN): check ``ok``/``errors``.
+    ``power.efficiency`` is 0.0 in a row without input power.
+    """
+
+    outputs: Tuple[str, ...]
+    values: np.ndarray
+    """(rows, outputs) float64."""
+    ok: np.ndarray
+    """(rows,) bool: False where the row failed (see ``errors``)."""
+    errors: Dict[int, RowError]
+
+    def __len__(self) -> int:
+        return int(self.values.shape[0])
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        """One output column over all rows, e.g. ``result["torque.2"]``."""
+        try:
+            return self.values[:, self.outputs.index(name)]
+        except ValueError:
+            raise KeyError(f"no output column {name!r} (outputs: {', '.join(self.outputs)})") from None
+
+    def to_dict(self) -> Dict[str, Any]:
+        return {
+            "outputs": list(self.outputs),
+            "values": self.values.tolist(),
+            "ok": self.ok.tolist(),
+            "errors": {str(r): {"kind": e.kind, "message": e.message} for r, e in self.errors.items()},
+        }
+
+    def to_pandas(self) -> "pandas.DataFrame":
+        pd = _pandas()
+        df = pd.DataFrame(self.values, columns=list(self.outputs))
+        df["ok"] = self.ok
+        df["error"] = [self.errors[r].message if r in self.errors else None for r in range(len(self))]
+        return df
+
+
+class BatchPlan:
+    """A train prepared for many scenarios (build it with :meth:`egt.Train.batch`).
+
+    Each scenario is a row of :attr:`parameters`; :meth:`params` builds the
+    matrix from the base row (the spec's values) and the columns you vary,
+    :meth:`run` solves it in parallel with the GIL released.
+    """
+
+    __slots__ = ("_core", "compute", "parameters", "outputs", "_gears", "_signs")
+
+    def __init__(
+        self,
+        core: BatchPlanCore,
+        compute: str,
+        gears: Sequence[str],
+        signs: Sequence[Optional[float]],
+    ) -> None:
+        self._core = core
+        self.compute = compute
+        self.parameters: Tuple[str, ...] = tuple(core.parameters)
+        self.outputs: Tuple[str, ...] = tuple(core.outputs)
+        self._gears = tuple(gears)
+        self._signs = tuple(signs)
+
+    @property
+    def base(self) -> np.ndarray:
+        """The spec's own parameter values (NaN where the spec gives none)."""
+        return self._core.base
+
+    def __repr__(self) -> str:
+        return f"<egt.BatchPlan {self.compute}: {len(self.parameters)} parameters -> {len(self.outputs)} outputs>"
+
+    def column(self, name: str) -> int:
+        try:
+            return self.parameters.index(name)
+        except ValueError:
+            raise KeyError(
+                f"no parameter column {name!r} (parameters: {', '.join(self.parameters)})"
+            ) from None
+
+    def params(
+        self,
+        values: Optional[Mapping[str, ArrayLike]] = None,
+        *,
+        ratios: Optional[ArrayLike] = None,
+        teeth: Optional[ArrayLike] = None,
+        rows: Optional[int] = None,
+    ) -> Tuple[np.ndarray, Dict[int, RowError]]:
+        """The parameter matrix: the base row repeated, with the columns in
+        ``values`` (name -> scalar or one value per row) and the ratio columns
+        from ``ratios`` ((gears,) or (rows, gears)) or ``teeth`` ((gears, 2)
+        or (rows, gears, 2)) replaced. Also returns the rows whose tooth
+        counts are invalid."""
+        names, cols = columns(values or {}, "values")
+        per_row: List[Tuple[str, np.ndarray, int]] = [(f"values[{n!r}]", c, 0) for n, c in zip(names, cols)]
+        r_arr = None if ratios is None else _numeric(ratios, "ratios")
+        t_arr = None if teeth is None else _numeric(teeth, "teeth")
+        if r_arr is not None and t_arr is not None:
+            raise ValueError("give either `ratios` or `teeth`, not both")
+        if r_arr is not None:
+            per_row.append(("ratios", r_arr, 1))
+        if t_arr is not None:
+            per_row.append(("teeth", t_arr, 2))
+        n_rows = common_rows(per_row)
+        if rows is not None:
+            if any(_rows_of(a, nd) not in (None, rows) for _, a, nd in per_row):
+                raise ValueError(f"rows={rows} disagrees with the per-row arrays")
+            n_rows = rows
+        p = np.repeat(self.base.reshape(1, -1), n_rows, axis=0)
+        bad: Dict[int, RowError] = {}
+        ratio_cols = [self.column(f"ratio.{g}") for g in self._gears]
+        if r_arr is not None:
+            p[:, ratio_cols] = rows_matrix(r_arr, n_rows, len(self._gears), "ratios")
+        if t_arr is not None:
+            if any(s is None for s in self._signs):
+                missing = [g for g, s in zip(self._gears, self._signs) if s is None]
+                raise ValueError(
+                    f"ratios from teeth need the mesh kind of gear pairs {missing}: give `mesh` in the spec"
+                )
+            z = teeth_array(t_arr, n_rows, len(self._gears))
+            tau, bad = ratios_from_teeth(z, [float(s) for s in self._signs if s is not None], self._gears)
+            p[:, ratio_cols] = tau
+        for n, c in zip(names, cols):
+            p[:, self.column(n)] = np.broadcast_to(c.astype(np.float64, copy=False), (n_rows,))
+        return p, bad
+
+    def run(self, params: ArrayLike, *, threads: Optional[int] = None) -> BatchResult:
+        """Solve every row of ``params`` ((rows, parameters) or one row)."""
+        a = _numeric(params, "params")
+        if a.ndim == 1:
+            a = a.reshape(1, -1)
+        if a.ndim != 2 or a.shape[1] != len(self.parameters):
+            raise ValueError(
+                f"params must have shape (rows, {len(self.parameters)}), got {a.shape}"
+            )
+        if threads is not None and (isinstance(threads, bool) or int(threads) < 1):
+            raise ValueError(f"threads must be a positive integer, got {threads!r}")
+        values, raw = self._core.run(
+            np.ascontiguousarray(a, dtype=np.float64), None if threads is None else int(threads)
+        )
+        ok = np.ones(values.shape[0], dtype=bool)
+        errors = {r: RowError(r, k, m) for r, k, m in raw}
+        ok[list(errors)] = False
+        return BatchResult(self.outputs, values, ok, errors)
+
+    def evaluate(
+        self,
+        values: Optional[Mapping[str, ArrayLike]] = None,
+        *,
+        ratios: Optional[ArrayLike] = None,
+        teeth: Optional[ArrayLike] = None,
+        rows: Optional[int] = None,
+        threads: Optional[int] = None,
+    ) -> BatchResult:
+        """:meth:`params` then :meth:`run`; rows with invalid teeth are failed rows."""
+        p, bad = self.params(values, ratios=ratios, teeth=teeth, rows=rows)
+        res = self.run(p, threads=threads)
+        if bad:
+            idx = list(bad)
+            res.values[idx, :] = 0.0
+            res.ok[idx] = False
+            res.errors.update(bad)
+        return res
+
+
+def _known_columns(
+    res: BatchResult, prefix: str, links: Sequence[str]
+) -> np.ndarray:
+    """Per-link (rows, links) array from the ``<prefix>.<link>`` output columns (0 elsewhere)."""
+    out = np.zeros((len(res), len(links)), dtype=np.float64)
+    for k, name in enumerate(links):
+        col = f"{prefix}.{name}"
+        if col in res.outputs:
+            out[:, k] = res[col]
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -128,24 +340,23 @@ class BatchKinematics:
 
     links: Tuple[str, ...]
     speeds: np.ndarray
-    """(rows, links) float64; 0.0 in failed rows."""
-    condition: np.ndarray
-    residual: np.ndarray
+    """(rows, links) float64; 0.0 in failed rows and for links of unknown speed."""
     known: np.ndarray
+    """(links,) bool: False for a planet given without teeth (and True for the frame)."""
+    condition: np.ndarray
+    """(rows,) condition estimate of the Willis system."""
     ok: np.ndarray
-    """(rows,) bool: False where the row failed (see ``errors``)."""
     errors: Dict[int, RowError]
 
     @classmethod
-    def _from_raw(cls, links: Tuple[str, ...], d: Mapping[str, Any]) -> "BatchKinematics":
+    def _from_result(cls, links: Tuple[str, ...], known: np.ndarray, res: BatchResult) -> "BatchKinematics":
         return cls(
             links=links,
-            speeds=d["speed"],
-            condition=d["condition"],
-            residual=d["residual"],
-            known=d["known"],
-            ok=d["ok"],
-            errors=_errors(d["errors"]),
+            speeds=_known_columns(res, "speed", links),
+            known=known,
+            condition=np.ascontiguousarray(res["cond.speeds"]),
+            ok=res.ok,
+            errors=res.errors,
         )
 
     def __len__(self) -> int:
@@ -160,14 +371,11 @@ class BatchKinematics:
             "links": list(self.links),
             "speeds": self.speeds.tolist(),
             "condition": self.condition.tolist(),
-            "residual": self.residual.tolist(),
             "ok": self.ok.tolist(),
             "errors": {str(r): {"kind": e.kind, "message": e.message} for r, e in self.errors.items()},
         }
 
     def to_pandas(self) -> "pandas.DataFrame":
-        from ._results import _pandas
-
         pd = _pandas()
         df = pd.DataFrame(self.speeds, columns=list(self.links))
         df["ok"] = self.ok
@@ -186,25 +394,33 @@ class BatchDynamics:
     accelerations: np.ndarray
     """(rows, links)."""
     multipliers: np.ndarray
-    """(rows, constraints): Willis rows then engaged elements."""
+    """(rows, constraints): Willis rows (gear-pair order), then engaged elements."""
+    forces: Dict[str, np.ndarray]
+    """Gear pair -> (rows,) tangential force lambda_m / r_i (eq. 11), for pairs with radii."""
     conditions: np.ndarray
-    """(rows, 2): condition estimates of [Psi_w] (eq. 8) and the force system (eq. 10)."""
+    """(rows, 3): condition estimates of the speed system, [Psi_w] (eq. 8) and eq. (10)."""
     ok: np.ndarray
     errors: Dict[int, RowError]
 
     @classmethod
-    def _from_raw(
-        cls, links: Tuple[str, ...], driving: Tuple[str, ...], d: Mapping[str, Any]
+    def _from_result(
+        cls, links: Tuple[str, ...], driving: Tuple[str, ...], res: BatchResult
     ) -> "BatchDynamics":
+        lam = [c for c in res.outputs if c.startswith("lambda.")]
         return cls(
             links=links,
             driving=driving,
-            driving_torques=d["driving_torques"],
-            accelerations=d["acceleration"],
-            multipliers=d["multipliers"],
-            conditions=d["conditions"],
-            ok=d["ok"],
-            errors=_errors(d["errors"]),
+            driving_torques=np.stack([res[f"torque.{d}"] for d in driving], axis=1)
+            if driving
+            else np.zeros((len(res), 0)),
+            accelerations=_known_columns(res, "accel", links),
+            multipliers=np.stack([res[c] for c in lam], axis=1) if lam else np.zeros((len(res), 0)),
+            forces={c[len("force."):]: np.ascontiguousarray(res[c]) for c in res.outputs if c.startswith("force.")},
+            conditions=np.stack(
+                [res["cond.speeds"], res["cond.accelerations"], res["cond.forces"]], axis=1
+            ),
+            ok=res.ok,
+            errors=res.errors,
         )
 
     def __len__(self) -> int:
@@ -221,14 +437,13 @@ class BatchDynamics:
             "driving_torques": self.driving_torques.tolist(),
             "accelerations": self.accelerations.tolist(),
             "multipliers": self.multipliers.tolist(),
+            "forces": {g: f.tolist() for g, f in self.forces.items()},
             "conditions": self.conditions.tolist(),
             "ok": self.ok.tolist(),
             "errors": {str(r): {"kind": e.kind, "message": e.message} for r, e in self.errors.items()},
         }
 
     def to_pandas(self) -> "pandas.DataFrame":
-        from ._results import _pandas
-
         pd = _pandas()
         df = pd.DataFrame(self.driving_torques, columns=[f"T_{n}" for n in self.driving])
         df["ok"] = self.ok

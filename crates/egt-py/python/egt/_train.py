@@ -29,8 +29,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _batch
-from ._batch import BatchDynamics, BatchKinematics
-from ._egt import TrainCore, batch_dynamics, batch_kinematics
+from ._batch import BatchDynamics, BatchKinematics, BatchPlan
+from ._egt import TrainCore, batch_plan
 from ._results import (
     Circuit,
     Dynamics,
@@ -368,6 +368,40 @@ class Train:
 
     # -- batches -----------------------------------------------------------
 
+    def batch(
+        self,
+        compute: str = "dynamics",
+        *,
+        inputs: Optional[Sequence[str]] = None,
+        accelerated: Optional[Sequence[str]] = None,
+        driving: Optional[Sequence[str]] = None,
+        engaged: Sequence[str] = (),
+    ) -> BatchPlan:
+        """Prepare the train for many scenarios (``compute``: ``"kinematics"``,
+        ``"dynamics"`` or ``"power"``).
+
+        ``inputs``: links with prescribed speed (default: the spec's
+        ``[analysis] speeds``); ``accelerated`` and ``driving`` default to the
+        spec's choices, else the inputs. See :class:`egt.BatchPlan`.
+        """
+        core = batch_plan(
+            self._core,
+            compute,
+            None if inputs is None else _names(inputs, "inputs"),
+            None if accelerated is None else _names(accelerated, "accelerated"),
+            None if driving is None else _names(driving, "driving"),
+            _names(engaged, "engaged"),
+        )
+        signs = []
+        for g in self._core.gears():
+            if g["mesh"] is not None:
+                signs.append(-1.0 if g["mesh"] == "external" else 1.0)
+            elif g["ratio"] is not None:
+                signs.append(-1.0 if g["ratio"] < 0 else 1.0)
+            else:
+                signs.append(None)
+        return BatchPlan(core, compute, [g["name"] for g in self._core.gears()], signs)
+
     def batch_kinematics(
         self,
         inputs: Mapping[str, ArrayLike],
@@ -376,7 +410,7 @@ class Train:
         teeth: Optional[ArrayLike] = None,
         threads: Optional[int] = None,
     ) -> BatchKinematics:
-        """Speeds of every link for many scenarios, in parallel.
+        """Speeds of every link for many scenarios, in parallel with the GIL released.
 
         ``inputs`` maps each input link to a speed or an array of one speed
         per row; ``ratios`` is ``(gears,)`` or ``(rows, gears)`` Willis ratios,
@@ -384,32 +418,24 @@ class Train:
         ``[z_i, z_j]`` (signs from each pair's mesh kind); default: the train's
         ratios. Failed rows are flagged in ``ok`` / ``errors`` and hold 0.0.
         """
-        names, cols = _batch.columns(inputs, "inputs")
-        jg = len(self._core.gears())
-        per_row: List[Tuple[str, np.ndarray, int]] = [(f"inputs[{n!r}]", c, 0) for n, c in zip(names, cols)]
-        r_arr = None if ratios is None else _batch._numeric(ratios, "ratios")
-        if r_arr is not None:
-            per_row.append(("ratios", r_arr, 1))
-        t_arr = None if teeth is None else _batch._numeric(teeth, "teeth")
-        if t_arr is not None:
-            per_row.append(("teeth", t_arr, 2))
-        rows = _batch.common_rows(per_row)
-        raw = batch_kinematics(
-            self._core,
-            names,
-            _batch.stack_columns(cols, rows),
-            None if r_arr is None else _batch.rows_matrix(r_arr, rows, jg, "ratios"),
-            None if t_arr is None else _batch.teeth_array(t_arr, rows, jg),
-            threads,
+        names = [str(n) for n in inputs]
+        plan = self.batch("kinematics", inputs=names)
+        res = plan.evaluate(
+            {f"speed.{n}": v for n, v in zip(names, inputs.values())},
+            ratios=ratios,
+            teeth=teeth,
+            threads=threads,
         )
-        return BatchKinematics._from_raw(self._links, raw)
+        known = np.array([d["sized"] for d in self._core.links()], dtype=bool)
+        return BatchKinematics._from_result(self._links, known, res)
 
     def batch_dynamics(
         self,
         driving: Optional[Sequence[str]] = None,
         *,
-        torques: Optional[Mapping[str, ArrayLike]] = None,
         accelerations: Optional[Mapping[str, ArrayLike]] = None,
+        torques: Optional[Mapping[str, ArrayLike]] = None,
+        speeds: Optional[Mapping[str, ArrayLike]] = None,
         ratios: Optional[ArrayLike] = None,
         teeth: Optional[ArrayLike] = None,
         inertias: Optional[Mapping[str, ArrayLike]] = None,
@@ -417,59 +443,48 @@ class Train:
         engaged: Sequence[str] = (),
         threads: Optional[int] = None,
     ) -> BatchDynamics:
-        """Inverse dynamics for many scenarios, in parallel.
+        """Inverse dynamics for many scenarios, in parallel with the GIL released.
 
         Every mapping takes per link a scalar (the same for all rows) or one
-        value per row; ``inertias`` / ``masses`` override the links' data
-        (one copy; ``copies`` still multiplies). Omitted ``driving``,
-        ``torques`` and ``accelerations`` come from the spec. Failed rows are
-        flagged in ``ok`` / ``errors`` and hold 0.0.
+        value per row. ``accelerations``: the prescribed accelerations (omit
+        for the static analysis: the driving links at rest); ``torques``:
+        known applied torques (replacing the spec's); ``inertias`` /
+        ``masses``: one copy's data (``copies`` still multiplies); omitted
+        ``driving``, ``torques`` and ``accelerations`` come from the spec.
+        Failed rows are flagged in ``ok`` / ``errors`` and hold 0.0.
         """
         a = self._core.analysis()
         drv = list(a["driving"]) if driving is None else _names(driving, "driving")
-        tq: Mapping[str, ArrayLike] = dict(a["torques"]) if torques is None else torques
-        acc: Mapping[str, ArrayLike] = dict(a["accelerations"]) if accelerations is None else accelerations
-        t_names, t_cols = _batch.columns(tq, "torques")
-        a_names, a_cols = _batch.columns(acc, "accelerations")
-        i_names, i_cols = _batch.columns(inertias or {}, "inertias")
-        m_names, m_cols = _batch.columns(masses or {}, "masses")
-        per_row: List[Tuple[str, np.ndarray, int]] = []
-        for what, ns, cs in (
-            ("torques", t_names, t_cols),
-            ("accelerations", a_names, a_cols),
-            ("inertias", i_names, i_cols),
-            ("masses", m_names, m_cols),
-        ):
-            per_row += [(f"{what}[{n!r}]", c, 0) for n, c in zip(ns, cs)]
-        jg = len(self._core.gears())
-        r_arr = None if ratios is None else _batch._numeric(ratios, "ratios")
-        if r_arr is not None:
-            per_row.append(("ratios", r_arr, 1))
-        t_arr = None if teeth is None else _batch._numeric(teeth, "teeth")
-        if t_arr is not None:
-            per_row.append(("teeth", t_arr, 2))
-        rows = _batch.common_rows(per_row)
-        if not a_names:  # static analysis: the driving links are the accelerated ones, at rest
-            a_names, alpha = list(drv), np.zeros((rows, len(drv)))
+        if accelerations is None:
+            acc_names = [n for n, _ in a["accelerations"]] or list(drv)
+            acc_values: Dict[str, ArrayLike] = dict(a["accelerations"])
         else:
-            alpha = _batch.stack_columns(a_cols, rows)
-        raw = batch_dynamics(
-            self._core,
-            drv,
-            a_names,
-            alpha,
-            t_names,
-            _batch.stack_columns(t_cols, rows),
-            None if r_arr is None else _batch.rows_matrix(r_arr, rows, jg, "ratios"),
-            None if t_arr is None else _batch.teeth_array(t_arr, rows, jg),
-            i_names,
-            _batch.stack_columns(i_cols, rows) if i_names else None,
-            m_names,
-            _batch.stack_columns(m_cols, rows) if m_names else None,
-            _names(engaged, "engaged"),
-            threads,
+            # No accelerations: the static analysis, the driving links at rest.
+            acc_names = [str(n) for n in accelerations] or list(drv)
+            acc_values = {str(n): v for n, v in accelerations.items()}
+        speed_links = list(speeds) if speeds is not None else list(acc_names)
+        plan = self.batch(
+            "dynamics", inputs=[str(n) for n in speed_links], accelerated=acc_names,
+            driving=drv, engaged=engaged,
         )
-        return BatchDynamics._from_raw(self._links, tuple(drv), raw)
+        values: Dict[str, ArrayLike] = {}
+        # Speeds do not enter the inverse dynamics of a rigid train; unset ones are 0.
+        for n in speed_links:
+            values[f"speed.{n}"] = (speeds or {}).get(n, 0.0)
+        for n in acc_names:
+            values[f"accel.{n}"] = acc_values.get(n, 0.0)
+        if torques is not None:
+            for c in plan.parameters:
+                if c.startswith("torque."):
+                    values[c] = 0.0
+            for n, v in torques.items():
+                values[f"torque.{n}"] = v
+        for n, v in (inertias or {}).items():
+            values[f"inertia.{n}"] = v
+        for n, v in (masses or {}).items():
+            values[f"mass.{n}"] = v
+        res = plan.evaluate(values, ratios=ratios, teeth=teeth, threads=threads)
+        return BatchDynamics._from_result(self._links, tuple(drv), res)
 
     # -- computer algebra --------------------------------------------------
 

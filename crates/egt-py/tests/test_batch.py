@@ -1,0 +1,233 @@
+"""Batch evaluation: results equal single calls, NumPy dtype and shape
+handling, per-row errors without NaN, threads, the GIL released."""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+import pytest
+
+import egt
+
+RNG = np.random.default_rng(20240601)
+
+
+def _teeth_rows(rows: int) -> np.ndarray:
+    # Fig. 3 style: z_11 = z_31 + ..., any positive counts will do for kinematics.
+    z = RNG.integers(12, 80, size=(rows, 2, 2))
+    return z
+
+
+def test_batch_kinematics_equals_single_calls(fig3: egt.Train) -> None:
+    teeth = _teeth_rows(64)
+    speeds = RNG.uniform(-300, 300, size=64)
+    b = fig3.batch_kinematics({"2": speeds}, teeth=teeth)
+    assert b.speeds.shape == (64, 4) and b.speeds.dtype == np.float64
+    for r in range(64):
+        spec_train = _fig3_with_teeth(teeth[r])
+        if not b.ok[r]:
+            with pytest.raises(egt.AnalysisError):
+                spec_train.kinematics({"2": float(speeds[r])})
+            continue
+        single = spec_train.kinematics({"2": float(speeds[r])})
+        np.testing.assert_allclose(b.speeds[r], single.speeds, rtol=1e-13, atol=1e-12)
+        assert b.condition[r] >= 1.0
+
+
+def _fig3_with_teeth(z: np.ndarray) -> egt.Train:
+    from conftest import FIG3
+
+    s = FIG3.replace("teeth = [30, 20]", f"teeth = [{z[0, 0]}, {z[0, 1]}]").replace(
+        "teeth = [18, 32]", f"teeth = [{z[1, 0]}, {z[1, 1]}]"
+    )
+    return egt.loads(s.replace("module = 2.0e-3\n", ""))
+
+
+def test_batch_ratios_broadcast_and_match(fig5: egt.Train) -> None:
+    ratios = np.array([-3.0, -1.5, 3.5])
+    b = fig5.batch_kinematics({"2": [300.0, 100.0], "4": 100.0}, ratios=ratios)
+    assert len(b) == 2 and b.ok.all()
+    single = fig5.kinematics({"2": 100.0, "4": 100.0})
+    np.testing.assert_allclose(b.speeds[1], single.speeds, rtol=1e-14)
+    np.testing.assert_allclose(b.speed("6")[0], fig5.kinematics()["6"], rtol=1e-14)
+
+
+def test_batch_dynamics_equals_single_calls(fig3: egt.Train) -> None:
+    rows = 40
+    inertia3 = RNG.uniform(1e-5, 1e-4, rows)
+    mass3 = RNG.uniform(0.05, 0.2, rows)
+    load = RNG.uniform(-80, 0, rows)
+    alpha = RNG.uniform(-20, 20, rows)
+    b = fig3.batch_dynamics(
+        ["2"],
+        accelerations={"4": alpha},
+        torques={"4": load},
+        inertias={"3": inertia3},
+        masses={"3": mass3},
+    )
+    assert b.ok.all() and b.driving_torques.shape == (rows, 1)
+    from conftest import FIG3
+
+    for r in range(0, rows, 7):
+        spec = FIG3.replace("inertia = 4.0e-5", f"inertia = {float(inertia3[r])!r}").replace(
+            "mass = 0.12", f"mass = {float(mass3[r])!r}"
+        )
+        single = egt.loads(spec).dynamics(
+            torques={"4": float(load[r])}, accelerations={"4": float(alpha[r])}, driving=["2"]
+        )
+        assert b.driving_torque("2")[r] == pytest.approx(single.driving_torques["2"], rel=1e-12)
+        np.testing.assert_allclose(b.accelerations[r], single.accelerations, rtol=1e-13)
+        np.testing.assert_allclose(b.multipliers[r], single.multipliers, rtol=1e-12)
+        g1 = single.meshes[0].force
+        assert g1 is not None
+        assert b.forces["G1"][r] == pytest.approx(g1[0], rel=1e-12)
+
+
+def test_batch_dynamics_defaults_are_the_spec(fig3: egt.Train) -> None:
+    b = fig3.batch_dynamics()
+    assert b.driving == ("2",)
+    assert b.driving_torque("2")[0] == pytest.approx(fig3.dynamics().driving_torques["2"], rel=1e-13)
+
+
+def test_static_batch_dynamics(fig3: egt.Train) -> None:
+    b = fig3.batch_dynamics(["2"], torques={"4": [-10.0, -20.0]}, accelerations={})
+    single = fig3.dynamics(torques={"4": -20.0}, accelerations={}, driving=["2"])
+    assert b.driving_torque("2")[1] == pytest.approx(single.driving_torques["2"], rel=1e-13)
+    assert not b.accelerations.any()
+
+
+def test_bad_rows_are_flagged_not_nan(fig3: egt.Train) -> None:
+    teeth = np.array([[[30, 20], [18, 32]], [[0, 20], [18, 32]], [[30, 20], [18, 27]], [[30, 20], [18, 32]]])
+    b = fig3.batch_kinematics({"4": [1.0, 1.0, 1.0, np.nan]}, teeth=teeth)
+    assert list(b.ok) == [True, False, False, False]
+    assert not np.isnan(b.speeds).any() and not np.isnan(b.condition).any()
+    assert (b.speeds[~b.ok] == 0).all()
+    assert b.errors[1].kind == "invalid_teeth" and "G1" in b.errors[1].message
+    assert b.errors[2].kind in ("singular", "ill_conditioned")  # tau_1 tau_2 = 1
+    assert b.errors[3].kind == "out_of_range" and "speed.4" in b.errors[3].message
+    assert set(b.errors) == {1, 2, 3}
+    b.to_dict()
+
+
+def test_bad_dynamics_rows(fig3: egt.Train) -> None:
+    b = fig3.batch_dynamics(["2"], accelerations={"4": 1.0}, inertias={"3": [1e-5, -1.0, np.inf]})
+    assert list(b.ok) == [True, False, False]
+    assert not np.isnan(b.driving_torques).any()
+    assert "inertia.3" in b.errors[1].message
+
+
+def test_dtypes_are_converted(fig3: egt.Train) -> None:
+    ref = fig3.batch_kinematics({"2": np.array([1.0, 2.0])})
+    for speeds in (np.array([1, 2], dtype=np.int32), np.array([1, 2], dtype=np.float32), [1, 2], (1.0, 2.0)):
+        b = fig3.batch_kinematics({"2": speeds})
+        np.testing.assert_array_equal(b.speeds, ref.speeds)
+    teeth = np.array([[30, 20], [18, 32]])
+    for t in (teeth.astype(np.int16), teeth.astype(np.uint8), teeth.astype(np.float64)):
+        b = fig3.batch_kinematics({"2": 1.0}, teeth=t)
+        np.testing.assert_array_equal(b.speeds, fig3.batch_kinematics({"2": 1.0}).speeds)
+    # Non-contiguous input is fine.
+    wide = np.arange(8.0).reshape(2, 4)[:, ::2]
+    b = fig3.batch_kinematics({"2": wide[:, 0]})
+    assert b.ok.all()
+
+
+def test_wrong_types_and_shapes_raise(fig3: egt.Train) -> None:
+    with pytest.raises(TypeError):
+        fig3.batch_kinematics({"2": np.array([1 + 1j])})
+    with pytest.raises(TypeError):
+        fig3.batch_kinematics({"2": np.array([True, False])})
+    with pytest.raises(TypeError):
+        fig3.batch_kinematics({"2": np.array(["a"])})
+    with pytest.raises(ValueError, match="rows"):
+        fig3.batch_kinematics({"2": [1.0, 2.0, 3.0]}, ratios=np.ones((2, 2)))
+    with pytest.raises(ValueError, match="column"):
+        fig3.batch_kinematics({"2": 1.0}, ratios=np.ones((2, 3)))
+    with pytest.raises(ValueError):
+        fig3.batch_kinematics({"2": np.ones((2, 2))})
+    with pytest.raises(ValueError, match="whole numbers"):
+        fig3.batch_kinematics({"2": 1.0}, teeth=np.full((2, 2), 20.5))
+    with pytest.raises(ValueError, match="teeth"):
+        fig3.batch_kinematics({"2": 1.0}, teeth=np.ones((3, 2), dtype=int))
+    with pytest.raises(ValueError, match="not both"):
+        fig3.batch_kinematics({"2": 1.0}, ratios=[-1.0, -2.0], teeth=np.ones((2, 2), dtype=int))
+    plan = fig3.batch("kinematics")
+    with pytest.raises(ValueError, match="shape"):
+        plan.run(np.ones((3, len(plan.parameters) + 1)))
+    with pytest.raises(KeyError):
+        plan.params({"ratio.G9": 1.0})
+    with pytest.raises(ValueError, match="threads"):
+        plan.run(plan.base, threads=0)
+
+
+def test_unknown_links_in_batches_are_spec_errors(fig3: egt.Train) -> None:
+    with pytest.raises(egt.SpecError):
+        fig3.batch_kinematics({"22": 1.0})
+    with pytest.raises(egt.InputError):
+        fig3.batch_kinematics({"2": 1.0, "4": 1.0})
+
+
+def test_plan_columns_and_base(fig3: egt.Train) -> None:
+    plan = fig3.batch("dynamics")
+    assert plan.parameters[:2] == ("ratio.G1", "ratio.G2")
+    assert "torque.2" in plan.outputs and "force.G1" in plan.outputs
+    base = plan.base
+    assert base[plan.column("speed.2")] == 100.0
+    res = plan.run(base)
+    assert len(res) == 1 and res.ok.all()
+    assert res["torque.2"][0] == pytest.approx(fig3.dynamics().driving_torques["2"], rel=1e-13)
+    with pytest.raises(KeyError):
+        res["nope"]
+    p, bad = plan.params({"accel.4": [0.0, 1.0, 2.0]})
+    assert p.shape == (3, len(plan.parameters)) and not bad
+
+
+def test_power_batch(fig3: egt.Train) -> None:
+    plan = fig3.batch("power")
+    res = plan.evaluate({"efficiency.G1": [0.9, 0.98, 1.0], "efficiency.G2": 0.98})
+    assert res.ok.all()
+    single = fig3.power()  # the spec's efficiencies: 0.98 on both meshes
+    assert single.efficiency is not None
+    assert res["power.efficiency"][1] == pytest.approx(single.efficiency, rel=1e-12)
+    assert res["power.loss"][1] == pytest.approx(single.loss, rel=1e-12)
+    inp, out, loss, kr = (res[f"power.{k}"] for k in ("input", "output", "loss", "kinetic_rate"))
+    np.testing.assert_allclose(inp - out - loss - kr, 0.0, atol=1e-9 * inp.max())
+    assert loss[0] > loss[1] > loss[2] > 0
+
+
+def test_threads_give_the_same_answer(fig3: egt.Train) -> None:
+    teeth = _teeth_rows(3000)
+    a = fig3.batch_kinematics({"2": 1.0}, teeth=teeth, threads=1)
+    b = fig3.batch_kinematics({"2": 1.0}, teeth=teeth, threads=2)
+    c = fig3.batch_kinematics({"2": 1.0}, teeth=teeth)
+    np.testing.assert_array_equal(a.speeds, b.speeds)
+    np.testing.assert_array_equal(a.speeds, c.speeds)
+    assert a.errors.keys() == b.errors.keys()
+
+
+def test_the_gil_is_released(fig3: egt.Train) -> None:
+    # While a long batch runs in a thread, this thread keeps executing Python.
+    plan = fig3.batch("dynamics")
+    params, _ = plan.params({"accel.4": RNG.uniform(-1, 1, 400_000)})
+    started, done = threading.Event(), threading.Event()
+
+    def work() -> None:
+        started.set()
+        plan.run(params, threads=1)
+        done.set()
+
+    t = threading.Thread(target=work)
+    t.start()
+    started.wait()
+    ticks = 0
+    while not done.is_set():
+        ticks += 1
+    t.join()
+    assert ticks > 1000
+
+
+def test_batch_results_to_pandas(fig3: egt.Train) -> None:
+    pytest.importorskip("pandas")
+    b = fig3.batch_kinematics({"2": [1.0, 2.0]})
+    assert b.to_pandas().shape == (2, 6)
+    assert fig3.batch_dynamics().to_pandas().shape[0] == 1
