@@ -801,3 +801,102 @@ fn docs_transmission_md_table_is_current() {
     let block = &block[block.find('\n').unwrap() + 1..block.find("```").unwrap()];
     assert_eq!(block, stdout(&["shift", "examples/zf_8hp70.toml"]));
 }
+
+/// A Lepelletier six-speed (ZF 6HP26: a simple set with its sun fixed to the
+/// case, driven by its ring, and a Ravigneaux set) written inline: the two sets
+/// are coupled only through clutches A, B and E, so the bare train's sub-chains
+/// move independently and the gear states tie them together.
+const LEPELLETIER: &str = r#"
+    name = "ZF 6HP26 (Lepelletier)"
+    frame = "case"
+    [[planetary]]
+    name = "P1"
+    sun = "case"
+    ring = "input"
+    carrier = "c1"
+    teeth = { sun = 37, ring = 71 }
+    [[planetary]]
+    name = "RV"
+    kind = "ravigneaux"
+    sun = "s_small"
+    sun2 = "s_large"
+    ring = "output"
+    carrier = "c2"
+    teeth = { sun = 31, sun2 = 38, ring = 85 }
+    [[elements]]
+    name = "C"
+    kind = "brake"
+    links = ["s_large"]
+    [[elements]]
+    name = "D"
+    kind = "brake"
+    links = ["c2"]
+    [[elements]]
+    name = "F"
+    kind = "one_way_brake"
+    links = ["c2"]
+    CLUTCHES
+    [transmission]
+    input = "input"
+    output = "output"
+    [transmission.states]
+    "1" = ["A", "F"]
+    "2" = ["A", "C"]
+    "3" = ["A", "B"]
+    "4" = ["A", "E"]
+    "5" = ["B", "E"]
+    "6" = ["C", "E"]
+    "R" = ["B", "D"]
+"#;
+
+const LEPELLETIER_CLUTCHES: &str = r#"
+    [[elements]]
+    name = "A"
+    kind = "clutch"
+    links = ["c1", "s_small"]
+    [[elements]]
+    name = "B"
+    kind = "clutch"
+    links = ["c1", "s_large"]
+    [[elements]]
+    name = "E"
+    kind = "clutch"
+    links = ["input", "c2"]
+"#;
+
+#[test]
+fn sets_coupled_only_by_clutches_lepelletier() {
+    // Published ZF 6HP26 ratios, as printed.
+    let published = [
+        ("1", 4.171),
+        ("2", 2.340),
+        ("3", 1.521),
+        ("4", 1.143),
+        ("5", 0.867),
+        ("6", 0.691),
+        ("R", -3.403),
+    ];
+    let train = toml(&LEPELLETIER.replace("CLUTCHES", LEPELLETIER_CLUTCHES));
+    let t = train.shift_table().expect("every state has one DOF");
+    for (state, value) in published {
+        let g = gear(&t, state);
+        assert!(
+            (g.ratio - value).abs() <= 0.0005 + 1e-12,
+            "gear {state}: {} vs {value}",
+            g.ratio
+        );
+    }
+    // P1's sun is the case: its reaction is the housing torque, in the balance.
+    let first = gear(&t, "1");
+    assert!(first.housing_torque.abs() > 0.1);
+    assert!(first.torque_balance < 1e-12 && first.elements[1].holds == Some(true));
+    // Without the clutches the sub-chains really are independent.
+    let bare = LEPELLETIER.replace("CLUTCHES", "");
+    let bare = &bare[..bare.find("[transmission]").unwrap()];
+    match Train::from_str(bare, egt_core::Format::Toml, "bare") {
+        Err(Error::Topology(egt_core::TopologyError::Fractionated { link, parts })) => {
+            assert_eq!((link.as_str(), parts.len()), ("case", 2));
+        }
+        other => panic!("{other:?}"),
+    }
+}

@@ -109,7 +109,7 @@ pub(crate) fn analyse(
     revolutes: &[Revolute],
     gears: &[GearPair],
     graph: &UnGraph<LinkId, Edge>,
-    clutched: &[LinkId],
+    clutches: &[[LinkId; 2]],
 ) -> Result<Topology, TopologyError> {
     let n = links.len();
     let mut checks = Vec::new();
@@ -225,7 +225,7 @@ pub(crate) fn analyse(
     }
     // A shaft joined to the train only by clutches (e.g. a transmission's input
     // shaft) turns freely in the bare train; its gear states tie it down.
-    free.retain(|l| !clutched.contains(l));
+    free.retain(|l| !clutches.iter().any(|c| c.contains(l)));
     if !free.is_empty() {
         free.sort();
         free.dedup();
@@ -236,7 +236,7 @@ pub(crate) fn analyse(
     let mut cuts: Vec<NodeIndex> = articulation_points(graph, None).into_iter().collect();
     cuts.sort();
     for cut in cuts {
-        let parts = components_without(graph, cut);
+        let parts = join_clutched(components_without(graph, cut), clutches);
         let geared: Vec<Vec<LinkId>> = parts
             .into_iter()
             .filter(|(_, has_gear)| *has_gear)
@@ -339,6 +339,30 @@ fn subtree(tree: &Tree, top: LinkId) -> Vec<LinkId> {
 
 /// Connected components of the graph with `cut` removed, each with whether it
 /// holds a gear edge (meshes with `cut` itself included).
+/// Merge the parts that a clutch joins: sub-chains coupled only through
+/// clutches (a transmission's planetary sets) move independently in the bare
+/// train, and the gear states tie them together.
+fn join_clutched(
+    mut parts: Vec<(Vec<LinkId>, bool)>,
+    clutches: &[[LinkId; 2]],
+) -> Vec<(Vec<LinkId>, bool)> {
+    loop {
+        let part_of = |l: LinkId| parts.iter().position(|(p, _)| p.contains(&l));
+        let joined = clutches
+            .iter()
+            .find_map(|&[a, b]| match (part_of(a), part_of(b)) {
+                (Some(x), Some(y)) if x != y => Some((x.min(y), x.max(y))),
+                _ => None,
+            });
+        let Some((x, y)) = joined else {
+            return parts;
+        };
+        let (links, gear) = parts.swap_remove(y);
+        parts[x].0.extend(links);
+        parts[x].1 |= gear;
+    }
+}
+
 fn components_without(graph: &UnGraph<LinkId, Edge>, cut: NodeIndex) -> Vec<(Vec<LinkId>, bool)> {
     let mut seen = vec![false; graph.node_count()];
     seen[cut.index()] = true;

@@ -777,14 +777,18 @@ fn build(spec: &Spec, draft: &Draft) -> Result<Train> {
         );
     }
 
-    let clutched: Vec<LinkId> = spec
+    // Clutches as pairs of links (a malformed element is reported later, by name).
+    let clutches: Vec<[LinkId; 2]> = spec
         .elements
         .iter()
         .filter(|e| matches!(e.kind, ElementKind::Clutch | ElementKind::OneWayClutch))
-        .flat_map(|e| e.links.iter().filter_map(|n| ids.get(n.as_str()).copied()))
+        .filter_map(|e| match e.links.as_slice() {
+            [a, b] => Some([*ids.get(a.as_str())?, *ids.get(b.as_str())?]),
+            _ => None,
+        })
         .collect();
     let topo = topology::analyse(
-        &links, frame, &levels, &revolutes, &gears, &graph, &clutched,
+        &links, frame, &levels, &revolutes, &gears, &graph, &clutches,
     )?;
 
     let coordinates: Vec<LinkId> = (0..links.len())
