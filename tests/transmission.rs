@@ -900,3 +900,59 @@ fn sets_coupled_only_by_clutches_lepelletier() {
         other => panic!("{other:?}"),
     }
 }
+
+/// A transaxle: the same Lepelletier set driving a final shaft through one
+/// external fixed-axis pair (40:80), which reverses the output. Forward gears
+/// are then the negative ratios (the sign most states share), the ratios are
+/// -2 times the gearbox's, and the fixed-axis mesh's reaction is housing torque.
+#[test]
+fn transaxle_with_a_reversing_final_drive() {
+    let gearbox = toml(&LEPELLETIER.replace("CLUTCHES", LEPELLETIER_CLUTCHES))
+        .shift_table()
+        .expect("gearbox");
+    let transaxle = LEPELLETIER
+        .replace("CLUTCHES", LEPELLETIER_CLUTCHES)
+        .replace(
+            "[transmission]\n    input = \"input\"\n    output = \"output\"",
+            r#"[[links]]
+        name = "final"
+        [[revolutes]]
+        links = ["case", "final"]
+        level = "b"
+        [[gears]]
+        links = ["output", "final"]
+        teeth = [40, 80]
+        mesh = "external"
+        [transmission]
+        input = "input"
+        output = "final""#,
+        );
+    let train = toml(&transaxle);
+    let t = train.shift_table().expect("transaxle");
+    assert_eq!(t.forward, vec![true, true, true, true, true, true, false]);
+    for (a, b) in gearbox.gears.iter().zip(&t.gears) {
+        assert_eq!(b.ratio_exact, a.ratio_exact.as_ref().map(|q| q * fr(-2, 1)));
+        // The gearbox inside is loaded as before, so its elements carry the same
+        // torques, and the fixed-axis pair's reaction, housing torque, makes up the
+        // difference of output torques in the coaxial balance.
+        for (x, y) in a.elements.iter().zip(&b.elements) {
+            assert!((x.torque - y.torque).abs() < 1e-12);
+        }
+        let extra_housing = b.housing_torque - a.housing_torque;
+        assert!((extra_housing - (b.output_torque - a.output_torque)).abs() < 1e-12);
+        assert!((b.output_torque + 2.0 * a.output_torque).abs() < 1e-12);
+        assert!(b.torque_balance < 1e-12);
+    }
+    let (s0, s1) = (gearbox.spread.expect("spread"), t.spread.expect("spread"));
+    assert_eq!(s0.exact, s1.exact);
+    assert_eq!(t.steps.len(), 5);
+    let garage: Vec<_> = t
+        .shifts
+        .iter()
+        .filter(|s| s.kind == ShiftKind::Garage)
+        .collect();
+    assert_eq!(
+        (garage.len(), t.gears[garage[0].to].state.as_str()),
+        (1, "R")
+    );
+}

@@ -263,11 +263,6 @@ impl GearAnalysis {
             },
         )
     }
-
-    /// True for a forward gear (positive ratio).
-    pub fn is_forward(&self) -> bool {
-        self.ratio > 0.0
-    }
 }
 
 /// The constraint row an element imposes, as an extra row of the dynamics.

@@ -66,6 +66,7 @@ pub(crate) struct GearRow {
     engaged: Vec<String>,
     pub(crate) ratio: f64,
     ratio_exact: Option<String>,
+    /// A forward gear: its ratio has the sign most states share.
     forward: bool,
     /// Every link's speed per unit input speed (`null` for a planet without teeth).
     pub(crate) speeds: Vec<SpeedRow>,
@@ -232,7 +233,8 @@ fn build(train: &Train, source: &str, table: &ShiftTable) -> Report {
     let gears = table
         .gears
         .iter()
-        .map(|g| gear_row(train, g))
+        .zip(&table.forward)
+        .map(|(g, &forward)| gear_row(train, g, forward))
         .collect::<Vec<_>>();
     Report {
         source: source.to_string(),
@@ -283,7 +285,7 @@ fn build(train: &Train, source: &str, table: &ShiftTable) -> Report {
     }
 }
 
-fn gear_row(train: &Train, g: &GearAnalysis) -> GearRow {
+fn gear_row(train: &Train, g: &GearAnalysis, forward: bool) -> GearRow {
     let name = |l: egt_core::LinkId| train.link_name(l).to_string();
     let element_name = |e: egt_core::ElementId| train.elements()[e.index()].name.clone();
     let shaft = |l: egt_core::LinkId| {
@@ -313,7 +315,7 @@ fn gear_row(train: &Train, g: &GearAnalysis) -> GearRow {
         engaged: g.engaged.iter().map(|&e| element_name(e)).collect(),
         ratio: g.ratio,
         ratio_exact: exact_str(g.ratio_exact.as_ref()),
-        forward: g.is_forward(),
+        forward,
         speeds: train
             .links()
             .iter()

@@ -2,6 +2,11 @@
 //! overall spread, and which shift elements change at each shift (a shift that
 //! is not one element off and one on needs more than one element controlled at
 //! once, and is flagged).
+//!
+//! Forward gears are those whose ratio has the sign most states share (ties:
+//! positive); the others are reverse gears. A transaxle whose final drive
+//! turns the output opposite to the input has negative forward ratios, and
+//! its reverse gear the positive one.
 
 use serde::Serialize;
 
@@ -76,6 +81,8 @@ pub struct ShiftTable {
     pub output: crate::LinkId,
     /// Every gear state, in the spec's order.
     pub gears: Vec<GearAnalysis>,
+    /// Whether each gear is a forward gear (its ratio has the majority sign).
+    pub forward: Vec<bool>,
     /// Steps between forward gears adjacent in the list.
     pub steps: Vec<Step>,
     /// The overall spread (None with fewer than two forward gears).
@@ -107,9 +114,14 @@ fn shift(gears: &[GearAnalysis], from: usize, to: usize, kind: ShiftKind) -> Shi
 }
 
 pub(super) fn build(train: &Train, t: &Transmission, gears: Vec<GearAnalysis>) -> ShiftTable {
-    let forward: Vec<usize> = (0..gears.len())
-        .filter(|&k| gears[k].is_forward())
-        .collect();
+    let positive = gears.iter().filter(|g| g.ratio > 0.0).count();
+    let sign = if 2 * positive >= gears.len() {
+        1.0
+    } else {
+        -1.0
+    };
+    let is_forward: Vec<bool> = gears.iter().map(|g| g.ratio * sign > 0.0).collect();
+    let forward: Vec<usize> = (0..gears.len()).filter(|&k| is_forward[k]).collect();
     let mut warnings = Vec::new();
     let steps: Vec<Step> = forward
         .windows(2)
@@ -119,7 +131,7 @@ pub(super) fn build(train: &Train, t: &Transmission, gears: Vec<GearAnalysis>) -
                 (Some(x), Some(y)) => Some(x / y),
                 _ => None,
             };
-            if a.ratio <= b.ratio {
+            if a.ratio.abs() <= b.ratio.abs() {
                 warnings.push(format!(
                     "forward gear `{}` (ratio {:.4}) is listed before `{}` (ratio {:.4}), which has a larger or equal ratio: the step is not an upshift",
                     a.state, a.ratio, b.state, b.ratio
@@ -135,7 +147,7 @@ pub(super) fn build(train: &Train, t: &Transmission, gears: Vec<GearAnalysis>) -
         .collect();
     let by_ratio = |pick_max: bool| {
         forward.iter().copied().reduce(|x, y| {
-            let (rx, ry) = (gears[x].ratio, gears[y].ratio);
+            let (rx, ry) = (gears[x].ratio.abs(), gears[y].ratio.abs());
             if (ry > rx) == pick_max && ry != rx {
                 y
             } else {
@@ -165,10 +177,8 @@ pub(super) fn build(train: &Train, t: &Transmission, gears: Vec<GearAnalysis>) -
         .map(|w| shift(&gears, w[0], w[1], ShiftKind::Sequential))
         .collect();
     if let Some(&first) = forward.first() {
-        for (k, g) in gears.iter().enumerate() {
-            if g.ratio < 0.0 {
-                shifts.push(shift(&gears, first, k, ShiftKind::Garage));
-            }
+        for k in (0..gears.len()).filter(|&k| !is_forward[k]) {
+            shifts.push(shift(&gears, first, k, ShiftKind::Garage));
         }
     }
     for s in &shifts {
@@ -193,6 +203,7 @@ pub(super) fn build(train: &Train, t: &Transmission, gears: Vec<GearAnalysis>) -
         input: t.input,
         output: t.output,
         gears,
+        forward: is_forward,
         steps,
         spread,
         shifts,
