@@ -364,17 +364,20 @@ fn map(py: Python<'_>, e: &egt_core::Error, msg: String) -> PyErr {
     }
 }
 
+/// state, elements, gear pairs, free links, DOF, input, output.
+type StateFields<'a> = (
+    Option<&'a String>,
+    &'a [String],
+    &'a [String],
+    &'a [String],
+    Option<usize>,
+    Option<&'a String>,
+    Option<&'a String>,
+);
+
 fn transmission_to_py(py: Python<'_>, t: &CoreTransmission, msg: String, k: &str) -> PyErr {
     let none: Vec<String> = Vec::new();
-    let (state, elements, gears, free, dof, input, output): (
-        Option<&String>,
-        &[String],
-        &[String],
-        &[String],
-        Option<usize>,
-        Option<&String>,
-        Option<&String>,
-    ) = match t {
+    let (state, elements, gears, free, dof, input, output): StateFields<'_> = match t {
         CoreTransmission::InState { state, cause } => {
             let err = map(py, cause, msg);
             let _ = err.value(py).setattr("state", state.as_str());

@@ -6,6 +6,27 @@ from typing import Any, Dict, List, Optional, Tuple, final
 import numpy as np
 import numpy.typing as npt
 
+__all__ = [
+    "__version__",
+    "TrainCore",
+    "structure",
+    "BatchPlanCore",
+    "batch_plan",
+    "EgtError",
+    "SpecError",
+    "SpecSyntaxError",
+    "TopologyError",
+    "TransmissionError",
+    "AnalysisError",
+    "InputError",
+    "UnderdeterminedError",
+    "InconsistentError",
+    "SingularError",
+    "IllConditionedError",
+    "MissingDataError",
+    "InternalError",
+]
+
 __version__: str
 
 _Input = Tuple[str, float, Optional[str]]
@@ -61,36 +82,35 @@ class TrainCore:
     def _panic(self) -> None: ...
 
 def structure(core: TrainCore) -> Dict[str, Any]: ...
-def batch_kinematics(
+@final
+class BatchPlanCore:
+    @property
+    def parameters(self) -> List[str]: ...
+    @property
+    def outputs(self) -> List[str]: ...
+    @property
+    def base(self) -> npt.NDArray[np.float64]: ...
+    def run(
+        self, params: npt.NDArray[np.float64], threads: Optional[int] = None
+    ) -> Tuple[npt.NDArray[np.float64], List[Tuple[int, str, str]]]: ...
+    def describe(self) -> Dict[str, Any]: ...
+
+def batch_plan(
     core: TrainCore,
-    inputs: List[str],
-    speeds: npt.NDArray[np.float64],
-    ratios: Optional[npt.NDArray[np.float64]] = None,
-    teeth: Optional[npt.NDArray[np.int64]] = None,
-    threads: Optional[int] = None,
-) -> Dict[str, Any]: ...
-def batch_dynamics(
-    core: TrainCore,
-    driving: List[str],
-    accelerated: List[str],
-    alpha: npt.NDArray[np.float64],
-    torque_links: List[str],
-    torques: npt.NDArray[np.float64],
-    ratios: Optional[npt.NDArray[np.float64]] = None,
-    teeth: Optional[npt.NDArray[np.int64]] = None,
-    inertia_links: List[str] = ...,
-    inertias: Optional[npt.NDArray[np.float64]] = None,
-    mass_links: List[str] = ...,
-    masses: Optional[npt.NDArray[np.float64]] = None,
+    compute: str,
+    inputs: Optional[List[str]] = None,
+    accelerated: Optional[List[str]] = None,
+    driving: Optional[List[str]] = None,
     engaged: List[str] = ...,
-    threads: Optional[int] = None,
-) -> Dict[str, Any]: ...
+) -> BatchPlanCore: ...
 
 class EgtError(Exception):
     kind: Optional[str]
     """The error variant in snake case (e.g. ``"unknown_link"``, ``"singular"``)."""
     names: Optional[Tuple[str, ...]]
     """The offending links, pairs, fields or levels."""
+    state: Optional[str]
+    """The gear state an analysis failed in, if any."""
 
 class SpecError(EgtError):
     path: Optional[str]
@@ -109,6 +129,15 @@ class TopologyError(EgtError):
     levels: Optional[Tuple[str, ...]]
     dof: Optional[int]
     parts: Optional[List[List[str]]]
+
+class TransmissionError(EgtError):
+    elements: Optional[Tuple[str, ...]]
+    gears: Optional[Tuple[str, ...]]
+    free: Optional[Tuple[str, ...]]
+    dof: Optional[int]
+    input: Optional[str]
+    output: Optional[str]
+    suggestion: Optional[str]
 
 class AnalysisError(EgtError): ...
 

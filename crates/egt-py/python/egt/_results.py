@@ -295,7 +295,7 @@ class Dynamics:
                 )
                 for m in d["meshes"]
             ),
-            conditions=tuple(d["conditions"]),  # type: ignore[arg-type]
+            conditions=tuple(d["conditions"]),
             warnings=tuple(d["warnings"]),
         )
 

@@ -76,7 +76,7 @@ def _speed_arg(name: str, v: Speed) -> Tuple[str, float, Optional[str]]:
 
 
 def _pairs(values: Mapping[str, float], what: str) -> List[Tuple[str, float]]:
-    out = []
+    out: List[Tuple[str, float]] = []
     for name, v in values.items():
         if isinstance(v, bool) or not isinstance(v, Real):
             raise TypeError(f"{what}[{name!r}] must be a number, got {type(v).__name__}")
@@ -219,7 +219,7 @@ class Train:
     def _spec_speeds(self) -> List[Tuple[str, float, Optional[str]]]:
         # A decimal written in the spec reaches us as the exact binary value of
         # the double; the user meant the decimal they wrote (as the CLI reads it).
-        out = []
+        out: List[Tuple[str, float, Optional[str]]] = []
         for n, v, ex in self._core.analysis()["speeds"]:
             if ex is None or Fraction(ex) == Fraction(v):
                 ex = _speed_arg(n, v)[2]
@@ -319,7 +319,7 @@ class Train:
             meshes=tuple(
                 MeshPower(
                     gear=m["gear"],
-                    absolute=tuple(m["absolute"]),  # type: ignore[arg-type]
+                    absolute=tuple(m["absolute"]),
                     rolling=m["rolling"],
                     driver=m["driver"],
                     efficiency=m["efficiency"],
@@ -392,7 +392,7 @@ class Train:
             None if driving is None else _names(driving, "driving"),
             _names(engaged, "engaged"),
         )
-        signs = []
+        signs: List[Optional[float]] = []
         for g in self._core.gears():
             if g["mesh"] is not None:
                 signs.append(-1.0 if g["mesh"] == "external" else 1.0)

@@ -33,12 +33,13 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, Dict, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 try:
     import sympy
-except ImportError as e:  # pragma: no cover - depends on the environment
-    raise ImportError("Train.to_sympy() needs SymPy: pip install 'egt[sympy]'") from e
+except ImportError:  # pragma: no cover - depends on the environment
+    # Raised inside the handler, so the original error stays chained as context.
+    raise ImportError("Train.to_sympy() needs SymPy: pip install 'egt[sympy]'")
 
 __all__ = ["SymbolicTrain", "SymbolicDynamics"]
 
@@ -122,6 +123,11 @@ class SymbolicTrain:
     reduced_stiffness: Optional[sympy.Matrix]
     """V^T diag(K) V for ``inputs`` and ``slopes`` (eq. 26, see :meth:`reduced_stiffness_for`)."""
 
+    _s: Mapping[str, Any]
+    _symbols: Dict[str, sympy.Symbol]
+    _links: Dict[str, Mapping[str, Any]]
+    _circuits: List[Mapping[str, Any]]
+
     def __init__(self) -> None:
         raise TypeError("use Train.to_sympy() to build a SymbolicTrain")
 
@@ -134,7 +140,7 @@ class SymbolicTrain:
     ) -> "SymbolicTrain":
         self = object.__new__(cls)
         self._s = s
-        self._symbols: Dict[str, sympy.Symbol] = {}
+        self._symbols = {}
         self.frame = s["frame"]
         self.coordinates = tuple(s["coordinates"])
         self._links = {d["name"]: d for d in s["links"]}
