@@ -1,6 +1,6 @@
 //! The `egt` binary: parse the command line, run one subcommand, map the
 //! outcome to an exit code. 0 on success (and when stdout is a closed pipe);
-//! 2 for usage, syntax, spec and topology errors; 1 for analysis and I/O errors.
+//! 2 for usage, syntax, spec, topology and gear-state errors; 1 for analysis and I/O errors.
 //! Errors print to stderr as `error: ...`.
 
 mod cli;
@@ -36,7 +36,9 @@ fn exit_code(e: &anyhow::Error) -> u8 {
             return match core {
                 egt_core::Error::Syntax(_)
                 | egt_core::Error::Spec { .. }
-                | egt_core::Error::Topology(_) => 2,
+                | egt_core::Error::Topology(_)
+                // A gear state that does not leave one DOF is a wrong spec too.
+                | egt_core::Error::Transmission(_) => 2,
                 _ => 1,
             };
         }
