@@ -23,10 +23,10 @@ test-rust: ## Rust unit, integration, CLI and doc tests
 	cargo test --workspace --all-targets
 	cargo test --workspace --doc
 
-$(VENV)/.ready:
+$(VENV)/.ready: crates/egt-py/requirements-dev.txt
 	$(PYTHON) -m venv $(VENV)
 	$(VPY) -m pip install --quiet --upgrade pip
-	$(VPY) -m pip install --quiet maturin pytest hypothesis numpy sympy mypy
+	$(VPY) -m pip install --quiet -r crates/egt-py/requirements-dev.txt
 	touch $@
 
 venv: $(VENV)/.ready ## Create the Python virtualenv with the test tools
@@ -37,7 +37,7 @@ python-dev: venv ## Build and install the egt Python module into the virtualenv
 		$(VENV)/bin/maturin develop --release --quiet -m crates/egt-py/Cargo.toml; \
 	fi
 
-test-python: python-dev ## Python tests (pytest, warnings as errors)
+test-python: python-dev ## Python tests (pytest, warnings as errors; stubtest and mypy included)
 	@if [ -d crates/egt-py/tests ]; then \
 		$(VPY) -m pytest -q -W error crates/egt-py/tests; \
 	else echo "no Python package yet"; fi
