@@ -72,6 +72,13 @@ fn close(a: f64, b: f64, scale: f64, rel: f64) -> bool {
     (a - b).abs() <= rel * scale.max(a.abs()).max(b.abs()).max(1e-300)
 }
 
+/// |a - b| <= rel * (size of the terms of the entry) + 4 eps * (size of the
+/// matrix): the second part is the rounding floor of entries that are exactly
+/// zero in the printed form (e.g. K12 with K_r = 0).
+fn entry(a: f64, b: f64, terms: f64, matrix: f64, rel: f64) -> bool {
+    (a - b).abs() <= rel * terms + 4.0 * f64::EPSILON * matrix
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(96))]
 
@@ -104,18 +111,20 @@ proptest! {
         let sum = |x: &[f64]| x.iter().sum::<f64>();
         let size = |x: &[f64]| x.iter().map(|v| v.abs()).sum::<f64>();
         let m = &model.mass;
-        prop_assert!(close(m[(0, 0)], sum(&m11), size(&m11), 1e-12), "M11 {} vs {}", m[(0, 0)], sum(&m11));
-        prop_assert!(close(m[(0, 1)], sum(&m12), size(&m12), 1e-12), "M12 {} vs {}", m[(0, 1)], sum(&m12));
-        prop_assert!(close(m[(1, 0)], sum(&m12), size(&m12), 1e-12), "M21");
-        prop_assert!(close(m[(1, 1)], sum(&m22), size(&m22), 1e-12), "M22");
+        let mn = size(&m11) + size(&m22);
+        prop_assert!(entry(m[(0, 0)], sum(&m11), size(&m11), mn, 1e-12), "M11 {} vs {}", m[(0, 0)], sum(&m11));
+        prop_assert!(entry(m[(0, 1)], sum(&m12), size(&m12), mn, 1e-12), "M12 {} vs {}", m[(0, 1)], sum(&m12));
+        prop_assert!(entry(m[(1, 0)], sum(&m12), size(&m12), mn, 1e-12), "M21");
+        prop_assert!(entry(m[(1, 1)], sum(&m22), size(&m22), mn, 1e-12), "M22");
         let k11 = [kd1, a6 * a6 * kr];
         let k12 = [t2 * (t3 - t2) / (t1 * t3 * t3) * kr];
         let k22 = [kd2, t2 * t2 / (t3 * t3) * kr];
         let k = &model.slope;
-        prop_assert!(close(k[(0, 0)], sum(&k11), size(&k11), 1e-12), "K11 {} vs {}", k[(0, 0)], sum(&k11));
-        prop_assert!(close(k[(0, 1)], sum(&k12), size(&k12), 1e-12), "K12");
+        let kn = size(&k11) + size(&k22);
+        prop_assert!(entry(k[(0, 0)], sum(&k11), size(&k11), kn, 1e-12), "K11 {} vs {}", k[(0, 0)], sum(&k11));
+        prop_assert!(entry(k[(0, 1)], sum(&k12), size(&k12), kn, 1e-12), "K12 {} vs {}", k[(0, 1)], sum(&k12));
         prop_assert!(k[(0, 1)] == k[(1, 0)], "[K] is exactly symmetric");
-        prop_assert!(close(k[(1, 1)], sum(&k22), size(&k22), 1e-12), "K22");
+        prop_assert!(entry(k[(1, 1)], sum(&k22), size(&k22), kn, 1e-12), "K22");
     }
 
     /// [K] is the derivative of the reduced torque: V^T T(w0 + V d) - V^T T(w0) = [K] d
@@ -456,7 +465,10 @@ fn stiff_train_rk4_step_limit_is_predicted_and_implicit_stays_accurate() {
     let below = run(0.95 * limit, Method::Rk4);
     assert!(below.diverged.is_none());
     assert!(err(&below) < 1e-3, "RK4 below the limit: {}", err(&below));
-    assert!(below.warnings.is_empty(), "{:?}", below.warnings);
+    // Stable, but the fast transient is not resolved (R(z) = 0.81 per step
+    // where e^z = 0.07): the energy balance says so.
+    assert!(!below.warnings.iter().any(|w| w.contains("stability limit")));
+    assert!(below.energy_error > 1e-2, "{}", below.energy_error);
     // Just above: the fast mode is amplified every step.
     let above = run(1.05 * limit, Method::Rk4);
     let grown = above.diverged.is_some()
@@ -726,4 +738,153 @@ fn fig5_example_operating_point_and_verdict() {
         );
         assert!(r.meshes.iter().all(|m| m.multiplier.is_finite()));
     }
+}
+
+fn egt(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_egt"))
+        .args(args)
+        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
+        .output()
+        .expect("run egt")
+}
+
+/// `egt stability --format json` reports what the library computes; `--slope`
+/// moves motor 2 up its rising branch until the train turns unstable.
+#[test]
+fn cli_stability_json_and_slope_override() {
+    let out = egt(&[
+        "stability",
+        "examples/fig5_stability.toml",
+        "--format",
+        "json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["verdict"], "stable");
+    assert_eq!(v["coordinates"], serde_json::json!(["2", "4"]));
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/fig5_stability.toml"
+    );
+    let t = Train::from_str(&std::fs::read_to_string(path).unwrap(), Format::Toml, "x").unwrap();
+    let rep = t.stability(&StabilityRequest::default()).unwrap();
+    // JSON round trip: within an ulp or two.
+    let same = |a: &serde_json::Value, b: f64| close(a.as_f64().unwrap(), b, 0.0, 1e-15);
+    for (k, lam) in rep.stability.eigenvalues.iter().enumerate() {
+        assert!(same(&v["eigenvalues"][k], *lam));
+        assert!(same(&v["modes"][k]["eigenvalue"], *lam));
+    }
+    assert!(same(&v["mass"][0][1], rep.model.mass[(0, 1)]));
+    assert!(same(&v["slope"][1][1], rep.model.slope[(1, 1)]));
+    assert!(v["operating"]["steady"].as_bool().unwrap());
+
+    // Critical slope of motor 2: det [K] = 0 with K11 = k2 + K11(0).
+    let k = &rep.model.slope;
+    let critical = 0.02 - k[(0, 0)] + k[(0, 1)] * k[(1, 0)] / k[(1, 1)];
+    for (slope, want) in [(0.98 * critical, "stable"), (1.02 * critical, "unstable")] {
+        let s = format!("2={slope}");
+        let out = egt(&[
+            "stability",
+            "examples/fig5_stability.toml",
+            "--format",
+            "json",
+            "--slope",
+            &s,
+        ]);
+        assert!(out.status.success());
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(v["verdict"], want, "slope {slope}");
+    }
+    let out = egt(&[
+        "stability",
+        "examples/fig5_stability.toml",
+        "--slope",
+        "3=0.1",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "a link without a curve is a spec error"
+    );
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no curve"));
+}
+
+/// `egt simulate`: CSV with every stored sample, the SVG plot, the table's
+/// checks, and exit 1 with the series when RK4 blows up past its step limit.
+#[test]
+fn cli_simulate_csv_plot_and_blow_up() {
+    let dir = std::env::temp_dir().join(format!("egt-sim-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let svg = dir.join("fig5.svg");
+    let out = egt(&[
+        "simulate",
+        "examples/fig5_stability.toml",
+        "--format",
+        "csv",
+        "--every",
+        "10",
+        "--plot",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines[0], "t,w_2,w_3,w_4,w_5,w_6,drift,energy,work,power");
+    assert_eq!(lines.len(), 1 + 101);
+    let first: Vec<f64> = lines[1].split(',').map(|x| x.parse().unwrap()).collect();
+    assert!((first[1] - 330.0).abs() < 1e-9 && (first[3] - 80.0).abs() < 1e-9);
+    let last: Vec<f64> = lines[101].split(',').map(|x| x.parse().unwrap()).collect();
+    assert_eq!(last[0], 1.0);
+    let plot = std::fs::read_to_string(&svg).unwrap();
+    assert!(
+        plot.starts_with("<svg") && plot.matches("<polyline").count() == 10,
+        "two panels of five links"
+    );
+
+    let out = egt(&[
+        "simulate",
+        "examples/fig5_stability.toml",
+        "--method",
+        "implicit",
+        "--dt",
+        "0.02",
+    ]);
+    assert!(out.status.success());
+    let table = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        table.contains("method: implicit") && table.contains("Newton iterations"),
+        "{table}"
+    );
+
+    let out = egt(&[
+        "simulate",
+        "examples/fig5_stability.toml",
+        "--dt",
+        "0.04",
+        "--t-end",
+        "20",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("blew up") && err.contains("stability limit"),
+        "{err}"
+    );
+    assert!(
+        !out.stdout.is_empty(),
+        "the series up to the blow-up is still written"
+    );
+
+    let out = egt(&["simulate", "examples/fig5_example62.toml"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("t_end"));
+    std::fs::remove_dir_all(&dir).ok();
 }

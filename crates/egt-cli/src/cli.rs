@@ -34,6 +34,10 @@ pub enum Command {
     Shift(commands::shift::Args),
     /// Write the train's graph as Graphviz DOT (links, turning and gear pairs, shift elements).
     Graph(commands::graph::Args),
+    /// Stability of the linearised motion (eq. 19-27): [V], [M], [K], eigenvalues, modes, verdict.
+    Stability(commands::stability::Args),
+    /// Forward dynamics in time under the torque-speed curves (RK4 or implicit); CSV/JSON, SVG plot.
+    Simulate(commands::simulate::Args),
     /// Print the JSON Schema of the spec format.
     Schema(commands::schema::Args),
 }

@@ -40,7 +40,7 @@ use crate::error::{AnalysisError, Error, Result, SpecErrorKind};
 use crate::kinematics::willis_residual;
 use crate::linalg::Lu;
 use crate::mass::MassMatrix;
-use crate::stability::{InertiaSplit, RK4_REAL_LIMIT, ReducedModel};
+use crate::stability::{InertiaSplit, RK4_REAL_LIMIT, ReducedModel, num};
 use crate::train::{Curve, LinkId, Train};
 
 /// Stop when a speed exceeds this [rad/s]: the solution has blown up.
@@ -51,6 +51,10 @@ const NEWTON_TOL: f64 = 1e-12;
 const NEWTON_MAX: usize = 25;
 /// Halvings of an implicit step whose Newton iteration fails.
 const MAX_HALVINGS: usize = 12;
+/// Above this relative energy-balance error a simulation carries a warning.
+pub const ENERGY_WARN: f64 = 1e-3;
+/// Above this relative Willis drift a simulation carries a warning.
+pub const DRIFT_WARN: f64 = 1e-10;
 /// Default number of stored samples.
 pub const DEFAULT_SAMPLES: usize = 2000;
 /// Largest number of steps accepted.
@@ -594,8 +598,10 @@ impl<'a> ReducedDynamics<'a> {
             if let Some(limit) = rk4_step_limit {
                 if dt > limit {
                     warnings.push(format!(
-                        "dt = {dt:e} exceeds RK4's stability limit {limit:.4e} = 2.785 / |lambda| (lambda = {:.4e}): expect a numerical blow-up; use --method implicit or a smaller dt",
-                        eigenvalues.last().copied().unwrap_or(0.0)
+                        "dt = {} exceeds RK4's stability limit {} = 2.785 / |lambda| (lambda = {}): expect a numerical blow-up; use --method implicit or a smaller dt",
+                        num(dt),
+                        num(limit),
+                        num(eigenvalues.last().copied().unwrap_or(0.0))
                     ));
                 }
             }
@@ -648,6 +654,16 @@ impl<'a> ReducedDynamics<'a> {
             .fold(0.0, f64::max)
             / scale;
         let max_drift = samples.iter().map(|s| s.drift).fold(0.0, f64::max);
+        if energy_error > ENERGY_WARN {
+            warnings.push(format!(
+                "the energy balance is off by {energy_error:.2e} of the largest energy: the integration is inaccurate; reduce dt"
+            ));
+        }
+        if max_drift > DRIFT_WARN {
+            warnings.push(format!(
+                "the Willis equations drift by {max_drift:.2e} (relative): rounding has accumulated"
+            ));
+        }
         Ok(Simulation {
             method,
             dt,

@@ -59,12 +59,16 @@ pub const RK4_REAL_LIMIT: f64 = 2.785_293_563_405_282;
 /// be picked as an independent driving coordinate.
 const SELECT_REL: f64 = 1e-6;
 
+/// A matrix as a list of rows (for reports).
+pub fn matrix_rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
+    (0..m.nrows())
+        .map(|i| m.row(i).iter().copied().collect())
+        .collect()
+}
+
 /// Serialize a matrix as a list of rows.
 pub(crate) fn rows<S: Serializer>(m: &DMatrix<f64>, s: S) -> std::result::Result<S::Ok, S::Error> {
-    let rows: Vec<Vec<f64>> = (0..m.nrows())
-        .map(|i| m.row(i).iter().copied().collect())
-        .collect();
-    rows.serialize(s)
+    matrix_rows(m).serialize(s)
 }
 
 /// How the driving coordinates were chosen.
@@ -331,6 +335,15 @@ fn sorted_eigen(a: DMatrix<f64>) -> (Vec<f64>, DMatrix<f64>) {
         vecs.set_column(c, &e.eigenvectors.column(i));
     }
     (order.iter().map(|&i| e.eigenvalues[i]).collect(), vecs)
+}
+
+/// A number for messages: 6 decimals for ordinary magnitudes, else scientific.
+pub(crate) fn num(v: f64) -> String {
+    if v != 0.0 && !(1e-3..1e6).contains(&v.abs()) {
+        return format!("{v:.4e}");
+    }
+    let s = format!("{v:.6}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
 }
 
 fn sym(a: &DMatrix<f64>) -> DMatrix<f64> {
@@ -897,8 +910,8 @@ impl ReducedModel {
             (
                 Verdict::Unstable,
                 format!(
-                    "a massless direction has a rising torque (slope {:.4e} > 0): with any parasitic inertia it runs away infinitely fast",
-                    runaway[0].slope
+                    "a massless direction has a rising torque (slope {} > 0): with any parasitic inertia it runs away infinitely fast",
+                    num(runaway[0].slope)
                 ),
             )
         } else if r == 0 {
@@ -909,13 +922,19 @@ impl ReducedModel {
         } else if margin > tolerance {
             (
                 Verdict::Unstable,
-                format!("eigenvalue {margin:.6e} > 0: a perturbation grows as e^({margin:.4e} t)"),
+                format!(
+                    "eigenvalue {} > 0: a perturbation grows as e^({} t)",
+                    num(margin),
+                    num(margin)
+                ),
             )
         } else if margin < -tolerance {
             (
                 Verdict::Stable,
                 format!(
-                    "every eigenvalue is negative (largest {margin:.6e}): perturbations decay at least as e^({margin:.4e} t)"
+                    "every eigenvalue is negative (largest {}): perturbations decay at least as e^({} t)",
+                    num(margin),
+                    num(margin)
                 ),
             )
         } else {

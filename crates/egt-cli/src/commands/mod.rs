@@ -13,6 +13,8 @@ pub mod kinematics;
 pub mod power;
 pub mod schema;
 pub mod shift;
+pub mod simulate;
+pub mod stability;
 
 /// Run one subcommand, writing its report to `out`.
 ///
@@ -27,6 +29,8 @@ pub fn run(command: &Command, out: &mut dyn Write) -> anyhow::Result<()> {
         Command::Power(args) => power::run(args, out),
         Command::Shift(args) => shift::run(args, out),
         Command::Graph(args) => graph::run(args, out),
+        Command::Stability(args) => stability::run(args, out),
+        Command::Simulate(args) => simulate::run(args, out),
         Command::Schema(args) => schema::run(args, out),
     }
 }

@@ -1,0 +1,450 @@
+//! `egt simulate SPEC --t-end T`: forward dynamics in reduced coordinates
+//! (eq. 12, 25) under the spec's linearised torque-speed curves, from given
+//! initial speeds, with the explicit RK4 or the L-stable implicit SDIRK2
+//! integrator. Prints a summary and a sampled table, the whole time series as
+//! JSON or CSV, and optionally an SVG plot of the link speeds.
+
+mod plot;
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use anyhow::Context;
+use egt_core::{
+    LinearCurves, LinkId, Method, ReducedDynamics, Simulation, SimulationOptions,
+    SimulationRequest, Train,
+};
+use serde::Serialize;
+
+use crate::cli::{OutputFormat, SpecArgs, SpecFormat};
+use crate::commands::circuits::title;
+use crate::commands::dynamics::parse_pair;
+use crate::commands::stability::{ModelArgs, curves, resolve_pairs, sci};
+use crate::input;
+use crate::report::{self, Table};
+
+/// Output formats of `egt simulate`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum SimFormat {
+    /// A summary and a sampled table.
+    #[default]
+    Table,
+    /// The summary and every stored sample as JSON.
+    Json,
+    /// Every stored sample as CSV: t, each link's speed, drift, energy, work, power.
+    Csv,
+}
+
+/// Integrators, as flags.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum MethodArg {
+    /// Classical explicit Runge-Kutta, order 4 (stable for |lambda| dt <= 2.785).
+    Rk4,
+    /// Two-stage L-stable SDIRK, order 2, Newton on the analytic Jacobian (stiff trains).
+    Implicit,
+}
+
+/// Arguments of `egt simulate`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct Args {
+    /// The spec file (TOML or JSON), or `-` for standard input.
+    #[arg(value_name = "SPEC")]
+    pub spec: PathBuf,
+    /// Spec format; by default from the extension (`.json` is JSON), or sniffed on stdin.
+    #[arg(long, value_enum, value_name = "FORMAT")]
+    pub spec_format: Option<SpecFormat>,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = SimFormat::Table)]
+    pub format: SimFormat,
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// End time [s]. Default: `[analysis.simulate] t_end`.
+    #[arg(long, value_name = "T")]
+    pub t_end: Option<f64>,
+    /// Fixed step [s]. Default: `[analysis.simulate] dt`, else t_end / 1000.
+    #[arg(long, value_name = "DT")]
+    pub dt: Option<f64>,
+    /// Integrator. Default: `[analysis.simulate] method`, else rk4.
+    #[arg(long, value_enum)]
+    pub method: Option<MethodArg>,
+    /// An initial speed, `LINK=SPEED`, one per DOF (any independent links).
+    /// Default: `[analysis.simulate] initial`, else `[analysis] speeds`.
+    #[arg(short, long = "initial", value_name = "LINK=SPEED", value_parser = parse_pair)]
+    pub initial: Vec<(String, f64)>,
+    /// Store every N-th step (default: about 2000 samples).
+    #[arg(long, value_name = "N")]
+    pub every: Option<usize>,
+    /// Write an SVG plot of the link speeds against time to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
+    /// Also report the constraint (Willis multiplier) and mesh torques at the
+    /// end time, by inverse dynamics on the simulated state (eq. 6-11).
+    #[arg(long)]
+    pub reactions: bool,
+}
+
+#[derive(Debug, Serialize)]
+struct SampleOut {
+    t: f64,
+    speeds: Vec<f64>,
+    drift: f64,
+    energy: f64,
+    work: f64,
+    power: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct MeshOut {
+    gear: String,
+    multiplier: f64,
+    torque_i: f64,
+    torque_j: f64,
+    torque_carrier: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct Report {
+    source: String,
+    name: Option<String>,
+    dof: usize,
+    method: Method,
+    dt: f64,
+    t_end: f64,
+    steps: usize,
+    eigenvalues: Vec<f64>,
+    rk4_step_limit: Option<f64>,
+    max_drift: f64,
+    energy_error: f64,
+    newton_iterations: usize,
+    diverged: Option<egt_core::simulate::Divergence>,
+    /// The equilibrium of the curves (link speeds), when it is unique.
+    equilibrium: Option<Vec<f64>>,
+    /// Growth rate of the deviation from the equilibrium over the second half.
+    observed_rate: Option<f64>,
+    /// Link names, in the order of every `speeds` array.
+    links: Vec<String>,
+    reactions: Option<Vec<MeshOut>>,
+    warnings: Vec<String>,
+    samples: Vec<SampleOut>,
+}
+
+/// Run `egt simulate`.
+///
+/// # Errors
+/// Reading or validating the spec; unknown links, a bad method or step
+/// (exit 2); missing data, singular systems, a blown-up solution (exit 1,
+/// after the series up to the blow-up has been written); I/O.
+pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
+    let spec_args = SpecArgs {
+        spec: args.spec.clone(),
+        spec_format: args.spec_format,
+        format: OutputFormat::Table,
+    };
+    let loaded = input::load(&spec_args)?;
+    let train = &loaded.train;
+    let ctx = || format!("{}: simulate", loaded.source);
+    let req = request(train, args)?;
+    let curves = curves(train, &args.model)?;
+    let torque = LinearCurves::new(train, &curves)?;
+    let initial = train.initial_speeds(&req).with_context(ctx)?;
+    let mut dynamics = ReducedDynamics::new(train, &torque).with_context(ctx)?;
+    let sim = dynamics
+        .simulate(&initial, &req.options)
+        .with_context(ctx)?;
+
+    // The equilibrium of the curves, to plot and to measure the deviation against.
+    let equilibrium = if curves.is_empty() {
+        None
+    } else {
+        let coords = dynamics.model().coordinates.clone();
+        train
+            .reduced_model(&coords, &curves)
+            .ok()
+            .and_then(|m| m.equilibrium().ok())
+            .map(|(e, _)| e)
+    };
+    let observed_rate = equilibrium.as_ref().and_then(|e| {
+        let mass = train.mass_matrix().ok()?;
+        let half = sim.samples.last()?.t / 2.0;
+        sim.growth_rate(train, &mass, e, half)
+    });
+    let reactions = if args.reactions {
+        let last = sim.samples.last().context("no samples")?;
+        let r = dynamics
+            .reactions(last.t, &last.speed)
+            .with_context(|| format!("{}: reactions at t = {}", loaded.source, last.t))?;
+        Some(
+            r.meshes
+                .iter()
+                .map(|m| MeshOut {
+                    gear: train.gears()[m.gear.index()].name.clone(),
+                    multiplier: m.multiplier,
+                    torque_i: m.torque_i,
+                    torque_j: m.torque_j,
+                    torque_carrier: m.torque_carrier,
+                })
+                .collect(),
+        )
+    } else {
+        None
+    };
+    let report = build(
+        train,
+        &loaded.source,
+        &sim,
+        req.options.t_end,
+        equilibrium,
+        observed_rate,
+        reactions,
+    );
+    if let Some(path) = &args.plot {
+        let svg = plot::speeds_svg(
+            train,
+            &title(train, &loaded.source),
+            &report.links_plotted(train),
+            &sim,
+            report.equilibrium.as_deref(),
+        );
+        std::fs::write(path, svg).with_context(|| format!("writing {}", path.display()))?;
+    }
+    match args.format {
+        SimFormat::Json => report::json(out, &report)?,
+        SimFormat::Csv => write_csv(out, train, &report)?,
+        SimFormat::Table => write_table(out, train, &loaded.source, &report)?,
+    }
+    if let Some(d) = &sim.diverged {
+        let hint = match (sim.method, sim.rk4_step_limit) {
+            (Method::Rk4, Some(limit)) if sim.dt > limit => format!(
+                "; dt = {} exceeds RK4's stability limit {} (2.785 / |lambda_min|): use --method implicit or a smaller --dt",
+                sci(sim.dt),
+                sci(limit)
+            ),
+            _ => String::new(),
+        };
+        anyhow::bail!(
+            "{}: the solution blew up after t = {}: {}{hint}",
+            loaded.source,
+            sci(d.t),
+            d.reason
+        );
+    }
+    Ok(())
+}
+
+/// The simulation request: flags first, then `[analysis.simulate]`.
+///
+/// # Errors
+/// No end time; an unknown method name in the spec; unknown links.
+fn request(train: &Train, args: &Args) -> anyhow::Result<SimulationRequest> {
+    let spec = train.analysis().simulate.clone().unwrap_or_default();
+    let t_end = args.t_end.or(spec.t_end).ok_or_else(|| {
+        anyhow::Error::new(egt_core::Error::spec(
+            "analysis.simulate.t_end",
+            egt_core::SpecErrorKind::Missing {
+                what: "the end time: give `--t-end T` or `[analysis.simulate] t_end`".into(),
+            },
+        ))
+    })?;
+    let method = match (args.method, &spec.method) {
+        (Some(MethodArg::Rk4), _) => Method::Rk4,
+        (Some(MethodArg::Implicit), _) => Method::Implicit,
+        (None, Some(m)) => m
+            .parse()
+            .map_err(|e: String| egt_core::Error::invalid("analysis.simulate.method", e))?,
+        (None, None) => Method::default(),
+    };
+    Ok(SimulationRequest {
+        initial: resolve_pairs(train, &args.initial, "initial")?,
+        options: SimulationOptions {
+            t_end,
+            dt: args.dt.or(spec.dt).unwrap_or(t_end / 1000.0),
+            method,
+            every: args.every.unwrap_or(0),
+        },
+    })
+}
+
+impl Report {
+    /// Indices of the links to plot (every link but the frame).
+    fn links_plotted(&self, train: &Train) -> Vec<LinkId> {
+        (0..self.links.len())
+            .map(LinkId::from_index)
+            .filter(|&l| l != train.frame())
+            .collect()
+    }
+}
+
+fn build(
+    train: &Train,
+    source: &str,
+    sim: &Simulation,
+    t_end: f64,
+    equilibrium: Option<Vec<f64>>,
+    observed_rate: Option<f64>,
+    reactions: Option<Vec<MeshOut>>,
+) -> Report {
+    Report {
+        source: source.to_string(),
+        name: train.name().map(str::to_string),
+        dof: train.dof(),
+        method: sim.method,
+        dt: sim.dt,
+        t_end,
+        steps: sim.steps,
+        eigenvalues: sim.eigenvalues.clone(),
+        rk4_step_limit: sim.rk4_step_limit,
+        max_drift: sim.max_drift,
+        energy_error: sim.energy_error,
+        newton_iterations: sim.newton_iterations,
+        diverged: sim.diverged.clone(),
+        equilibrium,
+        observed_rate,
+        links: train.links().iter().map(|l| l.name.clone()).collect(),
+        reactions,
+        warnings: sim.warnings.clone(),
+        samples: sim
+            .samples
+            .iter()
+            .map(|s| SampleOut {
+                t: s.t,
+                speeds: s.speed.clone(),
+                drift: s.drift,
+                energy: s.energy,
+                work: s.work,
+                power: s.power,
+            })
+            .collect(),
+    }
+}
+
+fn write_csv(out: &mut dyn Write, train: &Train, r: &Report) -> anyhow::Result<()> {
+    let moving = r.links_plotted(train);
+    let mut header = vec!["t".to_string()];
+    header.extend(
+        moving
+            .iter()
+            .map(|&l| format!("w_{}", csv_name(&r.links[l.index()]))),
+    );
+    header.extend(["drift", "energy", "work", "power"].map(String::from));
+    writeln!(out, "{}", header.join(","))?;
+    for s in &r.samples {
+        let mut row = vec![format!("{:e}", s.t)];
+        row.extend(moving.iter().map(|l| format!("{:e}", s.speeds[l.index()])));
+        row.extend([s.drift, s.energy, s.work, s.power].map(|v| format!("{v:e}")));
+        writeln!(out, "{}", row.join(","))?;
+    }
+    Ok(())
+}
+
+/// A link name safe in a CSV header (quotes and commas replaced).
+fn csv_name(n: &str) -> String {
+    n.chars()
+        .map(|c| {
+            if c == ',' || c == '"' || c.is_whitespace() {
+                '_'
+            } else {
+                c
+            }
+        })
+        .collect()
+}
+
+/// Rows shown in the table: about 20, evenly spaced, the last always.
+const TABLE_ROWS: usize = 20;
+
+fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> anyhow::Result<()> {
+    writeln!(out, "{}: simulation", title(train, source))?;
+    writeln!(
+        out,
+        "degree of freedom: {}; method: {}; dt = {}; t_end = {}; steps: {}",
+        r.dof,
+        r.method,
+        sci(r.dt),
+        sci(r.t_end),
+        r.steps
+    )?;
+    let eig: Vec<String> = r.eigenvalues.iter().map(|&v| sci(v)).collect();
+    writeln!(
+        out,
+        "eigenvalues at the start [1/s]: {}; RK4 step limit: {}",
+        eig.join(", "),
+        r.rk4_step_limit.map_or_else(|| "none".into(), sci)
+    )?;
+    let moving = r.links_plotted(train);
+    let mut headers = vec!["t [s]".to_string()];
+    headers.extend(moving.iter().map(|&l| format!("w {}", r.links[l.index()])));
+    headers.extend(["energy", "Willis drift"].map(String::from));
+    let hs: Vec<&str> = headers.iter().map(String::as_str).collect();
+    let cols: Vec<usize> = (0..hs.len()).collect();
+    let mut t = Table::new(&hs).right(&cols);
+    let n = r.samples.len();
+    let stride = n.div_ceil(TABLE_ROWS).max(1);
+    for (k, s) in r.samples.iter().enumerate() {
+        if k % stride != 0 && k + 1 != n {
+            continue;
+        }
+        let mut row = vec![sci(s.t)];
+        row.extend(moving.iter().map(|l| report::float(s.speeds[l.index()])));
+        row.push(sci(s.energy));
+        row.push(format!("{:.1e}", s.drift));
+        t.row(row);
+    }
+    t.write(out, 2)?;
+    if let Some(e) = &r.equilibrium {
+        let eq: Vec<String> = moving
+            .iter()
+            .map(|&l| format!("{} {}", r.links[l.index()], report::float(e[l.index()])))
+            .collect();
+        writeln!(out, "equilibrium of the curves: {}", eq.join(", "))?;
+    }
+    if let Some(rate) = r.observed_rate {
+        writeln!(
+            out,
+            "deviation from the equilibrium over the second half grows at {} 1/s (largest eigenvalue {})",
+            sci(rate),
+            r.eigenvalues
+                .first()
+                .map_or_else(|| "-".into(), |&v| sci(v))
+        )?;
+    }
+    writeln!(
+        out,
+        "checks: max Willis drift {:.2e}; energy balance |E - E0 - W| / max {:.2e}{}",
+        r.max_drift,
+        r.energy_error,
+        if r.newton_iterations > 0 {
+            format!("; Newton iterations {}", r.newton_iterations)
+        } else {
+            String::new()
+        }
+    )?;
+    if let Some(m) = &r.reactions {
+        writeln!(
+            out,
+            "constraint torques at t = {} (inverse dynamics, eq. 6-11):",
+            sci(r.samples.last().map_or(0.0, |s| s.t))
+        )?;
+        let mut t = Table::new(&[
+            "gear pair",
+            "lambda",
+            "on gear i",
+            "on gear j",
+            "on carrier",
+        ])
+        .right(&[1, 2, 3, 4]);
+        for x in m {
+            t.row(vec![
+                x.gear.clone(),
+                sci(x.multiplier),
+                sci(x.torque_i),
+                sci(x.torque_j),
+                sci(x.torque_carrier),
+            ]);
+        }
+        t.write(out, 2)?;
+    }
+    for w in &r.warnings {
+        writeln!(out, "warning: {w}")?;
+    }
+    Ok(())
+}

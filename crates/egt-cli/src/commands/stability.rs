@@ -1,0 +1,420 @@
+//! `egt stability SPEC`: the reduced model of a train with any number of
+//! degrees of freedom (paper section 5, eq. 19-27): [V] for the driving
+//! links, the orthogonality check (eq. 24), the reduced mass and slope
+//! matrices (eq. 25-27, with [K] = V^T diag(K) V), the operating point and
+//! whether it is a steady state, and the eigenvalues and modes of
+//! (lambda [M] - [K]) X = 0 with the verdict (stable, unstable, marginal).
+
+use std::io::Write;
+
+use anyhow::Context;
+use egt_core::stability::matrix_rows;
+use egt_core::train::Curve;
+use egt_core::{LinkId, StabilityReport, StabilityRequest, Train};
+use serde::Serialize;
+
+use crate::cli::{OutputFormat, SpecArgs};
+use crate::commands::circuits::title;
+use crate::commands::dynamics::parse_pair;
+use crate::input;
+use crate::report::{self, Table};
+
+/// Choices shared by `egt stability` and `egt simulate`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct ModelArgs {
+    /// Replace the slope dT/dw of the curves on a link, `LINK=SLOPE`
+    /// (repeatable), e.g. to find where a train turns unstable.
+    #[arg(long = "slope", value_name = "LINK=SLOPE", value_parser = parse_pair)]
+    pub slopes: Vec<(String, f64)>,
+}
+
+/// Arguments of `egt stability`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct Args {
+    #[command(flatten)]
+    pub spec: SpecArgs,
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// The F driving links (the columns of [V]), comma-separated or repeated.
+    /// Default: the links of `[analysis] speeds`, else a well-conditioned choice.
+    #[arg(long = "coords", value_name = "LINK", value_delimiter = ',')]
+    pub coords: Vec<String>,
+    /// An operating speed, `LINK=SPEED`, one per DOF. Default: `[analysis]
+    /// speeds`, else the equilibrium of the curves.
+    #[arg(short, long = "input", value_name = "LINK=SPEED", value_parser = parse_pair)]
+    pub inputs: Vec<(String, f64)>,
+}
+
+/// The spec's curves with the `--slope` overrides applied.
+///
+/// # Errors
+/// Unknown links; a link without a curve.
+pub(crate) fn curves(train: &Train, a: &ModelArgs) -> anyhow::Result<Vec<Curve>> {
+    let mut curves = train.analysis().curves.clone();
+    for (name, slope) in &a.slopes {
+        let l = train.resolve(name, &format!("--slope {name}"))?;
+        let mut found = false;
+        for c in curves.iter_mut().filter(|c| c.link == l) {
+            c.slope = *slope;
+            found = true;
+        }
+        if !found {
+            return Err(anyhow::Error::new(egt_core::Error::invalid(
+                format!("--slope {name}"),
+                format!("link `{name}` carries no curve; add it to [[analysis.curves]]"),
+            )));
+        }
+    }
+    Ok(curves)
+}
+
+/// Resolve `LINK=VALUE` flags.
+pub(crate) fn resolve_pairs(
+    train: &Train,
+    pairs: &[(String, f64)],
+    flag: &str,
+) -> anyhow::Result<Vec<(LinkId, f64)>> {
+    pairs
+        .iter()
+        .map(|(l, v)| Ok((train.resolve(l, &format!("--{flag} {l}"))?, *v)))
+        .collect()
+}
+
+#[derive(Debug, Serialize)]
+struct LinkValue {
+    link: String,
+    value: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct ModeOut {
+    eigenvalue: f64,
+    time_constant: Option<f64>,
+    /// The mode in the driving coordinates (largest link speed 1).
+    coordinates: Vec<LinkValue>,
+    /// Every link's speed in the mode.
+    speeds: Vec<LinkValue>,
+}
+
+#[derive(Debug, Serialize)]
+struct MasslessOut {
+    links: Vec<String>,
+    slope: f64,
+    speeds: Vec<LinkValue>,
+}
+
+#[derive(Debug, Serialize)]
+struct OperatingOut {
+    source: egt_core::stability::OperatingSource,
+    speeds: Vec<LinkValue>,
+    torques: Vec<LinkValue>,
+    /// V^T T per driving link: zero at a steady state.
+    reduced_torque: Vec<LinkValue>,
+    residual: f64,
+    steady: bool,
+    equilibrium: Option<Vec<LinkValue>>,
+}
+
+#[derive(Debug, Serialize)]
+struct Report {
+    source: String,
+    name: Option<String>,
+    dof: usize,
+    coordinates: Vec<String>,
+    coordinate_source: egt_core::CoordinateSource,
+    gamma_condition: f64,
+    orthogonality: f64,
+    /// [V] (eq. 23): one row per link (the frame's is zero), one column per driving link.
+    velocity: Vec<Vec<f64>>,
+    links: Vec<String>,
+    /// V^T M V (eq. 25).
+    mass: Vec<Vec<f64>>,
+    /// V^T diag(K) V (eq. 26-27).
+    slope: Vec<Vec<f64>>,
+    operating: OperatingOut,
+    eigenvalues: Vec<f64>,
+    modes: Vec<ModeOut>,
+    massless: Vec<MasslessOut>,
+    verdict: egt_core::Verdict,
+    reason: String,
+    margin: f64,
+    tolerance: f64,
+    rk4_step_limit: Option<f64>,
+    stiffness: Option<f64>,
+    eigen_residual: f64,
+    warnings: Vec<String>,
+}
+
+/// Run `egt stability`.
+///
+/// # Errors
+/// Reading or validating the spec; unknown links (exit 2); no curves, driving
+/// links that do not determine the train, ill-conditioned [Gamma_w], a
+/// massless direction without slope (exit 1); I/O.
+pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
+    let loaded = input::load(&args.spec)?;
+    let train = &loaded.train;
+    let coords = args
+        .coords
+        .iter()
+        .map(|n| train.resolve(n, &format!("--coords {n}")))
+        .collect::<Result<Vec<_>, _>>()?;
+    let req = StabilityRequest {
+        coordinates: (!coords.is_empty()).then_some(coords),
+        curves: Some(curves(train, &args.model)?),
+        speeds: (!args.inputs.is_empty())
+            .then(|| resolve_pairs(train, &args.inputs, "input"))
+            .transpose()?,
+    };
+    let rep = train
+        .stability(&req)
+        .with_context(|| format!("{}: stability", loaded.source))?;
+    let report = build(train, &loaded.source, &rep);
+    match args.spec.format {
+        OutputFormat::Json => report::json(out, &report),
+        OutputFormat::Table => write_table(out, train, &loaded.source, &report),
+    }
+}
+
+fn values(train: &Train, v: &[f64], skip_frame: bool) -> Vec<LinkValue> {
+    v.iter()
+        .enumerate()
+        .filter(|(l, _)| !(skip_frame && LinkId::from_index(*l) == train.frame()))
+        .map(|(l, &value)| LinkValue {
+            link: train.link_name(LinkId::from_index(l)).to_string(),
+            value,
+        })
+        .collect()
+}
+
+fn build(train: &Train, source: &str, rep: &StabilityReport) -> Report {
+    let m = &rep.model;
+    let st = &rep.stability;
+    let op = &rep.operating;
+    let names: Vec<String> = m
+        .coordinates
+        .iter()
+        .map(|&l| train.link_name(l).to_string())
+        .collect();
+    let per_coord = |v: &[f64]| -> Vec<LinkValue> {
+        names
+            .iter()
+            .zip(v)
+            .map(|(n, &value)| LinkValue {
+                link: n.clone(),
+                value,
+            })
+            .collect()
+    };
+    Report {
+        source: source.to_string(),
+        name: train.name().map(str::to_string),
+        dof: m.dof(),
+        coordinates: names.clone(),
+        coordinate_source: m.source,
+        gamma_condition: m.gamma_condition,
+        orthogonality: m.orthogonality,
+        velocity: matrix_rows(&m.velocity),
+        links: train.links().iter().map(|l| l.name.clone()).collect(),
+        mass: matrix_rows(&m.mass),
+        slope: matrix_rows(&m.slope),
+        operating: OperatingOut {
+            source: op.source,
+            speeds: values(train, &op.speed, true),
+            torques: values(train, &op.torque, true),
+            reduced_torque: per_coord(&op.reduced_torque),
+            residual: op.residual,
+            steady: op.steady,
+            equilibrium: op.equilibrium.as_ref().map(|e| values(train, e, true)),
+        },
+        eigenvalues: st.eigenvalues.clone(),
+        modes: st
+            .modes
+            .iter()
+            .map(|md| ModeOut {
+                eigenvalue: md.eigenvalue,
+                time_constant: md.time_constant,
+                coordinates: per_coord(&md.coordinates),
+                speeds: values(train, &md.speeds, true),
+            })
+            .collect(),
+        massless: st
+            .massless
+            .iter()
+            .map(|d| MasslessOut {
+                links: d
+                    .links
+                    .iter()
+                    .map(|&l| train.link_name(l).to_string())
+                    .collect(),
+                slope: d.slope,
+                speeds: values(train, &d.speeds, true),
+            })
+            .collect(),
+        verdict: st.verdict,
+        reason: st.reason.clone(),
+        margin: st.margin,
+        tolerance: st.tolerance,
+        rk4_step_limit: st.rk4_step_limit,
+        stiffness: st.stiffness,
+        eigen_residual: st.residual,
+        warnings: rep.warnings.clone(),
+    }
+}
+
+fn square(
+    out: &mut dyn Write,
+    label: &str,
+    names: &[String],
+    m: &[Vec<f64>],
+) -> anyhow::Result<()> {
+    writeln!(out, "{label}")?;
+    let mut headers = vec![""];
+    headers.extend(names.iter().map(String::as_str));
+    let cols: Vec<usize> = (1..=names.len()).collect();
+    let mut t = Table::new(&headers).right(&cols);
+    for (n, row) in names.iter().zip(m) {
+        let mut cells = vec![n.clone()];
+        cells.extend(row.iter().map(|&v| sci(v)));
+        t.row(cells);
+    }
+    t.write(out, 2)?;
+    Ok(())
+}
+
+/// Six significant digits, scientific when small or large.
+pub(crate) fn sci(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    let a = v.abs();
+    if (1e-3..1e6).contains(&a) {
+        report::float(v)
+    } else {
+        format!("{v:.6e}")
+    }
+}
+
+fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> anyhow::Result<()> {
+    writeln!(out, "{}: stability", title(train, source))?;
+    let from = match r.coordinate_source {
+        egt_core::CoordinateSource::Given => "given",
+        egt_core::CoordinateSource::SpecSpeeds => "the links of [analysis] speeds",
+        egt_core::CoordinateSource::Automatic => "chosen for conditioning",
+    };
+    writeln!(
+        out,
+        "degree of freedom: {}; driving links: {} ({from})",
+        r.dof,
+        r.coordinates.join(", ")
+    )?;
+    writeln!(
+        out,
+        "[Gamma_w] condition number: {}; orthogonality |psi_w V| (eq. 24): {}",
+        sci(r.gamma_condition),
+        sci(r.orthogonality)
+    )?;
+    writeln!(out, "[V] (eq. 23): link speeds per unit driving speed")?;
+    let mut headers = vec!["link"];
+    headers.extend(r.coordinates.iter().map(String::as_str));
+    let cols: Vec<usize> = (1..=r.dof).collect();
+    let mut t = Table::new(&headers).right(&cols);
+    for (l, row) in r.links.iter().zip(&r.velocity) {
+        if train.link_id(l) == Some(train.frame()) {
+            continue;
+        }
+        let mut cells = vec![l.clone()];
+        cells.extend(row.iter().map(|&v| sci(v)));
+        t.row(cells);
+    }
+    t.write(out, 2)?;
+    square(
+        out,
+        "reduced mass matrix [M] = V^T M V (eq. 25):",
+        &r.coordinates,
+        &r.mass,
+    )?;
+    square(
+        out,
+        "reduced slope matrix [K] = V^T diag(dT/dw) V (eq. 26-27, corrected):",
+        &r.coordinates,
+        &r.slope,
+    )?;
+    let op = &r.operating;
+    let src = match op.source {
+        egt_core::stability::OperatingSource::Speeds => "from the input speeds",
+        egt_core::stability::OperatingSource::Equilibrium => "the equilibrium of the curves",
+    };
+    writeln!(out, "operating point ({src}):")?;
+    let mut t = Table::new(&["link", "speed", "torque", "equilibrium"]).right(&[1, 2, 3]);
+    for (k, s) in op.speeds.iter().enumerate() {
+        t.row(vec![
+            s.link.clone(),
+            report::float(s.value),
+            sci(op.torques[k].value),
+            op.equilibrium
+                .as_ref()
+                .map_or_else(|| "-".into(), |e| report::float(e[k].value)),
+        ]);
+    }
+    t.write(out, 2)?;
+    let rt: Vec<String> = op
+        .reduced_torque
+        .iter()
+        .map(|v| format!("{} {}", v.link, sci(v.value)))
+        .collect();
+    writeln!(
+        out,
+        "reduced torque V^T T: {} (relative {:.2e}): {}",
+        rt.join(", "),
+        op.residual,
+        if op.steady {
+            "a steady state"
+        } else {
+            "NOT a steady state"
+        }
+    )?;
+    writeln!(
+        out,
+        "eigenvalues of (lambda [M] - [K]) X = 0; modes as link speeds (largest 1):"
+    )?;
+    let link_names: Vec<&str> = op.speeds.iter().map(|s| s.link.as_str()).collect();
+    let mut headers = vec!["lambda [1/s]", "time constant [s]"];
+    headers.extend(link_names.iter().copied());
+    let cols: Vec<usize> = (0..headers.len()).collect();
+    let mut t = Table::new(&headers).right(&cols);
+    for md in &r.modes {
+        let mut cells = vec![
+            sci(md.eigenvalue),
+            md.time_constant.map_or_else(|| "-".into(), sci),
+        ];
+        cells.extend(md.speeds.iter().map(|v| report::float(v.value)));
+        t.row(cells);
+    }
+    t.write(out, 2)?;
+    for d in &r.massless {
+        writeln!(
+            out,
+            "massless direction (links {}): torque slope {} -> eliminated as an algebraic torque balance",
+            d.links.join(", "),
+            sci(d.slope)
+        )?;
+    }
+    let verdict = match r.verdict {
+        egt_core::Verdict::Stable => "STABLE",
+        egt_core::Verdict::Unstable => "UNSTABLE",
+        egt_core::Verdict::Marginal => "MARGINAL",
+    };
+    writeln!(out, "verdict: {verdict}: {}", r.reason)?;
+    writeln!(
+        out,
+        "margin (largest eigenvalue): {}; RK4 step limit 2.785/|lambda_min|: {}; stiffness: {}",
+        sci(r.margin),
+        r.rk4_step_limit.map_or_else(|| "none".into(), sci),
+        r.stiffness.map_or_else(|| "-".into(), sci),
+    )?;
+    for w in &r.warnings {
+        writeln!(out, "warning: {w}")?;
+    }
+    Ok(())
+}
