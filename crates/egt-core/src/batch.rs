@@ -79,6 +79,40 @@ impl BatchSpec {
     }
 }
 
+impl BatchSpec {
+    /// One gear state of a transmission: its engaged elements as extra
+    /// constraint rows (their reaction torques become `lambda.<element>`
+    /// columns); speed and acceleration prescribed on the input, whose torque
+    /// is a parameter (`torque.<input>`); the output torque solved.
+    ///
+    /// # Errors
+    /// No transmission data or no such state.
+    pub fn for_gear_state(train: &Train, state: &str, compute: Compute) -> Result<Self> {
+        let t = train.checked_transmission()?;
+        let s = t.states.iter().find(|s| s.name == state).ok_or_else(|| {
+            Error::Transmission(crate::TransmissionError::UnknownState {
+                state: state.to_string(),
+                suggestion: crate::error::suggest(state, t.states.iter().map(|s| s.name.as_str())),
+            })
+        })?;
+        let extras = s
+            .engaged
+            .iter()
+            .map(|&e| {
+                let el = &train.elements()[e.index()];
+                (el.name.clone(), crate::transmission::element_constraint(el))
+            })
+            .collect();
+        Ok(BatchSpec {
+            inputs: vec![t.input],
+            accelerated: vec![t.input],
+            driving: vec![t.output],
+            extras,
+            compute,
+        })
+    }
+}
+
 /// Where each parameter group starts in a row.
 #[derive(Debug, Clone, Copy, Default)]
 struct Groups {

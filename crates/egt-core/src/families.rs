@@ -267,6 +267,37 @@ pub fn stationary_planet(eps: f64) -> String {
     s
 }
 
+/// Run the topology checks, the tree and the circuit table (Table 1) of a
+/// validated train again, and return the number of circuits: the benchmarks
+/// time this phase apart from parsing and field validation, which
+/// [`crate::Train::from_spec`] performs together with it.
+///
+/// # Errors
+/// None for a train that was valid when built; the [`crate::TopologyError`] otherwise.
+#[doc(hidden)]
+pub fn topology_phase(train: &crate::Train) -> crate::Result<usize> {
+    use crate::spec::ElementKind;
+    let clutches: Vec<[crate::LinkId; 2]> = train
+        .elements
+        .iter()
+        .filter(|e| matches!(e.kind, ElementKind::Clutch | ElementKind::OneWayClutch))
+        .filter_map(|e| match e.links.as_slice() {
+            &[a, b] => Some([a, b]),
+            _ => None,
+        })
+        .collect();
+    let topo = crate::topology::analyse(
+        &train.links,
+        train.frame,
+        &train.levels,
+        &train.revolutes,
+        &train.gears,
+        &train.graph,
+        &clutches,
+    )?;
+    Ok(topo.circuits.len())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

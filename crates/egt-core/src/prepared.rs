@@ -470,16 +470,17 @@ impl PreparedTrain {
         ws.cond[0] = ws.kin.condition();
         refuse(ws.cond[0], "the speed system (eq. 2)")?;
         self.input_rhs(s.speeds, &mut ws.speed);
-        ws.kin.solve(&mut ws.speed);
         if what == Compute::Kinematics {
+            ws.kin.solve(&mut ws.speed);
             return Ok(());
         }
         // Accelerations: eq. (8), the same factorisation when the links are the same.
         self.input_rhs(s.accelerations, &mut ws.accel);
         if self.accel_shared {
             ws.cond[1] = ws.cond[0];
-            ws.kin.solve(&mut ws.accel);
+            ws.kin.solve2(&mut ws.speed, &mut ws.accel);
         } else {
+            ws.kin.solve(&mut ws.speed);
             self.acceleration_matrix(s.ratios, ws.acc.matrix_mut());
             ws.acc.factor().map_err(|_| {
                 singular(

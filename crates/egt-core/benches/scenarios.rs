@@ -1,0 +1,239 @@
+//! Timings by phase and by train size (divan): parsing; validation with the
+//! topology checks; the topology checks and circuit table alone; preparing a
+//! batch plan; and one scenario on a prepared train (kinematics, inverse
+//! dynamics with meshing forces, power flow with mesh losses); plus batch
+//! throughput on all cores. Sizes run from 3 to 30 links over two generated
+//! families (planetary chains, nests) and the bundled examples.
+//!
+//! `make bench` runs this with short settings; docs/benchmarks.md has the numbers.
+//! A row of the scenario benches is the one the spec's `[analysis]` describes.
+
+use std::hint::black_box;
+
+use divan::Bencher;
+use divan::counter::ItemsCount;
+use egt_core::batch::{BatchPlan, BatchSpec};
+use egt_core::prepared::Compute;
+use egt_core::{Format, Train, families, parse_spec};
+
+fn main() {
+    divan::main();
+}
+
+/// Train sizes in links: a planetary chain of k sets has 2 + 2k links.
+const CHAIN_LINKS: &[usize] = &[4, 6, 10, 16, 22, 30];
+/// A nest of n links (n - 1 nested stages).
+const NEST_LINKS: &[usize] = &[3, 6, 10, 16, 22, 30];
+/// Bundled examples with an `[analysis]` section that names inputs.
+const EXAMPLES: &[&str] = &[
+    "fig3_example61.toml",
+    "fig5_example62.toml",
+    "simple_planetary.toml",
+];
+
+fn chain(links: usize) -> String {
+    families::planetary_chain((links - 2) / 2)
+}
+
+fn example(name: &str) -> String {
+    let path = format!("{}/../../examples/{name}", env!("CARGO_MANIFEST_DIR"));
+    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"))
+}
+
+fn build(text: &str) -> Train {
+    Train::from_str(text, Format::Toml, "bench").unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn plan(t: &Train, compute: Compute) -> BatchPlan {
+    let spec = BatchSpec::from_analysis(t, compute).unwrap_or_else(|e| panic!("{e}"));
+    BatchPlan::new(t, &spec).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// One scenario on a prepared plan (the base row).
+fn scenario(b: Bencher, t: &Train, compute: Compute) {
+    let p = plan(t, compute);
+    let row = p.base().to_vec();
+    let mut out = vec![0.0; p.outputs().len()];
+    let mut w = p.worker();
+    b.bench_local(|| {
+        w.eval(black_box(&row), black_box(&mut out))
+            .unwrap_or_else(|e| panic!("{e}"))
+    });
+}
+
+macro_rules! phases {
+    ($module:ident, $sizes:expr, $make:expr) => {
+        mod $module {
+            use super::*;
+
+            #[divan::bench(args = $sizes)]
+            fn parse(b: Bencher, links: usize) {
+                let text = $make(links);
+                b.bench(|| {
+                    parse_spec(black_box(&text), Format::Toml, "bench").map(|s| s.frame.len())
+                });
+            }
+
+            #[divan::bench(args = $sizes)]
+            fn validate(b: Bencher, links: usize) {
+                let spec = parse_spec(&$make(links), Format::Toml, "bench")
+                    .unwrap_or_else(|e| panic!("{e}"));
+                b.bench(|| Train::from_spec(black_box(&spec)).map(|t| t.dof()));
+            }
+
+            #[divan::bench(args = $sizes)]
+            fn topology(b: Bencher, links: usize) {
+                let t = build(&$make(links));
+                b.bench(|| families::topology_phase(black_box(&t)));
+            }
+
+            #[divan::bench(args = $sizes)]
+            fn prepare(b: Bencher, links: usize) {
+                let t = build(&$make(links));
+                b.bench(|| plan(black_box(&t), Compute::Power).outputs().len());
+            }
+
+            #[divan::bench(args = $sizes)]
+            fn kinematics(b: Bencher, links: usize) {
+                scenario(b, &build(&$make(links)), Compute::Kinematics);
+            }
+
+            #[divan::bench(args = $sizes)]
+            fn inverse_dynamics(b: Bencher, links: usize) {
+                scenario(b, &build(&$make(links)), Compute::Dynamics);
+            }
+
+            #[divan::bench(args = $sizes)]
+            fn power_lossy(b: Bencher, links: usize) {
+                scenario(b, &build(&$make(links)), Compute::Power);
+            }
+        }
+    };
+}
+
+phases!(chain, CHAIN_LINKS, chain);
+phases!(nest, NEST_LINKS, families::nest);
+
+mod examples {
+    use super::*;
+
+    #[divan::bench(args = EXAMPLES)]
+    fn parse_validate(b: Bencher, name: &str) {
+        let text = example(name);
+        b.bench(|| Train::from_str(black_box(&text), Format::Toml, "bench").map(|t| t.dof()));
+    }
+
+    #[divan::bench(args = EXAMPLES)]
+    fn inverse_dynamics(b: Bencher, name: &str) {
+        scenario(b, &build(&example(name)), Compute::Dynamics);
+    }
+
+    #[divan::bench(args = EXAMPLES)]
+    fn power_lossy(b: Bencher, name: &str) {
+        scenario(b, &build(&example(name)), Compute::Power);
+    }
+
+    /// Every gear state of the ZF 8HP70 shift table, one scenario each (static:
+    /// input speed and torque, no acceleration).
+    #[divan::bench]
+    fn zf_8hp_shift_table(b: Bencher) {
+        let t = build(&example("zf_8hp70.toml"));
+        let states = shift_table(&t, Compute::Power);
+        let mut work: Vec<_> = states
+            .iter()
+            .map(|(p, row)| (p.worker(), row.clone(), vec![0.0; p.outputs().len()]))
+            .collect();
+        b.counter(ItemsCount::new(work.len())).bench_local(|| {
+            for (w, row, out) in &mut work {
+                w.eval(black_box(row), out)
+                    .unwrap_or_else(|e| panic!("{e}"));
+            }
+        });
+    }
+}
+
+/// A plan and a row per gear state: input at 200 rad/s with 300 N m.
+fn shift_table(t: &Train, compute: Compute) -> Vec<(BatchPlan, Vec<f64>)> {
+    let tr = t
+        .transmission()
+        .unwrap_or_else(|| panic!("no transmission"));
+    let input = t.link_name(tr.input).to_string();
+    tr.states
+        .iter()
+        .map(|s| {
+            let spec =
+                BatchSpec::for_gear_state(t, &s.name, compute).unwrap_or_else(|e| panic!("{e}"));
+            let p = BatchPlan::new(t, &spec).unwrap_or_else(|e| panic!("{e}"));
+            let mut row = p.base().to_vec();
+            let set = |row: &mut Vec<f64>, name: &str, v: f64| {
+                if let Some(c) = p.parameter(name) {
+                    row[c] = v;
+                }
+            };
+            set(&mut row, &format!("speed.{input}"), 200.0);
+            set(&mut row, &format!("torque.{input}"), 300.0);
+            (p, row)
+        })
+        .collect()
+}
+
+/// Batch throughput on all cores (rayon): scenarios per second.
+mod batch {
+    use super::*;
+
+    const ROWS: usize = 200_000;
+
+    fn run(b: Bencher, p: &BatchPlan, rows: &[f64]) {
+        let n = rows.len() / p.parameters().len();
+        let mut out = vec![0.0; n * p.outputs().len()];
+        b.counter(ItemsCount::new(n)).bench_local(|| {
+            let errors = p.run(black_box(rows), &mut out);
+            assert!(errors.is_empty());
+        });
+    }
+
+    /// The 6-link 1-DOF chain: inverse dynamics, every row a different load.
+    #[divan::bench(sample_count = 10)]
+    fn chain6_inverse_dynamics(b: Bencher) {
+        let t = build(&chain(6));
+        let p = plan(&t, Compute::Dynamics);
+        let load = p
+            .parameter("torque.c2")
+            .unwrap_or_else(|| panic!("no load column"));
+        let mut rows = Vec::with_capacity(ROWS * p.parameters().len());
+        for r in 0..ROWS {
+            let mut row = p.base().to_vec();
+            row[load] = -40.0 - (r % 1000) as f64 * 0.1;
+            rows.extend(row);
+        }
+        run(b, &p, &rows);
+    }
+
+    /// The ZF 8HP70 shift table: rows cycle through the gear states.
+    #[divan::bench(sample_count = 10)]
+    fn zf_8hp_shift_table(b: Bencher) {
+        let t = build(&example("zf_8hp70.toml"));
+        let states = shift_table(&t, Compute::Dynamics);
+        let per = ROWS / states.len();
+        let inputs: Vec<Vec<f64>> = states
+            .iter()
+            .map(|(p, row)| {
+                row.iter()
+                    .copied()
+                    .cycle()
+                    .take(per * p.parameters().len())
+                    .collect()
+            })
+            .collect();
+        let mut outs: Vec<Vec<f64>> = states
+            .iter()
+            .map(|(p, _)| vec![0.0; per * p.outputs().len()])
+            .collect();
+        b.counter(ItemsCount::new(per * states.len()))
+            .bench_local(|| {
+                for ((p, _), (rows, out)) in states.iter().zip(inputs.iter().zip(&mut outs)) {
+                    assert!(p.run(black_box(rows), out).is_empty());
+                }
+            });
+    }
+}
