@@ -32,6 +32,7 @@
 //! assert_eq!(egt_core::exact::display(&speeds.exact.unwrap()[carrier.index()]), "30");
 //! ```
 
+pub mod accuracy;
 pub mod batch;
 pub mod circuits;
 pub mod dynamics;

@@ -222,6 +222,8 @@ macro_rules! dispatch {
 use dispatch;
 
 /// LU with partial pivoting in place; returns ||A||_1.
+// Index loops on purpose: with a constant order they unroll completely.
+#[allow(clippy::needless_range_loop)]
 #[inline]
 fn factor<D: Dim>(
     d: D,
@@ -274,6 +276,8 @@ fn factor<D: Dim>(
 }
 
 /// Solve A x = b in place from the factors.
+// Index loops on purpose: with a constant order they unroll completely.
+#[allow(clippy::needless_range_loop)]
 #[inline]
 fn solve<D: Dim>(d: D, a: &[f64], piv: &[usize], dinv: &[f64], b: &mut [f64]) {
     let n = d.n();
@@ -300,6 +304,8 @@ fn solve<D: Dim>(d: D, a: &[f64], piv: &[usize], dinv: &[f64], b: &mut [f64]) {
 }
 
 /// Solve A x = b and A y = c in place, interleaved.
+// Index loops on purpose: with a constant order they unroll completely.
+#[allow(clippy::needless_range_loop)]
 #[inline]
 fn solve2<D: Dim>(d: D, a: &[f64], piv: &[usize], dinv: &[f64], b: &mut [f64], c: &mut [f64]) {
     let n = d.n();
@@ -331,6 +337,8 @@ fn solve2<D: Dim>(d: D, a: &[f64], piv: &[usize], dinv: &[f64], b: &mut [f64], c
 
 /// Solve A^T x = b in place: A^T = U^T L^T P, so U^T y = b, L^T z = y,
 /// x = P^T z, each as updates by rows of U and L (contiguous).
+// Index loops on purpose: with a constant order they unroll completely.
+#[allow(clippy::needless_range_loop)]
 #[inline]
 fn solve_transpose<D: Dim>(d: D, a: &[f64], piv: &[usize], dinv: &[f64], b: &mut [f64]) {
     let n = d.n();

@@ -19,7 +19,10 @@
 use std::ops::Range;
 
 use crate::dynamics::Extra;
+use num_traits::Zero;
+
 use crate::error::{AnalysisError, Error, Result};
+use crate::exact::{self, Q, QMatrix};
 use crate::linalg::{COND_REFUSE, Lu};
 use crate::power::Driver;
 use crate::train::{LinkId, Train};
@@ -165,6 +168,37 @@ impl MassModel {
             }
         }
     }
+}
+
+impl MassModel {
+    /// [M] in exact rationals, from exact inertias and masses (the offsets
+    /// taken exactly as their f64 values): the reference of the accuracy study.
+    pub(crate) fn fill_exact(&self, inertia: &[Q], mass: &[Q]) -> QMatrix {
+        let n = self.n;
+        let mut m = vec![vec![Q::zero(); n]; n];
+        for e in &self.entries {
+            let copies = exact_of(e.copies);
+            if let Some((c, s)) = e.spin {
+                m[c][c] += &copies * &inertia[s];
+            }
+            if let Some((s, range)) = &e.float {
+                let w = &copies * &mass[*s];
+                let terms = &self.terms[range.clone()];
+                for &(a, da) in terms {
+                    for &(b, db) in terms {
+                        let (da, db) = (exact_of(da), exact_of(db));
+                        m[a][b] += &w * &da * &db;
+                    }
+                }
+            }
+        }
+        m
+    }
+}
+
+/// The exact rational value of a finite float (0 for a non-finite one).
+pub(crate) fn exact_of(v: f64) -> Q {
+    exact::from_f64(v).unwrap_or_else(Q::zero)
 }
 
 /// What a scenario computes.
@@ -434,6 +468,81 @@ impl PreparedTrain {
         for (r, &k) in self.driving.iter().enumerate() {
             out[(c + r) * self.n + k] = -1.0;
         }
+    }
+
+    /// Every entry of the speed system (`system` 0), [Psi_w] (1) or the force
+    /// matrix (2) as a sum of terms `f(row, column, coefficient)` whose
+    /// coefficients are the data themselves (1, -tau, tau, -1), so that a
+    /// residual built from them carries no rounding of tau - 1.
+    pub(crate) fn for_each_term(
+        &self,
+        ratios: &[f64],
+        system: usize,
+        mut f: impl FnMut(usize, usize, f64),
+    ) {
+        for (m, (cols, &t)) in self.circuits.iter().zip(ratios).enumerate() {
+            for (k, v) in cols.iter().zip([1.0, -t, t]) {
+                if let Some(k) = k {
+                    f(m, *k, v);
+                }
+            }
+            if let Some(k) = cols[2] {
+                f(m, k, -1.0);
+            }
+        }
+        let c0 = self.circuits.len();
+        for (e, row) in self.extras.iter().enumerate() {
+            for &(k, v) in row {
+                if let Some(k) = k {
+                    f(c0 + e, k, v);
+                }
+            }
+        }
+        let c = self.constraints();
+        let (links, v) = match system {
+            0 => (&self.inputs, 1.0),
+            1 => (&self.accelerated, 1.0),
+            _ => (&self.driving, -1.0),
+        };
+        for (r, &k) in links.iter().enumerate() {
+            f(c + r, k, v);
+        }
+    }
+
+    /// The speed system, [Psi_w] and the force matrix (not transposed) in
+    /// exact rationals, for exact ratios: the reference of the accuracy study.
+    pub(crate) fn exact_matrices(&self, ratios: &[Q]) -> [QMatrix; 3] {
+        let n = self.n;
+        let mut base = vec![vec![Q::zero(); n]; n];
+        for (m, (cols, t)) in self.circuits.iter().zip(ratios).enumerate() {
+            let one = exact::q(1);
+            for (k, v) in cols.iter().zip([one.clone(), -t.clone(), t - &one]) {
+                if let Some(k) = k {
+                    base[m][*k] += v;
+                }
+            }
+        }
+        let c0 = self.circuits.len();
+        for (e, row) in self.extras.iter().enumerate() {
+            for &(k, v) in row {
+                if let Some(k) = k {
+                    base[c0 + e][k] += exact_of(v);
+                }
+            }
+        }
+        let c = self.constraints();
+        let with = |links: &[usize], v: i64| {
+            let mut a = base.clone();
+            for (r, &k) in links.iter().enumerate() {
+                a[c + r][k] = exact::q(v);
+            }
+            a
+        };
+        [
+            with(&self.inputs, 1),
+            with(&self.accelerated, 1),
+            with(&self.driving, -1),
+        ]
     }
 
     /// The right-hand side of the speed (or acceleration) solve: zeros, then the prescribed values.

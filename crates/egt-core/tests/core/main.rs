@@ -3,6 +3,9 @@
 //! The binary installs a counting global allocator (see `alloc.rs`) so that the
 //! per-scenario hot paths can be shown to allocate nothing.
 
+// The accuracy study: every method against exact rationals, condition estimates, refusal.
+mod accuracy;
+
 // Counting allocator and the zero-allocation proofs for every prepared solve.
 mod alloc;
 
