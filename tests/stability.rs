@@ -888,3 +888,34 @@ fn cli_simulate_csv_plot_and_blow_up() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("t_end"));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The output pasted in `docs/stability.md` for the bundled example is what
+/// `egt stability` prints today (every pasted line, except elided ones).
+#[test]
+fn docs_stability_block_is_current() {
+    let doc = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../docs/stability.md"
+    ))
+    .unwrap();
+    let start = doc
+        .find("For the bundled example")
+        .expect("the pasted block");
+    let block = &doc[start..];
+    let block = &block[block.find("```text").unwrap() + 7..];
+    let block = &block[..block.find("```").unwrap()];
+    let out = egt(&["stability", "examples/fig5_stability.toml"]);
+    let printed = String::from_utf8(out.stdout).unwrap();
+    let mut checked = 0;
+    for line in block
+        .lines()
+        .filter(|l| !l.trim().is_empty() && !l.contains("..."))
+    {
+        assert!(
+            printed.lines().any(|p| p == line),
+            "docs line not printed any more:\n{line}\n---\n{printed}"
+        );
+        checked += 1;
+    }
+    assert!(checked >= 12, "{checked}");
+}

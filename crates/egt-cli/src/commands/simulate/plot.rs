@@ -16,7 +16,7 @@ const PLOT_H: f64 = 330.0;
 /// Space between panels (axis labels and the next panel's heading).
 const GAP: f64 = 90.0;
 /// At most this many points per line.
-const MAX_POINTS: usize = 1500;
+const MAX_POINTS: usize = 600;
 
 /// A colour-blind-friendly palette (Okabe-Ito and Tol), cycled.
 const PALETTE: [&str; 10] = [
