@@ -4,6 +4,8 @@
 //! the eigenvalues (decay exactly when stable, growth at the largest
 //! eigenvalue), the energy balance, and the edges where methods fail (a stiff
 //! train, a nearly locked [Gamma_w], massless directions).
+// A failed unwrap is a failed test that prints the error: what a test wants.
+#![allow(clippy::unwrap_used)]
 
 use egt_core::simulate::{DIVERGED_SPEED, ReducedDynamics};
 use egt_core::stability::RK4_REAL_LIMIT;

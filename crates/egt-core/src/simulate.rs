@@ -519,13 +519,17 @@ impl<'a> ReducedDynamics<'a> {
         self.train.inverse_dynamics(&req, Some(&mass))
     }
 
-    /// The linearisation at x: eigenvalues of (lambda M - J_sym) over the
-    /// inertial directions (massless ones eliminated), largest first.
-    fn eigenvalues_at(&mut self, t: f64, x: &DVector<f64>) -> Vec<f64> {
+    /// The linearisation at x: (lambda M - J_sym) X = 0 over the inertial
+    /// directions (massless ones eliminated), eigenvalues largest first.
+    fn linearisation_at(
+        &mut self,
+        t: f64,
+        x: &DVector<f64>,
+    ) -> Option<crate::stability::Stability> {
         let j = self.jr(t, x);
         let mut lin = self.model.clone();
         lin.basis_slope = (&j + j.transpose()) * 0.5;
-        lin.stability().map(|s| s.eigenvalues).unwrap_or_default()
+        lin.stability().ok()
     }
 
     /// Integrate from F initial link speeds `initial` (given for any F
@@ -589,7 +593,17 @@ impl<'a> ReducedDynamics<'a> {
                 ));
             }
         }
-        let eigenvalues = self.eigenvalues_at(0.0, &x);
+        let linear = self.linearisation_at(0.0, &x);
+        if let Some(m) = linear
+            .as_ref()
+            .and_then(|l| l.massless.iter().find(|m| m.slope > 0.0))
+        {
+            warnings.push(format!(
+                "a massless direction has a rising torque (slope {}): the torque balance followed here is unstable, and with any parasitic inertia the train would run away from it",
+                num(m.slope)
+            ));
+        }
+        let eigenvalues = linear.map(|l| l.eigenvalues).unwrap_or_default();
         let rk4_step_limit = eigenvalues
             .last()
             .filter(|&&l| l < 0.0)
@@ -730,8 +744,7 @@ impl<'a> ReducedDynamics<'a> {
     ) -> Result<(DVector<f64>, f64)> {
         match self.sdirk_once(t, x, h) {
             Ok(r) => Ok(r),
-            Err(e) if depth < MAX_HALVINGS => {
-                let _ = e;
+            Err(_) if depth < MAX_HALVINGS => {
                 *halvings += 1;
                 let (xm, w1) = self.sdirk(t, x, h / 2.0, depth + 1, halvings)?;
                 let (xn, w2) = self.sdirk(t + h / 2.0, &xm, h / 2.0, depth + 1, halvings)?;

@@ -536,6 +536,14 @@ impl Train {
             link_offset[c.link.index()] += c.torque - c.slope * c.speed;
             has_curve[c.link.index()] = true;
         }
+        if coordinates.len() != self.dof() {
+            return Err(AnalysisError::WrongInputCount {
+                dof: self.dof(),
+                given: coordinates.len(),
+                what: "driving links".into(),
+            }
+            .into());
+        }
         let (v, gamma_condition) = self.velocity_matrix_cond(coordinates, &[])?;
         if gamma_condition > COND_WARN {
             warnings.push(format!(
@@ -676,7 +684,7 @@ impl Train {
             .unwrap_or_else(|| self.analysis().curves.clone());
         if curves.is_empty() {
             return Err(AnalysisError::MissingData {
-                what: "torque-speed curves".into(),
+                what: "a torque-speed curve".into(),
                 analysis: "the stability analysis".into(),
                 hint: "give [[analysis.curves]] with link, torque, slope and speed".into(),
             }
