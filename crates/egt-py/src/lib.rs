@@ -8,8 +8,10 @@
 mod batch;
 mod convert;
 mod errors;
+mod motion;
 mod structure;
 mod train;
+mod transmission;
 
 use pyo3::prelude::*;
 
@@ -21,6 +23,10 @@ fn _egt(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(structure::structure, m)?)?;
     m.add_class::<batch::BatchPlanCore>()?;
     m.add_function(wrap_pyfunction!(batch::batch_plan, m)?)?;
+    m.add_function(wrap_pyfunction!(motion::stability, m)?)?;
+    m.add_function(wrap_pyfunction!(motion::simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(transmission::gear, m)?)?;
+    m.add_function(wrap_pyfunction!(transmission::shift_table, m)?)?;
     errors::register(m)?;
     Ok(())
 }

@@ -10,6 +10,8 @@ validated once into a :class:`Train`, and then analysed::
     train.dynamics().driving_torques            # eq. (10)
     train.batch_kinematics({"2": 100.0}, teeth=teeth_rows)   # screening, in parallel
     train.to_sympy().mass_matrix                # eq. (3)-(6) symbolically
+    egt.load("examples/fig5_example62.toml").stability().verdict
+    egt.load("examples/ford_c4_simpson.toml").shift_table()
 
 The native part lives in ``egt._egt`` (Rust, via pyo3); this package adds the
 Pythonic surface. Every error is an :class:`EgtError`.
@@ -48,7 +50,18 @@ from ._results import (
     PowerFlow,
     RelativeSpeed,
 )
-from ._train import Speed, Train, load, loads
+from ._motion import Curve, MasslessDirection, Mode, OperatingPoint, Simulation, StabilityReport
+from ._train import CurveLike, Speed, Train, load, loads
+from ._transmission import (
+    ElementLoad,
+    GearPowerFlow,
+    GearState,
+    Shift,
+    ShiftTable,
+    Slip,
+    Spread,
+    Step,
+)
 
 __all__ = [
     "__version__",
@@ -74,6 +87,21 @@ __all__ = [
     "BatchKinematics",
     "BatchDynamics",
     "RowError",
+    "Curve",
+    "CurveLike",
+    "OperatingPoint",
+    "Mode",
+    "MasslessDirection",
+    "StabilityReport",
+    "Simulation",
+    "GearState",
+    "ElementLoad",
+    "Slip",
+    "GearPowerFlow",
+    "Step",
+    "Spread",
+    "Shift",
+    "ShiftTable",
     # errors
     "EgtError",
     "SpecError",

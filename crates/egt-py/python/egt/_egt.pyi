@@ -1,7 +1,7 @@
 # Hand-written stub of the native module `egt._egt` (crates/egt-py/src).
 # Checked against the built module by `python -m mypy.stubtest egt`.
 
-from typing import Any, Dict, List, Optional, Tuple, final
+from typing import Any, Callable, Dict, List, Optional, Tuple, final
 
 import numpy as np
 import numpy.typing as npt
@@ -12,6 +12,10 @@ __all__ = [
     "structure",
     "BatchPlanCore",
     "batch_plan",
+    "stability",
+    "simulate",
+    "gear",
+    "shift_table",
     "EgtError",
     "SpecError",
     "SpecSyntaxError",
@@ -103,6 +107,27 @@ def batch_plan(
     driving: Optional[List[str]] = None,
     engaged: List[str] = ...,
 ) -> BatchPlanCore: ...
+
+_Curve = Tuple[str, float, float, float]
+
+def stability(
+    core: TrainCore,
+    coordinates: Optional[List[str]] = None,
+    curves: Optional[List[_Curve]] = None,
+    speeds: Optional[List[_Pair]] = None,
+) -> Dict[str, Any]: ...
+def simulate(
+    core: TrainCore,
+    t_end: Optional[float] = None,
+    dt: Optional[float] = None,
+    method: Optional[str] = None,
+    initial: Optional[List[_Pair]] = None,
+    curves: Optional[List[_Curve]] = None,
+    torque: Optional[Callable[[float, npt.NDArray[np.float64]], npt.NDArray[np.float64]]] = None,
+    every: int = 0,
+) -> Dict[str, Any]: ...
+def gear(core: TrainCore, state: str) -> Dict[str, Any]: ...
+def shift_table(core: TrainCore) -> Dict[str, Any]: ...
 
 class EgtError(Exception):
     kind: Optional[str]

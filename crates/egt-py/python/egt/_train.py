@@ -16,6 +16,7 @@ from numbers import Rational, Real
 from typing import (
     TYPE_CHECKING,
     Any,
+    Callable,
     Dict,
     List,
     Mapping,
@@ -31,6 +32,12 @@ from numpy.typing import ArrayLike
 from . import _batch
 from ._batch import BatchDynamics, BatchKinematics, BatchPlan
 from ._egt import TrainCore, batch_plan
+from ._egt import gear as _gear
+from ._egt import shift_table as _shift_table
+from ._egt import simulate as _simulate
+from ._egt import stability as _stability
+from ._motion import Curve, Simulation, StabilityReport
+from ._transmission import GearState, ShiftTable
 from ._results import (
     Circuit,
     Dynamics,
@@ -47,7 +54,7 @@ from ._results import (
 if TYPE_CHECKING:  # pragma: no cover
     from .sympy_export import SymbolicTrain
 
-__all__ = ["Train", "load", "loads", "Speed"]
+__all__ = ["Train", "load", "loads", "Speed", "CurveLike"]
 
 Speed = Union[float, int, Fraction, str]
 """An input speed: a number, a Fraction, or exact text such as ``"-162/77"``."""
@@ -81,6 +88,26 @@ def _pairs(values: Mapping[str, float], what: str) -> List[Tuple[str, float]]:
         if isinstance(v, bool) or not isinstance(v, Real):
             raise TypeError(f"{what}[{name!r}] must be a number, got {type(v).__name__}")
         out.append((str(name), float(v)))
+    return out
+
+
+CurveLike = Union[Curve, Tuple[str, float, float, float], Mapping[str, Any]]
+"""A torque-speed curve: an :class:`egt.Curve`, a tuple (link, torque, slope,
+speed), or a dict with those keys (slope and speed default to 0)."""
+
+
+def _curves(curves: Sequence[CurveLike]) -> List[Tuple[str, float, float, float]]:
+    out: List[Tuple[str, float, float, float]] = []
+    for c in curves:
+        if isinstance(c, Curve):
+            out.append((c.link, float(c.torque), float(c.slope), float(c.speed)))
+        elif isinstance(c, Mapping):
+            out.append(
+                (str(c["link"]), float(c["torque"]), float(c.get("slope", 0.0)), float(c.get("speed", 0.0)))
+            )
+        else:
+            link, torque, slope, speed = c
+            out.append((str(link), float(torque), float(slope), float(speed)))
     return out
 
 
@@ -485,6 +512,77 @@ class Train:
             values[f"mass.{n}"] = v
         res = plan.evaluate(values, ratios=ratios, teeth=teeth, threads=threads)
         return BatchDynamics._from_result(self._links, tuple(drv), res)
+
+    # -- stability, simulation (section 5, eq. 12-27) ----------------------
+
+    def stability(
+        self,
+        coordinates: Optional[Sequence[str]] = None,
+        *,
+        curves: Optional[Sequence[CurveLike]] = None,
+        speeds: Optional[Mapping[str, float]] = None,
+    ) -> StabilityReport:
+        """Stability about an operating point, for any number of DOF.
+
+        ``coordinates``: the F driving links (default: the spec's input links,
+        else chosen for conditioning); ``curves``: linearised torque-speed
+        curves (default: the spec's ``[[analysis.curves]]``); ``speeds``: the
+        operating point (default: the spec's speeds, else the equilibrium).
+        See :mod:`egt._motion` for the sign convention.
+        """
+        raw = _stability(
+            self._core,
+            None if coordinates is None else _names(coordinates, "coordinates"),
+            None if curves is None else _curves(curves),
+            None if speeds is None else _pairs(speeds, "speeds"),
+        )
+        return StabilityReport._from_raw(raw)
+
+    def simulate(
+        self,
+        t_end: Optional[float] = None,
+        *,
+        dt: Optional[float] = None,
+        method: Optional[str] = None,
+        initial: Optional[Mapping[str, float]] = None,
+        curves: Optional[Sequence[CurveLike]] = None,
+        torque: Optional[Callable[[float, np.ndarray], np.ndarray]] = None,
+        every: int = 0,
+    ) -> Simulation:
+        """Integrate the motion in time (eq. 12) from ``initial`` speeds.
+
+        ``method``: ``"rk4"`` (default) or ``"implicit"`` (L-stable SDIRK);
+        ``dt`` defaults to ``t_end / 1000``; omitted settings come from the
+        spec's ``[analysis.simulate]``. The applied torques are the ``curves``
+        (default: the spec's), or ``torque(t, speeds) -> torques``, a Python
+        function of time and the per-link speed array returning a float64
+        array of per-link torques. ``every``: store every n-th step (0: about
+        2000 samples).
+        """
+        if isinstance(every, bool) or int(every) < 0:
+            raise ValueError(f"every must be a non-negative integer, got {every!r}")
+        raw = _simulate(
+            self._core,
+            None if t_end is None else float(t_end),
+            None if dt is None else float(dt),
+            method,
+            None if initial is None else _pairs(initial, "initial"),
+            None if curves is None else _curves(curves),
+            torque,
+            int(every),
+        )
+        return Simulation._from_raw(self._links, raw)
+
+    # -- transmissions -----------------------------------------------------
+
+    def gear(self, state: str) -> GearState:
+        """One gear state of the transmission, per unit input speed and torque."""
+        return GearState._from_raw(_gear(self._core, str(state)))
+
+    def shift_table(self) -> ShiftTable:
+        """Every gear state (ratios, element torques, power flow) and the
+        table across them: steps, spread, shifts."""
+        return ShiftTable._from_raw(_shift_table(self._core))
 
     # -- computer algebra --------------------------------------------------
 

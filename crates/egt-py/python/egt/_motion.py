@@ -1,0 +1,259 @@
+"""Results of :meth:`egt.Train.stability` and :meth:`egt.Train.simulate`.
+
+Sign convention (eq. 13-15, as in the spec): a curve is an *applied* torque
+T = T0 + K (w - w0) on a link, positive along positive rotation, so K = dT/dw.
+The linearised motion is [M] dw' = [K] dw with [M] = V^T M V and
+[K] = V^T diag(K) V; a mode grows as e^(lambda t) with (lambda [M] - [K]) X = 0.
+A motor whose torque falls as it speeds up (K < 0) is stabilising. The paper's
+eq. (16)-(18) carry the opposite sign and its eq. (26) names the vector, not
+the matrix: see docs/errata.md and docs/stability.md.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Dict, Mapping, Optional, Tuple
+
+import numpy as np
+
+from ._results import _pandas
+
+if TYPE_CHECKING:  # pragma: no cover
+    import pandas
+
+__all__ = ["Curve", "OperatingPoint", "Mode", "MasslessDirection", "StabilityReport", "Simulation"]
+
+
+@dataclass(frozen=True)
+class Curve:
+    """A linearised torque-speed curve T = torque + slope (w - speed) on a link (eq. 13-15)."""
+
+    link: str
+    torque: float
+    slope: float = 0.0
+    """dT/dw of the applied torque [N m s]."""
+    speed: float = 0.0
+    """The speed at which the torque is ``torque`` [rad/s]."""
+
+
+@dataclass(frozen=True, eq=False)
+class OperatingPoint:
+    """The operating point and whether it is a steady state."""
+
+    source: str
+    """``"speeds"`` (given or the spec's) or ``"equilibrium"`` (of the curves)."""
+    speeds: np.ndarray
+    """Every link's speed (link order)."""
+    torques: np.ndarray
+    """The curves' applied torque on every link there."""
+    reduced_torque: np.ndarray
+    """V^T T: zero at a steady state."""
+    residual: float
+    steady: bool
+    equilibrium: Optional[np.ndarray]
+    equilibrium_condition: Optional[float]
+
+
+@dataclass(frozen=True, eq=False)
+class Mode:
+    """One eigenvalue of (lambda [M] - [K]) X = 0 and its mode."""
+
+    eigenvalue: float
+    """lambda [1/s]: deviations grow as e^(lambda t)."""
+    time_constant: Optional[float]
+    coordinates: np.ndarray
+    """X in the driving coordinates (largest link speed 1)."""
+    speeds: np.ndarray
+    """V X: every link's speed in the mode."""
+
+
+@dataclass(frozen=True, eq=False)
+class MasslessDirection:
+    """A direction of the driving coordinates without inertia (an algebraic torque balance)."""
+
+    coordinates: np.ndarray
+    speeds: np.ndarray
+    links: Tuple[str, ...]
+    slope: float
+
+
+@dataclass(frozen=True, eq=False)
+class StabilityReport:
+    """Stability of a train about an operating point (paper section 5, any DOF)."""
+
+    coordinates: Tuple[str, ...]
+    """The F driving links (columns of [V])."""
+    source: str
+    """How they were chosen: ``"given"``, ``"spec_speeds"`` or ``"automatic"``."""
+    velocity_matrix: np.ndarray
+    """[V] (eq. 23) by link: row i is link i (the frame's row is zero)."""
+    mass_matrix: np.ndarray
+    """V^T M V (eq. 25)."""
+    slope_matrix: np.ndarray
+    """V^T diag(K) V (eq. 26, corrected)."""
+    link_slopes: np.ndarray
+    gamma_condition: float
+    orthogonality: float
+    """|psi_w V| relative (eq. 24): zero in exact arithmetic."""
+    operating: OperatingPoint
+    eigenvalues: np.ndarray
+    """Largest first."""
+    modes: Tuple[Mode, ...]
+    verdict: str
+    """``"stable"``, ``"unstable"`` or ``"marginal"``."""
+    reason: str
+    margin: float
+    """The largest eigenvalue (positive: unstable)."""
+    tolerance: float
+    massless: Tuple[MasslessDirection, ...]
+    rk4_step_limit: Optional[float]
+    stiffness: Optional[float]
+    residual: float
+    warnings: Tuple[str, ...]
+
+    @property
+    def stable(self) -> bool:
+        return self.verdict == "stable"
+
+    @classmethod
+    def _from_raw(cls, d: Mapping[str, Any]) -> "StabilityReport":
+        o = d["operating"]
+        return cls(
+            coordinates=tuple(d["coordinates"]),
+            source=d["source"],
+            velocity_matrix=d["velocity"],
+            mass_matrix=d["mass"],
+            slope_matrix=d["slope"],
+            link_slopes=d["link_slope"],
+            gamma_condition=d["gamma_condition"],
+            orthogonality=d["orthogonality"],
+            operating=OperatingPoint(
+                source=o["source"],
+                speeds=o["speed"],
+                torques=o["torque"],
+                reduced_torque=o["reduced_torque"],
+                residual=o["residual"],
+                steady=o["steady"],
+                equilibrium=o["equilibrium"],
+                equilibrium_condition=o["equilibrium_condition"],
+            ),
+            eigenvalues=d["eigenvalues"],
+            modes=tuple(Mode(*m) for m in d["modes"]),
+            verdict=d["verdict"],
+            reason=d["reason"],
+            margin=d["margin"],
+            tolerance=d["tolerance"],
+            massless=tuple(MasslessDirection(c, s, tuple(ls), k) for c, s, ls, k in d["massless"]),
+            rk4_step_limit=d["rk4_step_limit"],
+            stiffness=d["stiffness"],
+            residual=d["residual"],
+            warnings=tuple(d["warnings"]),
+        )
+
+    def to_dict(self) -> Dict[str, Any]:
+        return {
+            "coordinates": list(self.coordinates),
+            "source": self.source,
+            "velocity_matrix": self.velocity_matrix.tolist(),
+            "mass_matrix": self.mass_matrix.tolist(),
+            "slope_matrix": self.slope_matrix.tolist(),
+            "eigenvalues": self.eigenvalues.tolist(),
+            "modes": [
+                {
+                    "eigenvalue": m.eigenvalue,
+                    "time_constant": m.time_constant,
+                    "coordinates": m.coordinates.tolist(),
+                    "speeds": m.speeds.tolist(),
+                }
+                for m in self.modes
+            ],
+            "verdict": self.verdict,
+            "reason": self.reason,
+            "margin": self.margin,
+            "operating": {
+                "source": self.operating.source,
+                "speeds": self.operating.speeds.tolist(),
+                "steady": self.operating.steady,
+                "residual": self.operating.residual,
+            },
+            "warnings": list(self.warnings),
+        }
+
+
+@dataclass(frozen=True, eq=False)
+class Simulation:
+    """A simulated time series (eq. 12 in reduced coordinates) and its checks."""
+
+    links: Tuple[str, ...]
+    method: str
+    dt: float
+    steps: int
+    t: np.ndarray
+    """(samples,) times [s], 0 first."""
+    speeds: np.ndarray
+    """(samples, links) speeds."""
+    drift: np.ndarray
+    """Willis drift max|psi| / max|w| per sample (eq. 2)."""
+    energy: np.ndarray
+    work: np.ndarray
+    power: np.ndarray
+    max_drift: float
+    energy_error: float
+    """max |E - E0 - W| relative: the integration error."""
+    diverged: Optional[Tuple[float, str]]
+    """(time, reason) when the solution blew up; the samples end there."""
+    rk4_step_limit: Optional[float]
+    eigenvalues: np.ndarray
+    newton_iterations: int
+    halvings: int
+    warnings: Tuple[str, ...]
+
+    @classmethod
+    def _from_raw(cls, links: Tuple[str, ...], d: Mapping[str, Any]) -> "Simulation":
+        return cls(
+            links=links,
+            method=d["method"],
+            dt=d["dt"],
+            steps=d["steps"],
+            t=d["t"],
+            speeds=d["speeds"],
+            drift=d["drift"],
+            energy=d["energy"],
+            work=d["work"],
+            power=d["power"],
+            max_drift=d["max_drift"],
+            energy_error=d["energy_error"],
+            diverged=d["diverged"],
+            rk4_step_limit=d["rk4_step_limit"],
+            eigenvalues=d["eigenvalues"],
+            newton_iterations=d["newton_iterations"],
+            halvings=d["halvings"],
+            warnings=tuple(d["warnings"]),
+        )
+
+    def speed(self, link: str) -> np.ndarray:
+        """One link's speed over time."""
+        return self.speeds[:, self.links.index(link)]
+
+    def to_dict(self) -> Dict[str, Any]:
+        return {
+            "links": list(self.links),
+            "method": self.method,
+            "dt": self.dt,
+            "steps": self.steps,
+            "t": self.t.tolist(),
+            "speeds": self.speeds.tolist(),
+            "energy": self.energy.tolist(),
+            "work": self.work.tolist(),
+            "max_drift": self.max_drift,
+            "energy_error": self.energy_error,
+            "diverged": None if self.diverged is None else list(self.diverged),
+            "warnings": list(self.warnings),
+        }
+
+    def to_pandas(self) -> "pandas.DataFrame":
+        pd = _pandas()
+        df = pd.DataFrame(self.speeds, columns=list(self.links), index=pd.Index(self.t, name="t"))
+        df["energy"] = self.energy
+        df["work"] = self.work
+        return df

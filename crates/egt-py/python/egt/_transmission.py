@@ -1,0 +1,233 @@
+"""Results of :meth:`egt.Train.gear` and :meth:`egt.Train.shift_table`: the
+gear states of an automatic transmission, per unit input speed and torque."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import TYPE_CHECKING, Any, Dict, Mapping, Optional, Tuple
+
+from ._results import _pandas
+
+if TYPE_CHECKING:  # pragma: no cover
+    import pandas
+
+__all__ = ["ElementLoad", "Slip", "GearPowerFlow", "GearState", "Step", "Spread", "Shift", "ShiftTable"]
+
+
+def _frac(x: Optional[str]) -> Optional[Fraction]:
+    return None if x is None else Fraction(x)
+
+
+@dataclass(frozen=True)
+class ElementLoad:
+    """An engaged element's torque per unit input torque (on its first link)."""
+
+    element: str
+    torque: float
+    holds: Optional[bool]
+    """One-way elements: whether the torque has the direction it can hold."""
+    parallel: bool
+
+
+@dataclass(frozen=True)
+class Slip:
+    """The slip across an open element per unit input speed."""
+
+    element: str
+    speed: float
+    exact: Optional[Fraction]
+    freewheel: Optional[str]
+    """One-way elements: ``"overruns"``, ``"idle"`` or ``"locks"``."""
+
+
+@dataclass(frozen=True)
+class GearPowerFlow:
+    """A state's power flow with the meshes' basic efficiencies."""
+
+    efficiency: float
+    output_torque: float
+    loss: float
+    circulation_ratio: float
+    circulating: Optional[Tuple[Tuple[str, ...], Tuple[str, ...]]]
+
+
+@dataclass(frozen=True)
+class GearState:
+    """One gear state: ratio, speeds, element torques, power flow."""
+
+    state: str
+    index: int
+    engaged: Tuple[str, ...]
+    ratio: float
+    """Input speed over output speed."""
+    ratio_exact: Optional[Fraction]
+    speeds: Dict[str, Optional[float]]
+    """Every link's speed per unit input speed (None: a planet without teeth)."""
+    speeds_exact: Optional[Dict[str, Optional[Fraction]]]
+    relative: Tuple[Tuple[str, str, float], ...]
+    slips: Tuple[Slip, ...]
+    output_torque: float
+    housing_torque: float
+    elements: Tuple[ElementLoad, ...]
+    meshes: Tuple[Tuple[str, float, Optional[Tuple[float, float]]], ...]
+    """(gear pair, multiplier, tangential forces) per mesh, ideal."""
+    power: Optional[GearPowerFlow]
+    power_balance: float
+    torque_balance: float
+    warnings: Tuple[str, ...]
+    notes: Tuple[str, ...]
+
+    @classmethod
+    def _from_raw(cls, d: Mapping[str, Any]) -> "GearState":
+        p = d["power"]
+        return cls(
+            state=d["state"],
+            index=d["index"],
+            engaged=tuple(d["engaged"]),
+            ratio=d["ratio"],
+            ratio_exact=_frac(d["ratio_exact"]),
+            speeds=dict(d["speeds"]),
+            speeds_exact=None
+            if d["speeds_exact"] is None
+            else {n: _frac(x) for n, x in d["speeds_exact"]},
+            relative=tuple(tuple(r) for r in d["relative"]),
+            slips=tuple(Slip(e, s, _frac(x), f) for e, s, x, f in d["slips"]),
+            output_torque=d["output_torque"],
+            housing_torque=d["housing_torque"],
+            elements=tuple(ElementLoad(*e) for e in d["elements"]),
+            meshes=tuple(tuple(m) for m in d["meshes"]),
+            power=None
+            if p is None
+            else GearPowerFlow(
+                efficiency=p["efficiency"],
+                output_torque=p["output_torque"],
+                loss=p["loss"],
+                circulation_ratio=p["circulation_ratio"],
+                circulating=None
+                if p["circulating"] is None
+                else (tuple(p["circulating"][0]), tuple(p["circulating"][1])),
+            ),
+            power_balance=d["power_balance"],
+            torque_balance=d["torque_balance"],
+            warnings=tuple(d["warnings"]),
+            notes=tuple(d["notes"]),
+        )
+
+    def to_dict(self) -> Dict[str, Any]:
+        return {
+            "state": self.state,
+            "engaged": list(self.engaged),
+            "ratio": self.ratio,
+            "ratio_exact": None if self.ratio_exact is None else str(self.ratio_exact),
+            "speeds": dict(self.speeds),
+            "output_torque": self.output_torque,
+            "housing_torque": self.housing_torque,
+            "elements": [dict(e.__dict__) for e in self.elements],
+            "efficiency": None if self.power is None else self.power.efficiency,
+            "warnings": list(self.warnings),
+        }
+
+
+@dataclass(frozen=True)
+class Step:
+    """The step between two forward gears adjacent in the list."""
+
+    lower: str
+    upper: str
+    value: float
+    exact: Optional[Fraction]
+
+
+@dataclass(frozen=True)
+class Spread:
+    """The overall spread: ratio(lowest) / ratio(highest) forward gear."""
+
+    lowest: str
+    highest: str
+    value: float
+    exact: Optional[Fraction]
+
+
+@dataclass(frozen=True)
+class Shift:
+    """A sequential or garage shift: the elements released, applied and kept."""
+
+    source: str
+    target: str
+    kind: str
+    off: Tuple[str, ...]
+    on: Tuple[str, ...]
+    kept: Tuple[str, ...]
+    single_swap: bool
+
+
+@dataclass(frozen=True)
+class ShiftTable:
+    """Every gear state of a transmission and the table across them."""
+
+    input: str
+    output: str
+    gears: Tuple[GearState, ...]
+    forward: Tuple[bool, ...]
+    steps: Tuple[Step, ...]
+    spread: Optional[Spread]
+    shifts: Tuple[Shift, ...]
+    warnings: Tuple[str, ...]
+
+    @classmethod
+    def _from_raw(cls, d: Mapping[str, Any]) -> "ShiftTable":
+        gears = tuple(GearState._from_raw(g) for g in d["gears"])
+
+        def name(i: int) -> str:
+            return gears[i].state
+
+        sp = d["spread"]
+        return cls(
+            input=d["input"],
+            output=d["output"],
+            gears=gears,
+            forward=tuple(d["forward"]),
+            steps=tuple(Step(name(a), name(b), v, _frac(x)) for a, b, v, x in d["steps"]),
+            spread=None if sp is None else Spread(name(sp[0]), name(sp[1]), sp[2], _frac(sp[3])),
+            shifts=tuple(
+                Shift(name(a), name(b), k, tuple(off), tuple(on), tuple(kept), single)
+                for a, b, k, off, on, kept, single in d["shifts"]
+            ),
+            warnings=tuple(d["warnings"]),
+        )
+
+    def __getitem__(self, state: str) -> GearState:
+        for g in self.gears:
+            if g.state == state:
+                return g
+        raise KeyError(state)
+
+    def to_dict(self) -> Dict[str, Any]:
+        return {
+            "input": self.input,
+            "output": self.output,
+            "gears": [g.to_dict() for g in self.gears],
+            "forward": list(self.forward),
+            "steps": [{"lower": s.lower, "upper": s.upper, "value": s.value} for s in self.steps],
+            "spread": None if self.spread is None else {"lowest": self.spread.lowest, "highest": self.spread.highest, "value": self.spread.value},
+            "shifts": [
+                {"from": s.source, "to": s.target, "kind": s.kind, "off": list(s.off), "on": list(s.on)}
+                for s in self.shifts
+            ],
+            "warnings": list(self.warnings),
+        }
+
+    def to_pandas(self) -> "pandas.DataFrame":
+        pd = _pandas()
+        return pd.DataFrame(
+            {
+                "engaged": [" ".join(g.engaged) for g in self.gears],
+                "ratio": [g.ratio for g in self.gears],
+                "ratio_exact": [g.ratio_exact for g in self.gears],
+                "forward": list(self.forward),
+                "output_torque": [g.output_torque for g in self.gears],
+                "efficiency": [None if g.power is None else g.power.efficiency for g in self.gears],
+            },
+            index=pd.Index([g.state for g in self.gears], name="state"),
+        )
