@@ -27,6 +27,27 @@
 //! directions with zero inertia are algebraic (their torques balance at every
 //! instant) and are eliminated by a Schur complement before scaling by
 //! mu^(-1/2).
+//!
+//! ```
+//! use egt_core::{Format, StabilityRequest, Train, Verdict};
+//!
+//! // A motor (inertia 0.5) geared 2:1 to a flywheel (0.3); its torque falls
+//! // as it speeds up (slope -0.8 N m s): lambda = K / I_reflected < 0.
+//! let spec = r#"
+//!     frame = "0"
+//!     links = [{ name = "m", inertia = 0.5 }, { name = "o", inertia = 0.3 }]
+//!     revolutes = [{ links = ["0", "m"], level = "a" }, { links = ["0", "o"], level = "b" }]
+//!     gears = [{ links = ["m", "o"], ratio = -2.0 }]
+//!     [analysis]
+//!     speeds = { m = 100 }
+//!     curves = [{ link = "m", torque = 1.0, slope = -0.8, speed = 100.0 }]
+//! "#;
+//! let train = Train::from_str(spec, Format::Toml, "example").unwrap();
+//! let report = train.stability(&StabilityRequest::default()).unwrap();
+//! let lambda = report.stability.eigenvalues[0];
+//! assert!((lambda - (-0.8 / (0.5 + 0.3 / 4.0))).abs() < 1e-12);
+//! assert_eq!(report.stability.verdict, Verdict::Stable);
+//! ```
 
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use serde::{Serialize, Serializer};
