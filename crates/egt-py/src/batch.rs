@@ -38,9 +38,11 @@ fn compute_of(s: &str) -> Result<Compute> {
 }
 
 /// Prepare a batch. `inputs`, `accelerated`, `driving` default to the spec's
-/// `[analysis]` choices (accelerated and driving: the inputs).
+/// `[analysis]` choices (accelerated and driving: the inputs); with
+/// `gear_state`, to the transmission's input in that state, whose engaged
+/// elements are added to `engaged`.
 #[pyfunction]
-#[pyo3(signature = (core, compute, inputs = None, accelerated = None, driving = None, engaged = Vec::new()))]
+#[pyo3(signature = (core, compute, inputs = None, accelerated = None, driving = None, engaged = Vec::new(), gear_state = None))]
 pub fn batch_plan(
     core: &TrainCore,
     compute: &str,
@@ -48,16 +50,18 @@ pub fn batch_plan(
     accelerated: Option<Vec<String>>,
     driving: Option<Vec<String>>,
     engaged: Vec<String>,
+    gear_state: Option<String>,
 ) -> Result<BatchPlanCore> {
     let compute = compute_of(compute)?;
     guard(|| {
         let t = &core.train;
-        let mut spec = match &inputs {
-            Some(_) => BatchSpec {
+        let mut spec = match (&gear_state, &inputs) {
+            (Some(state), _) => BatchSpec::for_gear_state(t, state, compute)?,
+            (None, Some(_)) => BatchSpec {
                 compute,
                 ..BatchSpec::default()
             },
-            None => BatchSpec::from_analysis(t, compute)?,
+            (None, None) => BatchSpec::from_analysis(t, compute)?,
         };
         if let Some(names) = &inputs {
             spec.inputs = convert::links(t, names, "inputs")?;
@@ -70,11 +74,8 @@ pub fn batch_plan(
         if let Some(names) = &driving {
             spec.driving = convert::links(t, names, "driving")?;
         }
-        spec.extras = engaged
-            .iter()
-            .cloned()
-            .zip(convert::engaged(t, &engaged)?)
-            .collect();
+        spec.extras
+            .extend(engaged.iter().cloned().zip(convert::engaged(t, &engaged)?));
         Ok(BatchPlanCore {
             plan: BatchPlan::new(t, &spec)?,
         })

@@ -106,6 +106,7 @@ def batch_plan(
     accelerated: Optional[List[str]] = None,
     driving: Optional[List[str]] = None,
     engaged: List[str] = ...,
+    gear_state: Optional[str] = None,
 ) -> BatchPlanCore: ...
 
 _Curve = Tuple[str, float, float, float]

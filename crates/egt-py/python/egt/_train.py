@@ -403,13 +403,16 @@ class Train:
         accelerated: Optional[Sequence[str]] = None,
         driving: Optional[Sequence[str]] = None,
         engaged: Sequence[str] = (),
+        gear_state: Optional[str] = None,
     ) -> BatchPlan:
         """Prepare the train for many scenarios (``compute``: ``"kinematics"``,
         ``"dynamics"`` or ``"power"``).
 
         ``inputs``: links with prescribed speed (default: the spec's
         ``[analysis] speeds``); ``accelerated`` and ``driving`` default to the
-        spec's choices, else the inputs. See :class:`egt.BatchPlan`.
+        spec's choices, else the inputs. ``gear_state``: a state of the
+        transmission (its input speed prescribed, the output's torque solved,
+        its engaged elements adding ``lambda.<element>`` reaction columns). See :class:`egt.BatchPlan`.
         """
         core = batch_plan(
             self._core,
@@ -418,6 +421,7 @@ class Train:
             None if accelerated is None else _names(accelerated, "accelerated"),
             None if driving is None else _names(driving, "driving"),
             _names(engaged, "engaged"),
+            None if gear_state is None else str(gear_state),
         )
         signs: List[Optional[float]] = []
         for g in self._core.gears():
