@@ -76,6 +76,8 @@ pub const STEADY_REL: f64 = 1e-9;
 /// The classical RK4 is stable on the negative real axis for |lambda| dt up to
 /// this value (the real root of 1 + z + z^2/2 + z^3/6 + z^4/24 = 1 besides 0).
 pub const RK4_REAL_LIMIT: f64 = 2.785_293_563_405_282;
+/// Entries of [K] beyond this would overflow once scaled by the inertias.
+const OVERFLOW_GUARD: f64 = 1e150;
 /// Smallest relative residual of a row of the null-space basis for a link to
 /// be picked as an independent driving coordinate.
 const SELECT_REL: f64 = 1e-6;
@@ -861,6 +863,17 @@ impl ReducedModel {
     /// torque slope (its speed is undetermined).
     pub fn stability(&self) -> Result<Stability> {
         let f = self.dof();
+        if self
+            .basis_slope
+            .iter()
+            .any(|v| !v.is_finite() || v.abs() > OVERFLOW_GUARD)
+        {
+            return Err(AnalysisError::Other(
+                "the reduced slope matrix overflows: the torque slopes are too large to represent"
+                    .into(),
+            )
+            .into());
+        }
         let split = InertiaSplit::new(&self.basis_mass)?;
         let r = split.r;
         let kq = sym(&(split.q.transpose() * &self.basis_slope * &split.q));
@@ -911,6 +924,13 @@ impl ReducedModel {
         let ks = sym(&(&k11 - &k10 * &k00_inv * k10.transpose()));
         let d = DVector::from_iterator(r, split.mu.iter().map(|m| 1.0 / m.sqrt()));
         let a = sym(&DMatrix::from_fn(r, r, |i, j| d[i] * ks[(i, j)] * d[j]));
+        if a.iter().any(|v| !v.is_finite()) {
+            return Err(AnalysisError::Other(
+                "the scaled eigenproblem overflows: the torque slopes are too large for the inertias to represent"
+                    .into(),
+            )
+            .into());
+        }
         let (lambda, evec) = sorted_eigen(a.clone());
         let q1 = split.q1();
         let mut modes = Vec::with_capacity(r);
