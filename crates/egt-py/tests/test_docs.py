@@ -1,0 +1,27 @@
+"""Every ```python block of docs/python.md runs (from the repository root),
+in order, in one namespace."""
+
+from __future__ import annotations
+
+import os
+import pathlib
+import re
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[3]
+DOC = ROOT / "docs" / "python.md"
+
+
+def test_python_blocks_of_the_guide_run(capsys: pytest.CaptureFixture[str]) -> None:
+    pytest.importorskip("sympy")
+    blocks = re.findall(r"```python\n(.*?)```", DOC.read_text(), flags=re.S)
+    assert len(blocks) >= 5
+    cwd = os.getcwd()
+    os.chdir(ROOT)
+    try:
+        ns: dict = {}
+        for block in blocks:
+            exec(compile(block, str(DOC), "exec"), ns)
+    finally:
+        os.chdir(cwd)
