@@ -38,6 +38,8 @@ pub enum Command {
     Stability(commands::stability::Args),
     /// Forward dynamics in time under the torque-speed curves (RK4 or implicit); CSV/JSON, SVG plot.
     Simulate(commands::simulate::Args),
+    /// Many scenarios in parallel (parameter arrays, grids, rows, gear states, or a file of specs) as JSON Lines or CSV.
+    Batch(commands::batch::Args),
     /// Print the JSON Schema of the spec format.
     Schema(commands::schema::Args),
 }

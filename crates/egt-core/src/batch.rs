@@ -4,7 +4,7 @@
 //! A [`BatchPlan`] names its parameter columns (`ratio.<gear>`, `speed.<link>`,
 //! `accel.<link>`, `torque.<link>`, `inertia.<link>`, `mass.<link>`,
 //! `efficiency.<gear>`) and its output columns (`speed.<link>`, `accel.<link>`,
-//! `lambda.<gear or element>`, `torque.<driving link>`, `force.<gear>`,
+//! `lambda.<gear or element>`, `driving_torque.<link>`, `force.<gear>`,
 //! `power.*`, `cond.speeds`, `cond.accelerations`, `cond.forces`), and gives a base row holding the spec's own values.
 //! A caller copies the base row, overrides the columns it varies, and calls
 //! [`BatchPlan::run`] (all rows, in parallel with rayon) or a [`Worker`]
@@ -199,7 +199,11 @@ impl BatchPlan {
             }
             groups.torque = groups.accel + spec.accelerated.len();
             for &l in train.coordinates() {
-                let v: f64 = a.torques.iter().filter(|s| s.0 == l).map(|s| s.1).sum();
+                let v = a
+                    .torques
+                    .iter()
+                    .filter(|s| s.0 == l)
+                    .fold(0.0, |acc, s| acc + s.1);
                 push(format!("torque.{}", name(l)), v);
             }
             groups.inertia = groups.torque + train.coordinates().len();
@@ -238,7 +242,11 @@ impl BatchPlan {
             outputs.extend(known.iter().map(|&k| format!("accel.{}", coord_name(k))));
             outputs.extend(train.gears().iter().map(|g| format!("lambda.{}", g.name)));
             outputs.extend(spec.extras.iter().map(|e| format!("lambda.{}", e.0)));
-            outputs.extend(spec.driving.iter().map(|&l| format!("torque.{}", name(l))));
+            outputs.extend(
+                spec.driving
+                    .iter()
+                    .map(|&l| format!("driving_torque.{}", name(l))),
+            );
             for (m, g) in train.gears().iter().enumerate() {
                 if let Some(r) = prepared.radii()[m] {
                     forces.push((m, r));

@@ -5,6 +5,7 @@ use std::io::Write;
 
 use crate::cli::Command;
 
+pub mod batch;
 pub mod check;
 pub mod circuits;
 pub mod dynamics;
@@ -31,6 +32,7 @@ pub fn run(command: &Command, out: &mut dyn Write) -> anyhow::Result<()> {
         Command::Graph(args) => graph::run(args, out),
         Command::Stability(args) => stability::run(args, out),
         Command::Simulate(args) => simulate::run(args, out),
+        Command::Batch(args) => batch::run(args, out),
         Command::Schema(args) => schema::run(args, out),
     }
 }

@@ -13,8 +13,8 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
-use egt_core::prepared::{Compute, MassModel};
 use egt_core::KinematicsPlan;
+use egt_core::prepared::{Compute, MassModel};
 
 use crate::util::{self, one_dof_trains, plan};
 

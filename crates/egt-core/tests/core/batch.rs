@@ -76,7 +76,7 @@ fn check_against_single(name: &str, t: &Train, p: &BatchPlan, row: &[f64]) {
     }
     for &(l, td) in &d.driving_torques {
         tol(
-            out[col(format!("torque.{}", link(l)))],
+            out[col(format!("driving_torque.{}", link(l)))],
             td,
             "driving torque",
         );

@@ -1,0 +1,977 @@
+//! `egt batch`: many scenarios at full speed, in parallel (rayon), streamed
+//! as JSON Lines or CSV. Scenarios come from one spec whose parameters vary
+//! (`--vary` arrays, zipped; `--grid` axes, crossed; `--rows` a JSON Lines
+//! file of parameter objects; `--state` gear states of a transmission), or
+//! from a JSON Lines file of whole specs (`--specs`, one train per line, each
+//! with its `[analysis]`). A bad row (a parameter out of range, a singular or
+//! ill-conditioned system, an unreadable line) is reported in its own output
+//! row and on stderr; the rest go on, and the exit code is 1 when any failed.
+//! A progress bar shows on stderr when it is a terminal.
+
+use std::fmt::Write as _;
+use std::io::Write;
+use std::path::PathBuf;
+
+use anyhow::Context;
+use egt_core::batch::{BatchPlan, BatchSpec};
+use egt_core::linalg::COND_WARN;
+use egt_core::prepared::Compute;
+use egt_core::{Error, Format, SpecErrorKind, Train};
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+
+use crate::cli::{OutputFormat, SpecArgs, SpecFormat};
+use crate::input;
+
+/// Scenarios solved and written per block (bounds memory; output streams per block).
+const BLOCK: usize = 1 << 16;
+/// Rows formatted per parallel task.
+const FORMAT_TASK: usize = 1024;
+
+/// What each scenario computes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ComputeArg {
+    /// Speeds (eq. 2).
+    Kinematics,
+    /// Speeds, accelerations, multipliers, driving torques, meshing forces (eq. 2, 8, 10, 11).
+    Dynamics,
+    /// Dynamics with mesh losses and the power balance.
+    Power,
+}
+
+/// Output format of `egt batch`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum BatchOutput {
+    /// One JSON object per line.
+    Jsonl,
+    /// Comma-separated values with a header.
+    Csv,
+}
+
+/// Arguments of `egt batch`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct Args {
+    /// The spec (TOML or JSON, `-` for stdin) whose scenarios vary. Omit with `--specs`.
+    #[arg(value_name = "SPEC", required_unless_present = "specs")]
+    pub spec: Option<PathBuf>,
+    /// Spec format; by default from the extension, or sniffed on stdin.
+    #[arg(long, value_enum, value_name = "FORMAT")]
+    pub spec_format: Option<SpecFormat>,
+    /// A JSON Lines file of whole specs (`-` for stdin): one scenario per line, from its `[analysis]`.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["spec", "vary", "grid", "rows", "state"])]
+    pub specs: Option<PathBuf>,
+    /// What each scenario computes.
+    #[arg(long, value_enum, default_value_t = ComputeArg::Dynamics)]
+    pub compute: ComputeArg,
+    /// Fix a parameter: `NAME=VALUE` (see `--list`). Repeatable.
+    #[arg(long, value_name = "NAME=VALUE", value_parser = parse_set)]
+    pub set: Vec<(String, f64)>,
+    /// Vary a parameter over an array: `NAME=V1,V2,...` or `NAME=START:STOP:COUNT`.
+    /// Several `--vary` arrays are zipped (equal lengths).
+    #[arg(long, value_name = "NAME=VALUES", value_parser = parse_values)]
+    pub vary: Vec<(String, Vec<f64>)>,
+    /// A grid axis, as `--vary`; the scenarios are the cartesian product of the
+    /// axes (and of the zipped `--vary` block).
+    #[arg(long, value_name = "NAME=VALUES", value_parser = parse_values)]
+    pub grid: Vec<(String, Vec<f64>)>,
+    /// A JSON Lines file of parameter objects (`{"NAME": VALUE, ...}`), one scenario per line.
+    #[arg(long, value_name = "FILE")]
+    pub rows: Option<PathBuf>,
+    /// A gear state of the spec's transmission (repeatable), or `all` for the shift table.
+    #[arg(long, value_name = "STATE")]
+    pub state: Vec<String>,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = BatchOutput::Jsonl)]
+    pub output: BatchOutput,
+    /// Worker threads (default: all cores).
+    #[arg(short = 'j', long, value_name = "N")]
+    pub threads: Option<usize>,
+    /// Write only these output columns (comma-separated names; see `--list`). Default: all.
+    #[arg(long, value_name = "NAMES", value_delimiter = ',')]
+    pub columns: Vec<String>,
+    /// Print the parameters (with the spec's values) and the output columns, then exit.
+    #[arg(long)]
+    pub list: bool,
+}
+
+fn parse_set(s: &str) -> Result<(String, f64), String> {
+    let (name, v) = split(s)?;
+    let v: f64 = v.parse().map_err(|_| format!("`{v}` is not a number"))?;
+    Ok((name, v))
+}
+
+fn split(s: &str) -> Result<(String, &str), String> {
+    let (n, v) = s
+        .split_once('=')
+        .ok_or_else(|| format!("expected NAME=VALUE, got `{s}`"))?;
+    if n.trim().is_empty() {
+        return Err(format!("no parameter name in `{s}`"));
+    }
+    Ok((n.trim().to_string(), v.trim()))
+}
+
+fn parse_values(s: &str) -> Result<(String, Vec<f64>), String> {
+    let (name, v) = split(s)?;
+    let num = |x: &str| -> Result<f64, String> {
+        x.trim()
+            .parse::<f64>()
+            .map_err(|_| format!("`{}` is not a number", x.trim()))
+    };
+    let values = if v.contains(':') {
+        let parts: Vec<&str> = v.split(':').collect();
+        let [a, b, n] = parts[..] else {
+            return Err(format!("expected START:STOP:COUNT, got `{v}`"));
+        };
+        let (a, b) = (num(a)?, num(b)?);
+        let n: usize = n
+            .trim()
+            .parse()
+            .ok()
+            .filter(|&n| n >= 1)
+            .ok_or_else(|| format!("COUNT must be a positive integer, got `{n}`"))?;
+        (0..n)
+            .map(|i| {
+                if n == 1 {
+                    a
+                } else {
+                    a + (b - a) * i as f64 / (n - 1) as f64
+                }
+            })
+            .collect()
+    } else {
+        v.split(',').map(num).collect::<Result<Vec<_>, _>>()?
+    };
+    if values.is_empty() {
+        return Err(format!("no values for `{name}`"));
+    }
+    Ok((name, values))
+}
+
+/// Run `egt batch`.
+///
+/// # Errors
+/// Reading the spec or files; unknown parameter names or states (exit 2);
+/// I/O; and, after every row is written, a summary error when rows failed (exit 1).
+pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
+    if let Some(n) = args.threads {
+        // The global pool is built once per process; a second build only fails.
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build_global();
+    }
+    let compute = match args.compute {
+        ComputeArg::Kinematics => Compute::Kinematics,
+        ComputeArg::Dynamics => Compute::Dynamics,
+        ComputeArg::Power => Compute::Power,
+    };
+    let (total, failed, first) = match &args.specs {
+        Some(path) => run_specs(args, path, compute, out)?,
+        None => run_one_spec(args, compute, out)?,
+    };
+    if failed > 0 {
+        anyhow::bail!(
+            "{failed} of {total} scenarios failed (each is reported in its output row); first: {}",
+            first.unwrap_or_default()
+        );
+    }
+    Ok(())
+}
+
+fn progress(total: usize) -> ProgressBar {
+    // Drawn on stderr only when it is a terminal (indicatif hides it otherwise).
+    let bar = ProgressBar::new(total as u64);
+    if let Ok(style) =
+        ProgressStyle::with_template("{bar:40} {pos}/{len} scenarios, {per_sec}, eta {eta}")
+    {
+        bar.set_style(style);
+    }
+    bar
+}
+
+/// Where each scenario's overrides come from.
+struct Design {
+    /// Parameter columns (in the plans' layout) that vary, in output order.
+    varied: Vec<(String, usize)>,
+    /// Per scenario: overrides (column, value), or why the row is unreadable.
+    rows: Rows,
+}
+
+enum Rows {
+    /// Zipped arrays times grid axes: row i by mixed radix.
+    Product {
+        zipped: Vec<(usize, Vec<f64>)>,
+        axes: Vec<(usize, Vec<f64>)>,
+        count: usize,
+    },
+    /// Parsed lines of a `--rows` file.
+    Listed(Vec<Result<Vec<(usize, f64)>, String>>),
+}
+
+impl Rows {
+    fn count(&self) -> usize {
+        match self {
+            Rows::Product { count, .. } => *count,
+            Rows::Listed(v) => v.len(),
+        }
+    }
+
+    /// Apply row `i`'s overrides to `row`; Err for an unreadable line.
+    fn apply(&self, i: usize, row: &mut [f64]) -> Result<(), String> {
+        match self {
+            Rows::Product { zipped, axes, .. } => {
+                let zl = zipped.first().map_or(1, |z| z.1.len());
+                let mut r = i;
+                for (c, vals) in axes.iter().rev() {
+                    row[*c] = vals[r % vals.len()];
+                    r /= vals.len();
+                }
+                for (c, vals) in zipped {
+                    row[*c] = vals[r % zl];
+                }
+                Ok(())
+            }
+            Rows::Listed(v) => match &v[i] {
+                Ok(set) => {
+                    for &(c, x) in set {
+                        row[c] = x;
+                    }
+                    Ok(())
+                }
+                Err(e) => Err(e.clone()),
+            },
+        }
+    }
+}
+
+fn unknown(plan: &BatchPlan, name: &str, flag: &str) -> Error {
+    let hint = egt_core::error::suggest(name, plan.parameters().iter().map(String::as_str))
+        .map(|s| format!(" (did you mean `{s}`?)"))
+        .unwrap_or_default();
+    Error::spec(
+        flag,
+        SpecErrorKind::Invalid {
+            message: format!(
+                "unknown parameter `{name}`{hint}; `egt batch SPEC --list` lists them"
+            ),
+        },
+    )
+}
+
+fn design(args: &Args, plan: &BatchPlan) -> anyhow::Result<Design> {
+    let col = |name: &str, flag: &str| {
+        plan.parameter(name)
+            .ok_or_else(|| unknown(plan, name, flag))
+    };
+    let mut varied: Vec<(String, usize)> = Vec::new();
+    let mut note = |name: &str, c: usize| {
+        if !varied.iter().any(|v| v.1 == c) {
+            varied.push((name.to_string(), c));
+        }
+    };
+    if let Some(path) = &args.rows {
+        let text = read(path)?;
+        let mut rows = Vec::new();
+        for (k, line) in text
+            .lines()
+            .enumerate()
+            .filter(|(_, l)| !l.trim().is_empty())
+        {
+            let parsed = serde_json::from_str::<serde_json::Map<String, serde_json::Value>>(line)
+                .map_err(|e| format!("{}:{}: {e}", path.display(), k + 1))
+                .and_then(|obj| {
+                    obj.iter()
+                        .map(|(name, v)| {
+                            let c = plan.parameter(name).ok_or_else(|| {
+                                format!(
+                                    "{}:{}: {}",
+                                    path.display(),
+                                    k + 1,
+                                    unknown(plan, name, "--rows")
+                                )
+                            })?;
+                            let x = v.as_f64().ok_or_else(|| {
+                                format!("{}:{}: `{name}` is not a number", path.display(), k + 1)
+                            })?;
+                            Ok((c, x))
+                        })
+                        .collect::<Result<Vec<_>, String>>()
+                });
+            if let Ok(set) = &parsed {
+                for &(c, _) in set {
+                    note(&plan.parameters()[c], c);
+                }
+            }
+            rows.push(parsed);
+        }
+        return Ok(Design {
+            varied,
+            rows: Rows::Listed(rows),
+        });
+    }
+    let mut zipped = Vec::new();
+    for (name, vals) in &args.vary {
+        let c = col(name, "--vary")?;
+        if let Some((_, first)) = zipped.first().map(|z: &(usize, Vec<f64>)| (z.0, z.1.len())) {
+            anyhow::ensure!(
+                first == vals.len(),
+                "--vary arrays are zipped and must have equal lengths: `{name}` has {}, the first has {first}",
+                vals.len()
+            );
+        }
+        note(name, c);
+        zipped.push((c, vals.clone()));
+    }
+    let mut axes = Vec::new();
+    let mut count = zipped.first().map_or(1, |z| z.1.len());
+    for (name, vals) in &args.grid {
+        let c = col(name, "--grid")?;
+        note(name, c);
+        count = count.saturating_mul(vals.len());
+        axes.push((c, vals.clone()));
+    }
+    Ok(Design {
+        varied,
+        rows: Rows::Product {
+            zipped,
+            axes,
+            count,
+        },
+    })
+}
+
+fn read(path: &PathBuf) -> anyhow::Result<String> {
+    if path.as_os_str() == "-" {
+        let mut s = String::new();
+        std::io::Read::read_to_string(&mut std::io::stdin(), &mut s)
+            .context("reading standard input")?;
+        return Ok(s);
+    }
+    std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))
+}
+
+/// A JSON string literal.
+fn quoted(s: &str) -> String {
+    serde_json::to_string(s).unwrap_or_else(|_| "\"?\"".into())
+}
+
+/// A CSV field (quoted when needed).
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+/// A number as JSON (null when not finite) or CSV (empty when not finite).
+fn number(buf: &mut String, v: f64, json: bool) {
+    if v.is_finite() {
+        let _ = write!(buf, "{v:?}");
+    } else if json {
+        buf.push_str("null");
+    }
+}
+
+/// One plan's share of the output: which of the CSV columns it fills.
+struct Columns {
+    /// For each output column of the plan, its CSV position.
+    positions: Vec<usize>,
+}
+
+type Outcome = (usize, usize, Option<String>);
+
+fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::Result<Outcome> {
+    let spec = SpecArgs {
+        spec: args.spec.clone().unwrap_or_else(|| PathBuf::from("-")),
+        spec_format: args.spec_format,
+        format: OutputFormat::Json,
+    };
+    let loaded = input::load(&spec)?;
+    let train = &loaded.train;
+    let states: Vec<String> = if args.state.iter().any(|s| s == "all") {
+        train
+            .checked_transmission()?
+            .states
+            .iter()
+            .map(|s| s.name.clone())
+            .collect()
+    } else {
+        args.state.clone()
+    };
+    let plans: Vec<(Option<String>, BatchPlan)> = if states.is_empty() {
+        let spec = BatchSpec::from_analysis(train, compute)
+            .with_context(|| format!("{}: the batch's input links", loaded.source))?;
+        vec![(None, BatchPlan::new(train, &spec)?)]
+    } else {
+        states
+            .iter()
+            .map(|s| {
+                let spec = BatchSpec::for_gear_state(train, s, compute)?;
+                Ok((Some(s.clone()), BatchPlan::new(train, &spec)?))
+            })
+            .collect::<anyhow::Result<_>>()?
+    };
+    let first = &plans[0].1;
+    if args.list {
+        writeln!(out, "parameters (with the spec's values):")?;
+        for (p, v) in first.parameters().iter().zip(first.base()) {
+            writeln!(out, "  {p} = {v}")?;
+        }
+        for (state, plan) in &plans {
+            match state {
+                Some(s) => writeln!(out, "outputs (gear state {s}):")?,
+                None => writeln!(out, "outputs:")?,
+            }
+            writeln!(out, "  {}", plan.outputs().join(", "))?;
+        }
+        return Ok((0, 0, None));
+    }
+    let mut design = design(args, first)?;
+    // The output columns written, per plan.
+    let selected: Vec<Vec<usize>> = plans
+        .iter()
+        .map(|(_, p)| select(&args.columns, p))
+        .collect();
+    for name in &args.columns {
+        if !plans.iter().any(|(_, p)| p.output(name).is_some()) {
+            return Err(Error::spec(
+                "--columns",
+                SpecErrorKind::Invalid {
+                    message: format!(
+                        "unknown output column `{name}`; `egt batch SPEC --list` lists them"
+                    ),
+                },
+            )
+            .into());
+        }
+    }
+    let mut base = first.base().to_vec();
+    for (name, v) in &args.set {
+        let c = first
+            .parameter(name)
+            .ok_or_else(|| unknown(first, name, "--set"))?;
+        base[c] = *v;
+    }
+    // The CSV header: row, state, varied parameters, the union of outputs, error.
+    let json = args.output == BatchOutput::Jsonl;
+    let mut header: Vec<String> = Vec::new();
+    let mut columns = Vec::new();
+    for ((_, plan), sel) in plans.iter().zip(&selected) {
+        let positions = sel
+            .iter()
+            .map(|&i| &plan.outputs()[i])
+            .map(|o| match header.iter().position(|h| h == o) {
+                Some(k) => k,
+                None => {
+                    header.push(o.clone());
+                    header.len() - 1
+                }
+            })
+            .collect();
+        columns.push(Columns { positions });
+    }
+    // A varied speed or acceleration is also an output column (the same value): write it once.
+    design.varied.retain(|(name, _)| !header.contains(name));
+    if !json {
+        let mut h = String::from("row");
+        if plans[0].0.is_some() {
+            h.push_str(",state");
+        }
+        for (name, _) in &design.varied {
+            let _ = write!(h, ",{}", csv_field(name));
+        }
+        for o in &header {
+            let _ = write!(h, ",{}", csv_field(o));
+        }
+        h.push_str(",warning,error\n");
+        out.write_all(h.as_bytes())?;
+    }
+    let per_plan = design.rows.count();
+    let total = per_plan * plans.len();
+    let bar = progress(total);
+    let (mut failed, mut first_error) = (0, None);
+    let keys: Vec<String> = design.varied.iter().map(|v| quoted(&v.0)).collect();
+    for (k, (((state, plan), cols), sel)) in plans.iter().zip(&columns).zip(&selected).enumerate() {
+        let okeys: Vec<String> = plan.outputs().iter().map(|o| quoted(o)).collect();
+        let (np, nq) = (plan.parameters().len(), plan.outputs().len());
+        let mut start = 0;
+        while start < per_plan {
+            let len = BLOCK.min(per_plan - start);
+            let mut params = Vec::with_capacity(len * np);
+            let mut unreadable: Vec<(usize, String)> = Vec::new();
+            for i in start..start + len {
+                let mut row = base.clone();
+                if let Err(e) = design.rows.apply(i, &mut row) {
+                    row.iter_mut().for_each(|v| *v = f64::NAN);
+                    unreadable.push((i - start, e));
+                }
+                params.extend(row);
+            }
+            let mut results = vec![0.0; len * nq];
+            let errors = plan.run(&params, &mut results);
+            let mut messages: Vec<Option<String>> = vec![None; len];
+            for e in errors {
+                messages[e.row] = Some(e.error.to_string());
+            }
+            for (r, e) in unreadable {
+                messages[r] = Some(e);
+            }
+            let base_row = k * per_plan + start;
+            let text: Vec<String> = results
+                .par_chunks(nq * FORMAT_TASK)
+                .zip(params.par_chunks(np * FORMAT_TASK))
+                .zip(messages.par_chunks(FORMAT_TASK))
+                .enumerate()
+                .map(|(t, ((res, par), msgs))| {
+                    let mut buf = String::with_capacity(res.len() * 24);
+                    for (r, ((o, p), m)) in res.chunks(nq).zip(par.chunks(np)).zip(msgs).enumerate()
+                    {
+                        let row = base_row + t * FORMAT_TASK + r;
+                        let fmt = Row {
+                            row,
+                            state: state.as_deref(),
+                            varied: &design.varied,
+                            keys: &keys,
+                            params: p,
+                        };
+                        if json {
+                            fmt.json(&mut buf, &okeys, sel, plan, o, m.as_deref());
+                        } else {
+                            fmt.csv(
+                                &mut buf,
+                                header.len(),
+                                (&cols.positions, sel),
+                                plan,
+                                o,
+                                m.as_deref(),
+                            );
+                        }
+                    }
+                    buf
+                })
+                .collect();
+            for t in &text {
+                out.write_all(t.as_bytes())?;
+            }
+            for (r, m) in messages.iter().enumerate() {
+                if let Some(m) = m {
+                    failed += 1;
+                    if first_error.is_none() {
+                        first_error = Some(format!("row {}: {m}", base_row + r));
+                    }
+                }
+            }
+            bar.inc(len as u64);
+            start += len;
+        }
+    }
+    bar.finish_and_clear();
+    Ok((total, failed, first_error))
+}
+
+/// The output columns to write: those named (that the plan has), or all.
+fn select(names: &[String], plan: &BatchPlan) -> Vec<usize> {
+    if names.is_empty() {
+        (0..plan.outputs().len()).collect()
+    } else {
+        names.iter().filter_map(|n| plan.output(n)).collect()
+    }
+}
+
+/// One output row's identity and inputs.
+struct Row<'a> {
+    row: usize,
+    state: Option<&'a str>,
+    varied: &'a [(String, usize)],
+    keys: &'a [String],
+    params: &'a [f64],
+}
+
+/// The warning of a row whose condition estimate exceeds COND_WARN.
+fn warning(plan: &BatchPlan, o: &[f64]) -> Option<String> {
+    let worst = plan
+        .outputs()
+        .iter()
+        .zip(o)
+        .filter(|(n, _)| n.starts_with("cond."))
+        .map(|(_, v)| *v)
+        .fold(0.0, f64::max);
+    (worst > COND_WARN).then(|| {
+        format!(
+            "ill-conditioned (condition {worst:.2e}): expect about {:.0} correct digits",
+            (16.0 - worst.log10()).max(0.0)
+        )
+    })
+}
+
+impl Row<'_> {
+    fn json(
+        &self,
+        buf: &mut String,
+        okeys: &[String],
+        sel: &[usize],
+        plan: &BatchPlan,
+        o: &[f64],
+        error: Option<&str>,
+    ) {
+        let _ = write!(buf, "{{\"row\":{}", self.row);
+        if let Some(s) = self.state {
+            let _ = write!(buf, ",\"state\":{}", quoted(s));
+        }
+        for (k, (_, c)) in self.keys.iter().zip(self.varied) {
+            let _ = write!(buf, ",{k}:");
+            number(buf, self.params[*c], true);
+        }
+        match error {
+            Some(e) => {
+                let _ = write!(buf, ",\"error\":{}", quoted(e));
+            }
+            None => {
+                for &i in sel {
+                    let _ = write!(buf, ",{}:", okeys[i]);
+                    number(buf, o[i], true);
+                }
+                if let Some(w) = warning(plan, o) {
+                    let _ = write!(buf, ",\"warning\":{}", quoted(&w));
+                }
+            }
+        }
+        buf.push_str("}\n");
+    }
+
+    fn csv(
+        &self,
+        buf: &mut String,
+        width: usize,
+        cols: (&[usize], &[usize]),
+        plan: &BatchPlan,
+        o: &[f64],
+        error: Option<&str>,
+    ) {
+        let (positions, sel) = cols;
+        let _ = write!(buf, "{}", self.row);
+        if let Some(s) = self.state {
+            let _ = write!(buf, ",{}", csv_field(s));
+        }
+        for (_, c) in self.varied {
+            buf.push(',');
+            number(buf, self.params[*c], false);
+        }
+        let mut cells = vec![f64::NAN; width];
+        if error.is_none() {
+            for (&p, &i) in positions.iter().zip(sel) {
+                cells[p] = o[i];
+            }
+        }
+        for v in cells {
+            buf.push(',');
+            number(buf, v, false);
+        }
+        let w = if error.is_none() {
+            warning(plan, o)
+        } else {
+            None
+        };
+        let _ = write!(
+            buf,
+            ",{},{}\n",
+            csv_field(w.as_deref().unwrap_or("")),
+            csv_field(error.unwrap_or(""))
+        );
+    }
+}
+
+/// `--specs`: one whole spec per line, each its own train and plan.
+fn run_specs(
+    args: &Args,
+    path: &PathBuf,
+    compute: Compute,
+    out: &mut dyn Write,
+) -> anyhow::Result<Outcome> {
+    let text = read(path)?;
+    let lines: Vec<(usize, &str)> = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .collect();
+    let json = args.output == BatchOutput::Jsonl;
+    if !json {
+        out.write_all(b"row,name,quantity,value\n")?;
+    }
+    let bar = progress(lines.len());
+    let source = path.display().to_string();
+    let (mut failed, mut first_error) = (0, None);
+    for (b, block) in lines.chunks(BLOCK).enumerate() {
+        let rows: Vec<(String, Option<String>)> = block
+            .par_iter()
+            .enumerate()
+            .map(|(r, &(line_no, line))| {
+                let row = b * BLOCK + r;
+                let name = format!("{source}:{}", line_no + 1);
+                match one_spec(line, &name, compute, args) {
+                    Ok((title, plan, o)) => {
+                        let mut buf = String::new();
+                        if json {
+                            let _ = write!(buf, "{{\"row\":{row},\"name\":{}", quoted(&title));
+                            for &i in &select(&args.columns, &plan) {
+                                let _ = write!(buf, ",{}:", quoted(&plan.outputs()[i]));
+                                number(&mut buf, o[i], true);
+                            }
+                            if let Some(w) = warning(&plan, &o) {
+                                let _ = write!(buf, ",\"warning\":{}", quoted(&w));
+                            }
+                            buf.push_str("}\n");
+                        } else {
+                            for &i in &select(&args.columns, &plan) {
+                                let _ = write!(
+                                    buf,
+                                    "{row},{},{},",
+                                    csv_field(&title),
+                                    csv_field(&plan.outputs()[i])
+                                );
+                                number(&mut buf, o[i], false);
+                                buf.push('\n');
+                            }
+                        }
+                        (buf, None)
+                    }
+                    Err(e) => {
+                        let msg = format!("{e:#}");
+                        let buf = if json {
+                            format!(
+                                "{{\"row\":{row},\"name\":{},\"error\":{}}}\n",
+                                quoted(&name),
+                                quoted(&msg)
+                            )
+                        } else {
+                            format!("{row},{},error,{}\n", csv_field(&name), csv_field(&msg))
+                        };
+                        (buf, Some(format!("row {row} ({name}): {msg}")))
+                    }
+                }
+            })
+            .collect();
+        for (buf, err) in rows {
+            out.write_all(buf.as_bytes())?;
+            if let Some(e) = err {
+                failed += 1;
+                first_error.get_or_insert(e);
+            }
+        }
+        bar.inc(block.len() as u64);
+    }
+    bar.finish_and_clear();
+    Ok((lines.len(), failed, first_error))
+}
+
+/// Parse, validate, prepare and solve one spec line.
+fn one_spec(
+    line: &str,
+    name: &str,
+    compute: Compute,
+    args: &Args,
+) -> anyhow::Result<(String, BatchPlan, Vec<f64>)> {
+    let train = Train::from_str(line, Format::Json, name)?;
+    let plan = BatchPlan::new(&train, &BatchSpec::from_analysis(&train, compute)?)?;
+    let mut row = plan.base().to_vec();
+    for (p, v) in &args.set {
+        if let Some(c) = plan.parameter(p) {
+            row[c] = *v;
+        }
+    }
+    let mut o = vec![0.0; plan.outputs().len()];
+    plan.worker().eval(&row, &mut o)?;
+    let title = train
+        .name()
+        .map_or_else(|| name.to_string(), str::to_string);
+    Ok((title, plan, o))
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+
+    use crate::cli::{Cli, Command};
+
+    const FIG3: &str = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/fig3_example61.toml"
+    );
+
+    /// Run `egt batch ARGS...`; the text written and the outcome.
+    fn batch(args: &[&str]) -> (String, anyhow::Result<()>) {
+        let cli = Cli::try_parse_from(["egt", "batch"].iter().chain(args))
+            .unwrap_or_else(|e| panic!("{e}"));
+        let Command::Batch(a) = cli.command else {
+            panic!("not a batch command")
+        };
+        let mut out = Vec::new();
+        let r = super::run(&a, &mut out);
+        (String::from_utf8(out).unwrap_or_default(), r)
+    }
+
+    fn json_lines(text: &str) -> Vec<serde_json::Value> {
+        text.lines()
+            .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
+            .collect()
+    }
+
+    fn temp(name: &str, text: &str) -> String {
+        let dir = std::env::temp_dir().join(format!("egt-batch-test-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap_or_else(|e| panic!("{e}"));
+        p.display().to_string()
+    }
+
+    #[test]
+    fn bad_rows_are_reported_in_place_and_the_rest_go_on() {
+        let rows = temp(
+            "rows.jsonl",
+            "{\"torque.4\": -10}\nnot json\n{\"torque.9\": 1}\n{\"ratio.G1\": 0}\n{\"inertia.2\": -1}\n{\"torque.4\": -20, \"accel.4\": 0}\n",
+        );
+        let (text, r) = batch(&[FIG3, "--rows", &rows]);
+        let lines = json_lines(&text);
+        assert_eq!(lines.len(), 6, "{text}");
+        for (k, l) in lines.iter().enumerate() {
+            assert_eq!(l["row"], k);
+        }
+        let failed: Vec<usize> = (0..6)
+            .filter(|&k| lines[k].get("error").is_some())
+            .collect();
+        assert_eq!(failed, vec![1, 2, 3, 4]);
+        assert!(
+            lines[2]["error"]
+                .as_str()
+                .unwrap_or("")
+                .contains("torque.9")
+        );
+        assert!(
+            lines[3]["error"]
+                .as_str()
+                .unwrap_or("")
+                .contains("ratio.G1")
+        );
+        // The good rows carry results that differ as their loads do.
+        let t0 = lines[0]["driving_torque.2"].as_f64().unwrap_or(f64::NAN);
+        let t5 = lines[5]["driving_torque.2"].as_f64().unwrap_or(f64::NAN);
+        assert!(t0.is_finite() && t5.is_finite() && t0 != t5);
+        let e = r.expect_err("failed rows make the run fail");
+        assert!(e.to_string().starts_with("4 of 6 scenarios failed"), "{e}");
+    }
+
+    #[test]
+    fn vary_zips_grid_crosses_and_set_fixes() {
+        let (text, r) = batch(&[
+            FIG3,
+            "--vary",
+            "ratio.G1=-0.7,-0.6",
+            "--vary",
+            "accel.4=1,2",
+            "--grid",
+            "torque.4=-10:-30:3",
+            "--set",
+            "speed.2=50",
+            "--output",
+            "csv",
+        ]);
+        r.unwrap_or_else(|e| panic!("{e}"));
+        let mut lines = text.lines();
+        let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
+        let col = |n: &str| {
+            header
+                .iter()
+                .position(|h| *h == n)
+                .unwrap_or_else(|| panic!("{n}"))
+        };
+        let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+        assert_eq!(rows.len(), 6);
+        let got: Vec<(&str, &str, &str, &str)> = rows
+            .iter()
+            .map(|r| {
+                (
+                    r[col("ratio.G1")],
+                    r[col("accel.4")],
+                    r[col("torque.4")],
+                    r[col("speed.2")],
+                )
+            })
+            .collect();
+        assert_eq!(
+            got,
+            vec![
+                ("-0.7", "1.0", "-10.0", "50.0"),
+                ("-0.7", "1.0", "-20.0", "50.0"),
+                ("-0.7", "1.0", "-30.0", "50.0"),
+                ("-0.6", "2.0", "-10.0", "50.0"),
+                ("-0.6", "2.0", "-20.0", "50.0"),
+                ("-0.6", "2.0", "-30.0", "50.0"),
+            ]
+        );
+        let (_, r) = batch(&[
+            FIG3,
+            "--vary",
+            "ratio.G1=-0.7,-0.6",
+            "--vary",
+            "accel.4=1,2,3",
+        ]);
+        assert!(r.is_err(), "zipped arrays of unequal length");
+        let (_, r) = batch(&[FIG3, "--grid", "ratio.G9=1,2"]);
+        let e = r.expect_err("unknown parameter");
+        assert!(format!("{e:#}").contains("ratio.G9"));
+    }
+
+    #[test]
+    fn specs_file_one_train_per_line_with_a_broken_line() {
+        let good = egt_core::parse_spec(
+            &egt_core::families::planetary_chain(2),
+            egt_core::Format::Toml,
+            "x",
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let json = serde_json::to_string(&good).unwrap_or_default();
+        let specs = temp(
+            "specs.jsonl",
+            &format!("{json}\n{{\"frame\": 3}}\n{json}\n"),
+        );
+        let (text, r) = batch(&["--specs", &specs, "--columns", "driving_torque.s1"]);
+        let lines = json_lines(&text);
+        assert_eq!(lines.len(), 3);
+        assert!(lines[1].get("error").is_some());
+        assert_eq!(lines[0]["driving_torque.s1"], lines[2]["driving_torque.s1"]);
+        assert!(lines[0]["driving_torque.s1"].as_f64().is_some());
+        assert!(r.is_err());
+    }
+
+    #[test]
+    fn shift_table_states_share_a_csv_header() {
+        let spec = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/zf_8hp70.toml");
+        let (text, r) = batch(&[
+            spec,
+            "--state",
+            "all",
+            "--set",
+            "speed.input=100",
+            "--set",
+            "torque.input=200",
+            "--compute",
+            "power",
+            "--output",
+            "csv",
+            "--columns",
+            "speed.output,power.efficiency",
+        ]);
+        r.unwrap_or_else(|e| panic!("{e}"));
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(
+            lines[0],
+            "row,state,speed.output,power.efficiency,warning,error"
+        );
+        assert_eq!(lines.len(), 10, "nine gear states");
+        for l in &lines[1..] {
+            let f: Vec<&str> = l.split(',').collect();
+            let eta: f64 = f[3].parse().unwrap_or(f64::NAN);
+            assert!(eta > 0.9 && eta <= 1.0, "{l}");
+        }
+    }
+}
