@@ -276,19 +276,23 @@ pub fn core_to_py(py: Python<'_>, e: &egt_core::Error) -> PyErr {
 fn map(py: Python<'_>, e: &egt_core::Error, msg: String) -> PyErr {
     let k = kind(e);
     match e {
-        egt_core::Error::Syntax(s) => build::<SpecSyntaxError>(
-            py,
-            msg,
-            k,
-            &s.path.iter().cloned().collect::<Vec<_>>(),
-            &[
-                ("source", obj(py, s.source_name.as_str())),
-                ("line", obj(py, s.line)),
-                ("column", obj(py, s.column)),
-                ("path", obj(py, s.path.as_deref())),
-                ("message", obj(py, s.message.as_str())),
-            ],
-        ),
+        egt_core::Error::Syntax(s) => {
+            // serde_path_to_error writes `?` where it knows no field path.
+            let path = s.path.as_deref().filter(|p| *p != "?");
+            build::<SpecSyntaxError>(
+                py,
+                msg,
+                k,
+                &path.iter().map(|p| (*p).to_string()).collect::<Vec<_>>(),
+                &[
+                    ("source", obj(py, s.source_name.as_str())),
+                    ("line", obj(py, s.line)),
+                    ("column", obj(py, s.column)),
+                    ("path", obj(py, path)),
+                    ("message", obj(py, s.message.as_str())),
+                ],
+            )
+        }
         egt_core::Error::Spec { path, kind: sk } => {
             let (names, value, suggestion): (Vec<String>, Option<f64>, Option<String>) = match sk {
                 SpecErrorKind::UnknownLink { name, suggestion } => {

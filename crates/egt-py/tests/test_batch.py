@@ -170,12 +170,13 @@ def test_unknown_links_in_batches_are_spec_errors(fig3: egt.Train) -> None:
 def test_plan_columns_and_base(fig3: egt.Train) -> None:
     plan = fig3.batch("dynamics")
     assert plan.parameters[:2] == ("ratio.G1", "ratio.G2")
-    assert "torque.2" in plan.outputs and "force.G1" in plan.outputs
+    assert "force.G1" in plan.outputs
     base = plan.base
     assert base[plan.column("speed.2")] == 100.0
     res = plan.run(base)
     assert len(res) == 1 and res.ok.all()
-    assert res["torque.2"][0] == pytest.approx(fig3.dynamics().driving_torques["2"], rel=1e-13)
+    assert res.driving == ("2",)
+    assert res.driving_torque("2")[0] == pytest.approx(fig3.dynamics().driving_torques["2"], rel=1e-13)
     with pytest.raises(KeyError):
         res["nope"]
     p, bad = plan.params({"accel.4": [0.0, 1.0, 2.0]})

@@ -53,6 +53,9 @@ def test_json_syntax_error_has_line() -> None:
     with pytest.raises(egt.SpecSyntaxError) as info:
         egt.loads('{\n "frame": "f",\n "links": [ }\n', format="json")
     assert info.value.line == 3
+    with pytest.raises(egt.SpecSyntaxError) as info2:
+        egt.loads('{"frame": "f", ', format="json")
+    assert info2.value.path is None and info2.value.names == ()
 
 
 def test_file_name_is_the_source(tmp_path) -> None:  # type: ignore[no-untyped-def]

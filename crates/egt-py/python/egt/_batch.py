@@ -181,6 +181,20 @@ class BatchResult:
         except ValueError:
             raise KeyError(f"no output column {name!r} (outputs: {', '.join(self.outputs)})") from None
 
+    def driving_torque(self, link: str) -> np.ndarray:
+        """The solved torque on a driving link over all rows (column
+        ``driving_torque.<link>``; ``torque.<link>`` in older egt-core)."""
+        for name in (f"driving_torque.{link}", f"torque.{link}"):
+            if name in self.outputs:
+                return self[name]
+        raise KeyError(f"{link!r} is not a driving link of this batch")
+
+    @property
+    def driving(self) -> Tuple[str, ...]:
+        """The driving links (whose torques the rows solve)."""
+        new = [c.split(".", 1)[1] for c in self.outputs if c.startswith("driving_torque.")]
+        return tuple(new or [c.split(".", 1)[1] for c in self.outputs if c.startswith("torque.")])
+
     def to_dict(self) -> Dict[str, Any]:
         return {
             "outputs": list(self.outputs),
@@ -410,7 +424,7 @@ class BatchDynamics:
         return cls(
             links=links,
             driving=driving,
-            driving_torques=np.stack([res[f"torque.{d}"] for d in driving], axis=1)
+            driving_torques=np.stack([res.driving_torque(d) for d in driving], axis=1)
             if driving
             else np.zeros((len(res), 0)),
             accelerations=_known_columns(res, "accel", links),
