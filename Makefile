@@ -49,6 +49,14 @@ lint: ## Clippy and format check
 	cargo fmt --all -- --check
 	cargo clippy --workspace --all-targets -- -D warnings
 
+bench: ## Benchmarks by phase and train size, 3 to 30 links (divan, short settings; see docs/benchmarks.md)
+	cargo bench -p egt-core --bench scenarios -- --sample-count 20 --min-time 0.05
+
+chart: venv ## Re-measure Rust, SymPy and NumPy side by side; redraw docs/img/speed_accuracy.svg and the docs' tables
+	cargo run --release --quiet -p egt-core --example speed_accuracy -- target/speed_accuracy
+	$(VPY) bench/routes.py target/speed_accuracy
+	$(VPY) bench/chart.py target/speed_accuracy docs/img/speed_accuracy.svg docs/benchmarks.md docs/accuracy.md
+
 clean: ## Remove build outputs and the virtualenv
 	cargo clean
 	rm -rf $(VENV)

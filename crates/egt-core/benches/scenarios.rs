@@ -1,8 +1,8 @@
 //! Timings by phase and by train size (divan): parsing; validation with the
 //! topology checks; the topology checks and circuit table alone; preparing a
 //! batch plan; and one scenario on a prepared train (kinematics, inverse
-//! dynamics with meshing forces, power flow with mesh losses); plus batch
-//! throughput on all cores. Sizes run from 3 to 30 links over two generated
+//! dynamics with meshing forces, power flow with mesh losses; the stability
+//! eigenvalues of Fig. 5's two-motor train); plus batch throughput on all cores. Sizes run from 3 to 30 links over two generated
 //! families (planetary chains, nests) and the bundled examples.
 //!
 //! `make bench` runs this with short settings; docs/benchmarks.md has the numbers.
@@ -131,6 +131,31 @@ mod examples {
     #[divan::bench(args = EXAMPLES)]
     fn power_lossy(b: Bencher, name: &str) {
         scenario(b, &build(&example(name)), Compute::Power);
+    }
+
+    /// Stability of the Fig. 5 two-motor train (eq. 19-27): the eigenvalues of
+    /// a prepared reduced model (V, V^T M V, V^T K V built once), and the
+    /// whole analysis from the train (model, operating point, eigenvalues).
+    #[divan::bench]
+    fn stability_eigenvalues(b: Bencher) {
+        let t = build(&example("fig5_stability.toml"));
+        let (coords, _) = t
+            .driving_coordinates(None)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let model = t
+            .reduced_model(&coords, &t.analysis().curves)
+            .unwrap_or_else(|e| panic!("{e}"));
+        b.bench_local(|| model.stability().map(|s| s.eigenvalues.len()));
+    }
+
+    #[divan::bench]
+    fn stability_whole(b: Bencher) {
+        let t = build(&example("fig5_stability.toml"));
+        let req = egt_core::StabilityRequest::default();
+        b.bench_local(|| {
+            t.stability(black_box(&req))
+                .map(|r| r.stability.eigenvalues.len())
+        });
     }
 
     /// Every gear state of the ZF 8HP70 shift table, one scenario each (static:

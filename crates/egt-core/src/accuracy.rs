@@ -456,6 +456,29 @@ impl Problem {
         })
     }
 
+    /// The problem for tools outside Rust: the prepared structure (see
+    /// [`PreparedTrain::structure`]), the parameter values by group, and the
+    /// exact solution rounded to f64.
+    ///
+    /// # Errors
+    /// As [`Problem::exact`].
+    pub fn to_json(&self) -> Result<serde_json::Value> {
+        let s = self.scenario();
+        let exact = self.exact()?;
+        Ok(serde_json::json!({
+            "structure": self.pt().structure(),
+            "constraints": self.pt().constraints(),
+            "values": {
+                "ratios": s.ratios, "speeds": s.speeds, "accelerations": s.accelerations,
+                "torques": s.torques, "inertia": s.inertia, "mass": s.mass,
+            },
+            "exact": {
+                "speeds": exact.speeds, "accelerations": exact.accelerations,
+                "multipliers": exact.multipliers, "torques": exact.torques,
+            },
+        }))
+    }
+
     /// The true 1-norm condition numbers ||A||_1 ||A^-1||_1 of the speed
     /// system, [Psi_w] (eq. 8) and the force system (eq. 10), from exact
     /// inverses (infinite when singular).

@@ -470,6 +470,39 @@ impl PreparedTrain {
         }
     }
 
+    /// The prepared structure as JSON, for tools outside Rust (the benchmark's
+    /// SymPy and NumPy routes build the same equations from it): coordinates
+    /// `n`; per circuit the columns of gear i, gear j and the carrier (null
+    /// for the frame); extra rows as (column, coefficient) pairs; the input,
+    /// accelerated and driving columns; the mass model (per link: its copies,
+    /// its inertia slot and column, its mass slot and eq. 4 terms (column, offset)).
+    pub fn structure(&self) -> serde_json::Value {
+        let entries: Vec<serde_json::Value> = self
+            .mass
+            .entries
+            .iter()
+            .map(|e| {
+                serde_json::json!({
+                    "copies": e.copies,
+                    "spin": e.spin.map(|(c, s)| serde_json::json!({"column": c, "slot": s})),
+                    "float": e.float.as_ref().map(|(s, r)| serde_json::json!({
+                        "slot": s,
+                        "terms": self.mass.terms[r.clone()].iter().map(|&(c, d)| serde_json::json!([c, d])).collect::<Vec<_>>(),
+                    })),
+                })
+            })
+            .collect();
+        serde_json::json!({
+            "n": self.n,
+            "circuits": self.circuits,
+            "extras": self.extras,
+            "inputs": self.inputs,
+            "accelerated": self.accelerated,
+            "driving": self.driving,
+            "mass": entries,
+        })
+    }
+
     /// Every entry of the speed system (`system` 0), [Psi_w] (1) or the force
     /// matrix (2) as a sum of terms `f(row, column, coefficient)` whose
     /// coefficients are the data themselves (1, -tau, tau, -1), so that a

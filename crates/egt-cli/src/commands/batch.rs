@@ -498,15 +498,19 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
         while start < per_plan {
             let len = BLOCK.min(per_plan - start);
             let mut params = Vec::with_capacity(len * np);
-            let mut unreadable: Vec<(usize, String)> = Vec::new();
-            for i in start..start + len {
-                let mut row = base.clone();
-                if let Err(e) = design.rows.apply(i, &mut row) {
-                    row.iter_mut().for_each(|v| *v = f64::NAN);
-                    unreadable.push((i - start, e));
-                }
-                params.extend(row);
+            for _ in 0..len {
+                params.extend_from_slice(&base);
             }
+            let unreadable: Vec<(usize, String)> = params
+                .par_chunks_mut(np)
+                .enumerate()
+                .filter_map(|(r, row)| {
+                    design.rows.apply(start + r, row).err().map(|e| {
+                        row.iter_mut().for_each(|v| *v = f64::NAN);
+                        (r, e)
+                    })
+                })
+                .collect();
             let mut results = vec![0.0; len * nq];
             let errors = plan.run(&params, &mut results);
             let mut messages: Vec<Option<String>> = vec![None; len];
@@ -672,9 +676,9 @@ impl Row<'_> {
         } else {
             None
         };
-        let _ = write!(
+        let _ = writeln!(
             buf,
-            ",{},{}\n",
+            ",{},{}",
             csv_field(w.as_deref().unwrap_or("")),
             csv_field(error.unwrap_or(""))
         );

@@ -1,0 +1,212 @@
+"""Draw the speed-accuracy chart and refresh the generated sections of the docs.
+
+Reads OUT_DIR/rust.json (the `speed_accuracy` example) and OUT_DIR/python.json
+(bench/routes.py), writes the SVG chart (time per scenario against relative
+error, one point per method and train size, and the flop floor), and replaces
+the text between the `<!-- speed-accuracy:begin/end -->` markers of
+docs/benchmarks.md and between `<!-- sweeps:begin/end -->` of docs/accuracy.md.
+No plotting library: the SVG is written directly, so the figure depends only
+on the measurements. Run by `make chart`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import sys
+from typing import Any
+
+WIDTH, HEIGHT = 960, 600
+LEFT, RIGHT, TOP, BOTTOM = 80, 250, 50, 70
+EXACT_LEVEL = 1e-18  # where an error of exactly 0 is drawn
+
+SERIES = [
+    # (key, label, colour, marker)
+    ("egt LU", "egt (prepared, in-place LU)", "#d62728", "circle"),
+    ("egt LU + refinement", "egt LU + 1 refinement step", "#ff7f0e", "circle"),
+    ("nalgebra LU", "nalgebra LU", "#1f77b4", "square"),
+    ("faer LU", "faer LU", "#17becf", "square"),
+    ("nalgebra QR", "nalgebra QR", "#9467bd", "diamond"),
+    ("nalgebra SVD", "nalgebra SVD", "#8c564b", "diamond"),
+    ("exact rationals", "exact rationals (Rust)", "#7f7f7f", "triangle"),
+    ("numpy", "NumPy, one scenario at a time", "#2ca02c", "square"),
+    ("numpy-batch", "NumPy, 10 000 scenarios stacked", "#98df8a", "square"),
+    ("sympy", "SymPy: derive, lambdify, evaluate", "#e377c2", "triangle"),
+    ("sympy-subs", "SymPy: derive, subs/evalf", "#bcbd22", "triangle"),
+    ("floor", "flop floor (this machine's rate)", "#000000", "ring"),
+]
+
+
+def points(rust: dict[str, Any], python: dict[str, Any]) -> dict[str, list[tuple[int, float, float]]]:
+    out: dict[str, list[tuple[int, float, float]]] = {k: [] for k, *_ in SERIES}
+    for size in rust["sizes"]:
+        for m in size["methods"]:
+            out[m["method"]].append((size["links"], m["seconds"], m["error"]))
+        out["floor"].append((size["links"], size["floor_seconds"], 2.0**-53))
+    for row in python["rows"]:
+        out[row["route"]].append((row["links"], row["seconds"], row["error"]))
+    return out
+
+
+def svg(data: dict[str, list[tuple[int, float, float]]]) -> str:
+    xs = [t for pts in data.values() for _, t, _ in pts]
+    x0 = math.floor(math.log10(min(xs)))
+    x1 = math.ceil(math.log10(max(xs)))
+    y0, y1 = math.log10(EXACT_LEVEL), -11
+    pw, ph = WIDTH - LEFT - RIGHT, HEIGHT - TOP - BOTTOM
+
+    def px(t: float) -> float:
+        return LEFT + (math.log10(t) - x0) / (x1 - x0) * pw
+
+    def py(e: float) -> float:
+        e = max(e, EXACT_LEVEL)
+        v = min(max(math.log10(e), y0), y1)
+        return TOP + (y1 - v) / (y1 - y0) * ph
+
+    s = [
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="{WIDTH}" height="{HEIGHT}" viewBox="0 0 {WIDTH} {HEIGHT}" font-family="Helvetica, Arial, sans-serif" font-size="12">',
+        f'<rect width="{WIDTH}" height="{HEIGHT}" fill="white"/>',
+        f'<text x="{LEFT}" y="24" font-size="15" font-weight="bold">Time per scenario against relative error: inverse dynamics of planetary chains, 4 to 30 links</text>',
+        f'<text x="{LEFT}" y="40" fill="#555">one point per method and train size (small labels: links); error = largest normwise relative error of speeds, accelerations, multipliers, input torque vs exact rationals</text>',
+    ]
+    for k in range(x0, x1 + 1):
+        x = px(10.0**k)
+        s.append(f'<line x1="{x:.1f}" y1="{TOP}" x2="{x:.1f}" y2="{TOP + ph}" stroke="#e5e5e5"/>')
+        label = {-9: "1 ns", -8: "10 ns", -7: "100 ns", -6: "1 µs", -5: "10 µs", -4: "100 µs", -3: "1 ms", -2: "10 ms", -1: "100 ms", 0: "1 s", 1: "10 s"}.get(k, f"1e{k} s")
+        s.append(f'<text x="{x:.1f}" y="{TOP + ph + 18}" text-anchor="middle">{label}</text>')
+    for k in range(int(y0), y1 + 1):
+        y = py(10.0**k)
+        s.append(f'<line x1="{LEFT}" y1="{y:.1f}" x2="{LEFT + pw}" y2="{y:.1f}" stroke="#e5e5e5"/>')
+        label = "exact (0)" if k == int(y0) else f"1e{k}"
+        s.append(f'<text x="{LEFT - 8}" y="{y + 4:.1f}" text-anchor="end">{label}</text>')
+    s.append(f'<rect x="{LEFT}" y="{TOP}" width="{pw}" height="{ph}" fill="none" stroke="#333"/>')
+    s.append(f'<text x="{LEFT + pw / 2}" y="{HEIGHT - 22}" text-anchor="middle" font-size="13">time per scenario (log scale)</text>')
+    s.append(f'<text transform="translate(22 {TOP + ph / 2}) rotate(-90)" text-anchor="middle" font-size="13">relative error (log scale)</text>')
+
+    def marker(kind: str, x: float, y: float, colour: str) -> str:
+        if kind == "circle":
+            return f'<circle cx="{x:.1f}" cy="{y:.1f}" r="5" fill="{colour}"/>'
+        if kind == "square":
+            return f'<rect x="{x - 4.5:.1f}" y="{y - 4.5:.1f}" width="9" height="9" fill="{colour}"/>'
+        if kind == "diamond":
+            return f'<path d="M{x:.1f} {y - 6:.1f} L{x + 6:.1f} {y:.1f} L{x:.1f} {y + 6:.1f} L{x - 6:.1f} {y:.1f} Z" fill="{colour}"/>'
+        if kind == "triangle":
+            return f'<path d="M{x:.1f} {y - 6:.1f} L{x + 6:.1f} {y + 5:.1f} L{x - 6:.1f} {y + 5:.1f} Z" fill="{colour}"/>'
+        return f'<circle cx="{x:.1f}" cy="{y:.1f}" r="5" fill="none" stroke="{colour}" stroke-width="1.5"/>'
+
+    for key, label, colour, kind in SERIES:
+        pts = sorted(data.get(key, []))
+        if not pts:
+            continue
+        path = " ".join(f"{'M' if i == 0 else 'L'}{px(t):.1f} {py(e):.1f}" for i, (_, t, e) in enumerate(pts))
+        s.append(f'<path d="{path}" fill="none" stroke="{colour}" stroke-width="1" opacity="0.6"/>')
+        for links, t, e in pts:
+            s.append(marker(kind, px(t), py(e), colour))
+            if key in ("egt LU", "floor", "sympy", "numpy", "sympy-subs"):
+                s.append(f'<text x="{px(t) + 6:.1f}" y="{py(e) - 6:.1f}" font-size="9" fill="{colour}">{links}</text>')
+    ly = TOP + 8
+    for key, label, colour, kind in SERIES:
+        if not data.get(key):
+            continue
+        s.append(marker(kind, WIDTH - RIGHT + 22, ly, colour))
+        s.append(f'<text x="{WIDTH - RIGHT + 34}" y="{ly + 4}">{label}</text>')
+        ly += 22
+    s.append("</svg>")
+    return "\n".join(s) + "\n"
+
+
+def fmt_time(t: float | None) -> str:
+    if t is None:
+        return "–"
+    for unit, scale in (("s", 1.0), ("ms", 1e-3), ("µs", 1e-6), ("ns", 1e-9)):
+        if t >= scale:
+            return f"{t / scale:.3g} {unit}"
+    return f"{t * 1e9:.2g} ns"
+
+
+def fmt_ratio(a: float | None, b: float | None) -> str:
+    if a is None or b is None:
+        return "–"
+    r = a / b
+    return f"{r:,.0f}×" if r >= 10 else f"{r:.1f}×"
+
+
+def summary(rust: dict[str, Any], python: dict[str, Any], data: dict[str, list[tuple[int, float, float]]]) -> str:
+    by = {k: {links: (t, e) for links, t, e in pts} for k, pts in data.items()}
+
+    def t(key: str, links: int) -> float | None:
+        return by.get(key, {}).get(links, (None, None))[0]
+
+    derive = {r["links"]: r["derive_seconds"] for r in python["rows"] if r["route"] == "sympy"}
+    lines = [
+        f"Measured flop rate (one core, a 384 × 384 matrix product): **{rust['flop_rate'] / 1e9:.1f} GFLOP/s**; "
+        f"NumPy {python['numpy']}, SymPy {python['sympy']}.",
+        "",
+        "| links | n | egt | flop floor | egt / floor | NumPy | NumPy / egt | NumPy batch | SymPy lambdify | SymPy / egt | SymPy subs | subs / egt | SymPy derivation |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for size in rust["sizes"]:
+        links = size["links"]
+        egt = t("egt LU", links)
+        lines.append(
+            f"| {links} | {size['n']} | {fmt_time(egt)} | {fmt_time(size['floor_seconds'])} | {fmt_ratio(egt, size['floor_seconds'])} "
+            f"| {fmt_time(t('numpy', links))} | {fmt_ratio(t('numpy', links), egt)} | {fmt_time(t('numpy-batch', links))} "
+            f"| {fmt_time(t('sympy', links))} | {fmt_ratio(t('sympy', links), egt)} | {fmt_time(t('sympy-subs', links))} "
+            f"| {fmt_ratio(t('sympy-subs', links), egt)} | {fmt_time(derive.get(links))} |"
+        )
+    lines += [
+        "",
+        "Time per scenario of every Rust method and its largest relative error against exact rationals:",
+        "",
+        "| links | " + " | ".join(k for k, *_ in SERIES[:7]) + " |",
+        "|---|" + "---|" * 7,
+    ]
+    for size in rust["sizes"]:
+        cells = []
+        for k, *_ in SERIES[:7]:
+            tt, e = by[k].get(size["links"], (None, None))
+            cells.append(f"{fmt_time(tt)} ({e:.0e})" if tt is not None else "–")
+        lines.append(f"| {size['links']} | " + " | ".join(cells) + " |")
+    lines.append("")
+    lines.append(
+        "Python routes' errors: "
+        + ", ".join(f"{r['route']} {r['links']} links {r['error']:.0e}" for r in python["rows"] if r["links"] in (6, 30) or r["route"].startswith("sympy"))
+        + "."
+    )
+    return "\n".join(lines) + "\n"
+
+
+def replace_section(path: str, marker: str, text: str) -> None:
+    with open(path, encoding="utf-8") as fh:
+        doc = fh.read()
+    pattern = re.compile(rf"(<!-- {marker}:begin -->\n).*?(<!-- {marker}:end -->)", re.S)
+    if not pattern.search(doc):
+        raise SystemExit(f"{path}: no <!-- {marker}:begin/end --> markers")
+    doc = pattern.sub(lambda m: m.group(1) + text + m.group(2), doc)
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write(doc)
+
+
+def main() -> None:
+    out_dir = sys.argv[1] if len(sys.argv) > 1 else "target/speed_accuracy"
+    chart = sys.argv[2] if len(sys.argv) > 2 else "docs/img/speed_accuracy.svg"
+    with open(f"{out_dir}/rust.json", encoding="utf-8") as fh:
+        rust = json.load(fh)
+    with open(f"{out_dir}/python.json", encoding="utf-8") as fh:
+        python = json.load(fh)
+    data = points(rust, python)
+    with open(chart, "w", encoding="utf-8") as fh:
+        fh.write(svg(data))
+    print(f"wrote {chart}", file=sys.stderr)
+    if len(sys.argv) > 3:
+        replace_section(sys.argv[3], "speed-accuracy", summary(rust, python, data))
+        print(f"updated {sys.argv[3]}", file=sys.stderr)
+    if len(sys.argv) > 4:
+        with open(f"{out_dir}/accuracy.md", encoding="utf-8") as fh:
+            replace_section(sys.argv[4], "sweeps", fh.read())
+        print(f"updated {sys.argv[4]}", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()

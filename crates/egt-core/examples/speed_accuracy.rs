@@ -1,0 +1,249 @@
+//! The speed-accuracy study behind `docs/benchmarks.md` and `docs/accuracy.md`
+//! (run by `make chart`): for planetary chains of 4 to 30 links, the time per
+//! scenario and the error against exact rationals of every Rust method; this
+//! machine's flop rate (a dense matrix product) for the physical floor; the
+//! accuracy sweeps on ill-conditioned trains; and the problems as JSON for the
+//! SymPy and NumPy routes (`bench/routes.py`), which the chart puts beside these.
+//!
+//! Usage: `cargo run --release -p egt-core --example speed_accuracy -- OUT_DIR`
+
+use std::fmt::Write as _;
+use std::hint::black_box;
+use std::time::Instant;
+
+use egt_core::accuracy::{Method, Problem};
+use egt_core::linalg::COND_REFUSE;
+use egt_core::{Format, Train, families};
+use serde_json::json;
+
+/// Chain sizes, in links (a chain of k sets has 2 + 2k links).
+const LINKS: [usize; 6] = [4, 6, 10, 16, 22, 30];
+
+fn train(text: &str) -> Train {
+    Train::from_str(text, Format::Toml, "study").unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Seconds per call: batches of at least `min` seconds, the fastest of five.
+fn time(min: f64, mut f: impl FnMut()) -> f64 {
+    f();
+    let mut reps = 1usize;
+    loop {
+        let t = Instant::now();
+        for _ in 0..reps {
+            f();
+        }
+        if t.elapsed().as_secs_f64() >= min || reps >= 1 << 26 {
+            break;
+        }
+        reps *= 2;
+    }
+    (0..5)
+        .map(|_| {
+            let t = Instant::now();
+            for _ in 0..reps {
+                f();
+            }
+            t.elapsed().as_secs_f64() / reps as f64
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// This machine's double-precision rate on one core: a 384 x 384 matrix product.
+fn flop_rate() -> f64 {
+    let n = 384;
+    let a = nalgebra::DMatrix::<f64>::from_fn(n, n, |i, j| ((i * 7 + j * 3) % 11) as f64 - 5.0);
+    let b = a.transpose();
+    let mut c = nalgebra::DMatrix::<f64>::zeros(n, n);
+    let t = time(0.3, || {
+        c.gemm(1.0, black_box(&a), black_box(&b), 0.0);
+    });
+    2.0 * (n * n * n) as f64 / t
+}
+
+fn main() {
+    let dir = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "target/speed_accuracy".into());
+    std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{dir}: {e}"));
+    let rate = flop_rate();
+    eprintln!("flop rate: {:.2} GFLOP/s", rate / 1e9);
+
+    let mut sizes = Vec::new();
+    let mut problems = Vec::new();
+    for links in LINKS {
+        let t = train(&families::planetary_chain((links - 2) / 2));
+        let p = Problem::from_train(&t).unwrap_or_else(|e| panic!("{e}"));
+        let n = p.n();
+        let exact = p.exact().unwrap_or_else(|e| panic!("{e}"));
+        let mut methods = Vec::new();
+        for m in Method::ALL {
+            let sol = p
+                .solve(m)
+                .unwrap_or_else(|e| panic!("{links} {}: {e}", m.name()));
+            let errors = sol.errors(&exact);
+            let seconds = match m {
+                // egt as it runs in a batch: the prepared path, no allocation.
+                Method::Egt => {
+                    let plan = p.plan();
+                    let row = plan.base().to_vec();
+                    let mut out = vec![0.0; plan.outputs().len()];
+                    let mut w = plan.worker();
+                    time(0.05, || {
+                        let _ = w.eval(black_box(&row), &mut out);
+                    })
+                }
+                Method::Exact => time(0.2, || {
+                    let _ = black_box(p.exact());
+                }),
+                _ => time(0.05, || {
+                    let _ = black_box(p.solve(m));
+                }),
+            };
+            eprintln!(
+                "{links:>2} links  {:<22} {:>10.3} us  error {:.1e}",
+                m.name(),
+                seconds * 1e6,
+                errors.max()
+            );
+            methods.push(json!({
+                "method": m.name(), "seconds": seconds, "error": errors.max(),
+                "errors": {"speeds": errors.speeds, "accelerations": errors.accelerations,
+                           "multipliers": errors.multipliers, "torques": errors.torques},
+            }));
+        }
+        // The floor: one LU (2n^3/3), two solves for speeds and accelerations,
+        // [M]{w'} and the transposed solve (2n^2 each).
+        let nf = n as f64;
+        let flops = 2.0 * nf * nf * nf / 3.0 + 8.0 * nf * nf;
+        sizes.push(json!({
+            "links": links, "n": n, "floor_flops": flops, "floor_seconds": flops / rate,
+            "conditions": p.true_conditions(), "methods": methods,
+        }));
+        let mut pj = p.to_json().unwrap_or_else(|e| panic!("{e}"));
+        pj["links"] = json!(links);
+        problems.push(pj);
+    }
+    let rust = json!({"flop_rate": rate, "sizes": sizes});
+    write(
+        &dir,
+        "rust.json",
+        &serde_json::to_string_pretty(&rust).unwrap_or_default(),
+    );
+    write(
+        &dir,
+        "problems.json",
+        &serde_json::to_string(&problems).unwrap_or_default(),
+    );
+    write(&dir, "accuracy.md", &sweeps());
+    write(
+        &dir,
+        "planetary_chain_6.toml",
+        &families::planetary_chain(2),
+    );
+}
+
+fn write(dir: &str, name: &str, text: &str) {
+    let path = format!("{dir}/{name}");
+    std::fs::write(&path, text).unwrap_or_else(|e| panic!("{path}: {e}"));
+    eprintln!("wrote {path}");
+}
+
+/// Markdown tables of the ill-conditioned sweeps: per case the true condition
+/// (max over the three systems), egt's estimate, and each method's largest
+/// relative error (or egt's refusal).
+fn sweeps() -> String {
+    let mut md = String::new();
+    let head = |md: &mut String, title: &str| {
+        let _ = writeln!(md, "\n#### {title}\n");
+        let _ = write!(md, "| case | true condition | egt estimate |");
+        for m in Method::ALL.iter().filter(|m| **m != Method::Exact) {
+            let _ = write!(md, " {} |", m.name());
+        }
+        let _ = write!(md, "\n|---|---|---|");
+        for _ in 1..Method::ALL.len() {
+            md.push_str("---|");
+        }
+        md.push('\n');
+    };
+    let row = |md: &mut String, case: String, t: &Train| {
+        let p = Problem::from_train(t).unwrap_or_else(|e| panic!("{e}"));
+        let truth = p.true_conditions().into_iter().fold(0.0, f64::max);
+        let exact = p.exact();
+        let mut cells = Vec::new();
+        let mut est = String::from("-");
+        for m in Method::ALL.iter().filter(|m| **m != Method::Exact) {
+            cells.push(match (p.solve(*m), &exact) {
+                (Ok(s), Ok(x)) => {
+                    if let Some(c) = s.conditions {
+                        est = format!("{:.1e}", c.into_iter().fold(0.0, f64::max));
+                    }
+                    format!("{:.0e}", s.errors(x).max())
+                }
+                (Err(e), _) if *m == Method::Egt => {
+                    if let egt_core::Error::Analysis(egt_core::AnalysisError::IllConditioned {
+                        condition,
+                        ..
+                    }) = e
+                    {
+                        est = format!("{condition:.1e}");
+                    }
+                    "refused".into()
+                }
+                (Err(_), _) | (_, Err(_)) => "singular".into(),
+            });
+        }
+        let _ = writeln!(
+            md,
+            "| {case} | {truth:.1e} | {est} | {} |",
+            cells.join(" | ")
+        );
+    };
+    head(
+        &mut md,
+        "Near lock: Fig. 3 with tau_1 tau_2 = 1 + eps (eq. 8 and the speed system)",
+    );
+    for k in [2, 4, 6, 8, 10, 11, 12, 13, 14] {
+        let eps = 10f64.powi(-k);
+        row(
+            &mut md,
+            format!("eps = 1e-{k}"),
+            &train(&families::near_locked(eps)),
+        );
+    }
+    head(
+        &mut md,
+        "Nearly singular [Psi_w]: the planet prescribed while it barely turns (ratio 1 + eps)",
+    );
+    for k in [2, 4, 6, 8, 10, 12, 14] {
+        let eps = 10f64.powi(-k);
+        row(
+            &mut md,
+            format!("eps = 1e-{k}"),
+            &train(&families::stationary_planet(eps)),
+        );
+    }
+    head(
+        &mut md,
+        "Inertias and masses spread over 12 decades (random 4-set trains)",
+    );
+    for seed in 0..6 {
+        row(
+            &mut md,
+            format!("seed {seed}"),
+            &train(&families::random_train(100 + seed, 4, 12.0)),
+        );
+    }
+    head(&mut md, "Random well-conditioned trains (1 to 6 sets)");
+    for seed in 0..6 {
+        row(
+            &mut md,
+            format!("seed {seed}, {} sets", 1 + seed % 6),
+            &train(&families::random_train(seed, 1 + seed as usize % 6, 2.0)),
+        );
+    }
+    let _ = writeln!(
+        md,
+        "\negt refuses past COND_REFUSE = {COND_REFUSE:.0e} (estimate of any of the three systems)."
+    );
+    md
+}
