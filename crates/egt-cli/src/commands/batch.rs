@@ -181,7 +181,7 @@ fn progress(total: usize) -> ProgressBar {
     // Drawn on stderr only when it is a terminal (indicatif hides it otherwise).
     let bar = ProgressBar::new(total as u64);
     if let Ok(style) =
-        ProgressStyle::with_template("{bar:40} {pos}/{len} scenarios, {per_sec}, eta {eta}")
+        ProgressStyle::with_template("{bar:30} {human_pos}/{human_len} scenarios, eta {eta}")
     {
         bar.set_style(style);
     }
