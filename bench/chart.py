@@ -18,6 +18,7 @@ import sys
 from typing import Any
 
 WIDTH, HEIGHT = 960, 600
+PANEL2 = 420  # height of the second panel (time against links), below the first
 LEFT, RIGHT, TOP, BOTTOM = 80, 250, 50, 70
 EXACT_LEVEL = 1e-18  # where an error of exactly 0 is drawn
 
@@ -65,8 +66,8 @@ def svg(data: dict[str, list[tuple[int, float, float]]]) -> str:
         return TOP + (y1 - v) / (y1 - y0) * ph
 
     s = [
-        f'<svg xmlns="http://www.w3.org/2000/svg" width="{WIDTH}" height="{HEIGHT}" viewBox="0 0 {WIDTH} {HEIGHT}" font-family="Helvetica, Arial, sans-serif" font-size="12">',
-        f'<rect width="{WIDTH}" height="{HEIGHT}" fill="white"/>',
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="{WIDTH}" height="{HEIGHT + PANEL2}" viewBox="0 0 {WIDTH} {HEIGHT + PANEL2}" font-family="Helvetica, Arial, sans-serif" font-size="12">',
+        f'<rect width="{WIDTH}" height="{HEIGHT + PANEL2}" fill="white"/>',
         f'<text x="{LEFT}" y="24" font-size="15" font-weight="bold">Time per scenario against relative error: inverse dynamics of planetary chains, 4 to 30 links</text>',
         f'<text x="{LEFT}" y="40" fill="#555">one point per method and train size (small labels: links); error = largest normwise relative error of speeds, accelerations, multipliers, input torque vs exact rationals</text>',
     ]
@@ -105,6 +106,41 @@ def svg(data: dict[str, list[tuple[int, float, float]]]) -> str:
             s.append(marker(kind, px(t), py(e), colour))
             if key in ("egt LU", "floor", "sympy", "numpy", "sympy-subs"):
                 s.append(f'<text x="{px(t) + 6:.1f}" y="{py(e) - 6:.1f}" font-size="9" fill="{colour}">{links}</text>')
+    # Panel B: the same times against the number of links.
+    top2 = HEIGHT + 40
+    ph2 = PANEL2 - 100
+    ts = [t for pts in data.values() for _, t, _ in pts]
+    t0, t1 = math.floor(math.log10(min(ts))), math.ceil(math.log10(max(ts)))
+    lmax = max(links for pts in data.values() for links, _, _ in pts)
+
+    def qx(links: float) -> float:
+        return LEFT + links / (lmax + 2) * pw
+
+    def qy(t: float) -> float:
+        return top2 + (t1 - math.log10(t)) / (t1 - t0) * ph2
+
+    s.append(f'<text x="{LEFT}" y="{top2 - 14}" font-size="15" font-weight="bold">Time per scenario against train size (same runs)</text>')
+    for k in range(t0, t1 + 1):
+        y = qy(10.0**k)
+        s.append(f'<line x1="{LEFT}" y1="{y:.1f}" x2="{LEFT + pw}" y2="{y:.1f}" stroke="#e5e5e5"/>')
+        label = {-9: "1 ns", -8: "10 ns", -7: "100 ns", -6: "1 µs", -5: "10 µs", -4: "100 µs", -3: "1 ms", -2: "10 ms", -1: "100 ms", 0: "1 s"}.get(k, f"1e{k} s")
+        s.append(f'<text x="{LEFT - 8}" y="{y + 4:.1f}" text-anchor="end">{label}</text>')
+    for links in range(0, lmax + 1, 5):
+        x = qx(links)
+        s.append(f'<line x1="{x:.1f}" y1="{top2}" x2="{x:.1f}" y2="{top2 + ph2}" stroke="#e5e5e5"/>')
+        s.append(f'<text x="{x:.1f}" y="{top2 + ph2 + 18}" text-anchor="middle">{links}</text>')
+    s.append(f'<rect x="{LEFT}" y="{top2}" width="{pw}" height="{ph2}" fill="none" stroke="#333"/>')
+    s.append(f'<text x="{LEFT + pw / 2}" y="{top2 + ph2 + 40}" text-anchor="middle" font-size="13">links in the train</text>')
+    s.append(f'<text transform="translate(22 {top2 + ph2 / 2}) rotate(-90)" text-anchor="middle" font-size="13">time per scenario (log scale)</text>')
+    for key, label, colour, kind in SERIES:
+        pts = sorted(data.get(key, []))
+        if not pts:
+            continue
+        path = " ".join(f"{'M' if i == 0 else 'L'}{qx(n):.1f} {qy(t):.1f}" for i, (n, t, _) in enumerate(pts))
+        s.append(f'<path d="{path}" fill="none" stroke="{colour}" stroke-width="1.2" opacity="0.8"/>')
+        for n, t, _ in pts:
+            s.append(marker(kind, qx(n), qy(t), colour))
+
     ly = TOP + 8
     for key, label, colour, kind in SERIES:
         if not data.get(key):
