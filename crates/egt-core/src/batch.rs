@@ -14,6 +14,34 @@
 //!
 //! The layout is row-major `f64` throughout, so a NumPy array maps onto it
 //! without copying. A row allocates nothing unless it fails.
+//!
+//! ```
+//! use egt_core::batch::{BatchPlan, BatchSpec};
+//! use egt_core::prepared::Compute;
+//! use egt_core::{Format, Train, families};
+//!
+//! // Two planetary sets in series (6 links, 1 DOF), with its [analysis] data.
+//! let train = Train::from_str(&families::planetary_chain(2), Format::Toml, "chain").unwrap();
+//! let plan = BatchPlan::new(&train, &BatchSpec::from_analysis(&train, Compute::Dynamics).unwrap()).unwrap();
+//! // Three scenarios: the spec's values with three loads on the output carrier.
+//! let load = plan.parameter("torque.c2").unwrap();
+//! let mut params = Vec::new();
+//! for t in [-10.0, -20.0, f64::NAN] {
+//!     let mut row = plan.base().to_vec();
+//!     row[load] = t;
+//!     params.extend(row);
+//! }
+//! let mut out = vec![0.0; 3 * plan.outputs().len()];
+//! let errors = plan.run(&params, &mut out);
+//! // The NaN row is reported; the others are solved.
+//! assert_eq!(errors.len(), 1);
+//! assert_eq!(errors[0].row, 2);
+//! let torque = plan.output("driving_torque.s1").unwrap();
+//! let q = plan.outputs().len();
+//! // A larger load on the output needs a larger torque on the input.
+//! let (t1, t2) = (out[torque], out[q + torque]);
+//! assert!(t2 > t1 && t1 > 0.0);
+//! ```
 
 use rayon::prelude::*;
 
