@@ -20,6 +20,12 @@ pub struct Lu {
     /// Reciprocals of U's diagonal: the solves multiply instead of dividing
     /// (a division's latency dominates a small triangular solve).
     dinv: Vec<f64>,
+    /// Envelope of the factors: the first non-zero column of each row of L
+    /// and one past the last non-zero column of each row of U. Systems too
+    /// large for the unrolled kernels skip the zeros outside it (Willis rows
+    /// have three non-zeros, and chains of planetary sets stay banded).
+    lo: Vec<usize>,
+    hi: Vec<usize>,
     anorm: f64,
     work: Vec<f64>,
     work2: Vec<f64>,
@@ -38,6 +44,8 @@ impl Lu {
             a: vec![0.0; n * n],
             piv: vec![0; n],
             dinv: vec![0.0; n],
+            lo: (0..n).collect(),
+            hi: (1..=n).collect(),
             anorm: 0.0,
             work: vec![0.0; n],
             work2: vec![0.0; n],
@@ -61,27 +69,35 @@ impl Lu {
     /// [`ZeroPivot`] when a whole pivot column is zero.
     pub fn factor(&mut self) -> Result<(), ZeroPivot> {
         let (a, piv, dinv) = (&mut self.a[..], &mut self.piv[..], &mut self.dinv[..]);
-        self.anorm = dispatch!(self.n, d => factor(d, a, piv, dinv))?;
+        let env = Envelope {
+            lo: &mut self.lo,
+            hi: &mut self.hi,
+        };
+        self.anorm = dispatch!(self.n, d => factor(d, a, piv, dinv, env))?;
         Ok(())
     }
 
     /// Solve A x = b in place (after [`Lu::factor`]).
     pub fn solve(&self, b: &mut [f64]) {
-        let (a, piv, dinv) = (&self.a[..], &self.piv[..], &self.dinv[..]);
-        dispatch!(self.n, d => solve(d, a, piv, dinv, b));
+        let (a, piv, dinv, env) = (&self.a[..], &self.piv[..], &self.dinv[..], self.env());
+        dispatch!(self.n, d => solve(d, a, piv, dinv, env, b));
     }
 
     /// Solve A x = b and A y = c in place at once (after [`Lu::factor`]): the
     /// two substitutions interleave, which hides their latency on small systems.
     pub fn solve2(&self, b: &mut [f64], c: &mut [f64]) {
-        let (a, piv, dinv) = (&self.a[..], &self.piv[..], &self.dinv[..]);
-        dispatch!(self.n, d => solve2(d, a, piv, dinv, b, c));
+        let (a, piv, dinv, env) = (&self.a[..], &self.piv[..], &self.dinv[..], self.env());
+        dispatch!(self.n, d => solve2(d, a, piv, dinv, env, b, c));
     }
 
     /// Solve A^T x = b in place (after [`Lu::factor`]).
     pub fn solve_transpose(&self, b: &mut [f64]) {
-        let (a, piv, dinv) = (&self.a[..], &self.piv[..], &self.dinv[..]);
-        dispatch!(self.n, d => solve_transpose(d, a, piv, dinv, b));
+        let (a, piv, dinv, env) = (&self.a[..], &self.piv[..], &self.dinv[..], self.env());
+        dispatch!(self.n, d => solve_transpose(d, a, piv, dinv, env, b));
+    }
+
+    fn env(&self) -> (&[usize], &[usize]) {
+        (&self.lo, &self.hi)
     }
 
     /// Estimate of the 1-norm condition number ||A||_1 ||A^-1||_1, after
@@ -137,13 +153,23 @@ impl Lu {
 /// (most trains: up to 12 coordinates), where the loops then unroll and the
 /// bounds checks fold away, or a run-time value for the rest.
 trait Dim: Copy {
+    /// Track and use the envelope of the factors (run-time sizes only: the
+    /// unrolled kernels are faster without the bookkeeping).
+    const ENVELOPE: bool;
     fn n(self) -> usize;
+}
+
+/// The envelope being written by a factorisation.
+struct Envelope<'a> {
+    lo: &'a mut [usize],
+    hi: &'a mut [usize],
 }
 
 #[derive(Clone, Copy)]
 struct Fixed<const N: usize>;
 
 impl<const N: usize> Dim for Fixed<N> {
+    const ENVELOPE: bool = false;
     #[inline(always)]
     fn n(self) -> usize {
         N
@@ -154,6 +180,7 @@ impl<const N: usize> Dim for Fixed<N> {
 struct Dynamic(usize);
 
 impl Dim for Dynamic {
+    const ENVELOPE: bool = true;
     #[inline(always)]
     fn n(self) -> usize {
         self.0
@@ -230,6 +257,7 @@ fn factor<D: Dim>(
     a: &mut [f64],
     piv: &mut [usize],
     dinv: &mut [f64],
+    env: Envelope<'_>,
 ) -> Result<f64, ZeroPivot> {
     let n = d.n();
     let (a, piv, dinv) = (&mut a[..n * n], &mut piv[..n], &mut dinv[..n]);
@@ -261,15 +289,32 @@ fn factor<D: Dim>(
         }
         let inv = 1.0 / a[k * n + k];
         dinv[k] = inv;
+        // Row k of U is final now: its last non-zero bounds the updates.
+        let hk = if D::ENVELOPE {
+            (k + 1..n)
+                .rev()
+                .find(|&j| a[k * n + j] != 0.0)
+                .map_or(k + 1, |j| j + 1)
+        } else {
+            n
+        };
+        if D::ENVELOPE {
+            env.hi[k] = hk;
+        }
         // Eliminate below the pivot (the Willis rows are sparse: most multipliers are zero).
         for i in k + 1..n {
             let f = a[i * n + k] * inv;
             a[i * n + k] = f;
             if f != 0.0 {
-                for j in k + 1..n {
+                for j in k + 1..hk {
                     a[i * n + j] -= f * a[k * n + j];
                 }
             }
+        }
+    }
+    if D::ENVELOPE {
+        for i in 0..n {
+            env.lo[i] = (0..i).find(|&j| a[i * n + j] != 0.0).unwrap_or(i);
         }
     }
     Ok(anorm)
@@ -279,7 +324,14 @@ fn factor<D: Dim>(
 // Index loops on purpose: with a constant order they unroll completely.
 #[allow(clippy::needless_range_loop)]
 #[inline]
-fn solve<D: Dim>(d: D, a: &[f64], piv: &[usize], dinv: &[f64], b: &mut [f64]) {
+fn solve<D: Dim>(
+    d: D,
+    a: &[f64],
+    piv: &[usize],
+    dinv: &[f64],
+    env: (&[usize], &[usize]),
+    b: &mut [f64],
+) {
     let n = d.n();
     let (a, piv, dinv, b) = (&a[..n * n], &piv[..n], &dinv[..n], &mut b[..n]);
     for k in 0..n {
@@ -288,7 +340,7 @@ fn solve<D: Dim>(d: D, a: &[f64], piv: &[usize], dinv: &[f64], b: &mut [f64]) {
     // L y = P b (unit lower).
     for i in 1..n {
         let mut s = b[i];
-        for j in 0..i {
+        for j in lo::<D>(env, i)..i {
             s -= a[i * n + j] * b[j];
         }
         b[i] = s;
@@ -296,7 +348,7 @@ fn solve<D: Dim>(d: D, a: &[f64], piv: &[usize], dinv: &[f64], b: &mut [f64]) {
     // U x = y, multiplying by the stored reciprocal pivots.
     for i in (0..n).rev() {
         let mut s = b[i];
-        for j in i + 1..n {
+        for j in i + 1..hi::<D>(env, i, n) {
             s -= a[i * n + j] * b[j];
         }
         b[i] = s * dinv[i];
@@ -307,7 +359,15 @@ fn solve<D: Dim>(d: D, a: &[f64], piv: &[usize], dinv: &[f64], b: &mut [f64]) {
 // Index loops on purpose: with a constant order they unroll completely.
 #[allow(clippy::needless_range_loop)]
 #[inline]
-fn solve2<D: Dim>(d: D, a: &[f64], piv: &[usize], dinv: &[f64], b: &mut [f64], c: &mut [f64]) {
+fn solve2<D: Dim>(
+    d: D,
+    a: &[f64],
+    piv: &[usize],
+    dinv: &[f64],
+    env: (&[usize], &[usize]),
+    b: &mut [f64],
+    c: &mut [f64],
+) {
     let n = d.n();
     let (a, piv, dinv) = (&a[..n * n], &piv[..n], &dinv[..n]);
     let (b, c) = (&mut b[..n], &mut c[..n]);
@@ -317,7 +377,7 @@ fn solve2<D: Dim>(d: D, a: &[f64], piv: &[usize], dinv: &[f64], b: &mut [f64], c
     }
     for i in 1..n {
         let (mut s, mut t) = (b[i], c[i]);
-        for j in 0..i {
+        for j in lo::<D>(env, i)..i {
             s -= a[i * n + j] * b[j];
             t -= a[i * n + j] * c[j];
         }
@@ -326,7 +386,7 @@ fn solve2<D: Dim>(d: D, a: &[f64], piv: &[usize], dinv: &[f64], b: &mut [f64], c
     }
     for i in (0..n).rev() {
         let (mut s, mut t) = (b[i], c[i]);
-        for j in i + 1..n {
+        for j in i + 1..hi::<D>(env, i, n) {
             s -= a[i * n + j] * b[j];
             t -= a[i * n + j] * c[j];
         }
@@ -340,25 +400,44 @@ fn solve2<D: Dim>(d: D, a: &[f64], piv: &[usize], dinv: &[f64], b: &mut [f64], c
 // Index loops on purpose: with a constant order they unroll completely.
 #[allow(clippy::needless_range_loop)]
 #[inline]
-fn solve_transpose<D: Dim>(d: D, a: &[f64], piv: &[usize], dinv: &[f64], b: &mut [f64]) {
+fn solve_transpose<D: Dim>(
+    d: D,
+    a: &[f64],
+    piv: &[usize],
+    dinv: &[f64],
+    env: (&[usize], &[usize]),
+    b: &mut [f64],
+) {
     let n = d.n();
     let (a, piv, dinv, b) = (&a[..n * n], &piv[..n], &dinv[..n], &mut b[..n]);
     for i in 0..n {
         let y = b[i] * dinv[i];
         b[i] = y;
-        for j in i + 1..n {
+        for j in i + 1..hi::<D>(env, i, n) {
             b[j] -= a[i * n + j] * y;
         }
     }
     for i in (1..n).rev() {
         let z = b[i];
-        for j in 0..i {
+        for j in lo::<D>(env, i)..i {
             b[j] -= a[i * n + j] * z;
         }
     }
     for k in (0..n).rev() {
         b.swap(k, piv[k]);
     }
+}
+
+/// First column of row i of L to visit.
+#[inline(always)]
+fn lo<D: Dim>(env: (&[usize], &[usize]), i: usize) -> usize {
+    if D::ENVELOPE { env.0[i] } else { 0 }
+}
+
+/// One past the last column of row i of U to visit.
+#[inline(always)]
+fn hi<D: Dim>(env: (&[usize], &[usize]), i: usize, n: usize) -> usize {
+    if D::ENVELOPE { env.1[i] } else { n }
 }
 
 fn norm1(v: &[f64]) -> f64 {
@@ -414,6 +493,54 @@ mod tests {
         for i in 0..3 {
             let r: f64 = (0..3).map(|j| m[j * 3 + i] * y[j]).sum::<f64>() - b[i];
             assert!(r.abs() < 1e-14);
+        }
+    }
+
+    /// Larger systems take the run-time path with the envelope: banded,
+    /// sparse-with-fill and dense matrices, checked by residuals both ways.
+    #[test]
+    fn envelope_path_solves_banded_sparse_and_dense_systems() {
+        let n = 20;
+        let mut seed = 7u64;
+        let mut rand = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((seed >> 33) as f64 / (1u64 << 31) as f64) - 0.5
+        };
+        for kind in 0..3 {
+            let mut m = vec![0.0; n * n];
+            for i in 0..n {
+                for j in 0..n {
+                    let keep = match kind {
+                        0 => i.abs_diff(j) <= 2,
+                        1 => i == j || (i * 7 + j * 3) % 5 == 0,
+                        _ => true,
+                    };
+                    if keep {
+                        m[i * n + j] = rand();
+                    }
+                }
+                m[i * n + i] += if kind == 1 { 0.3 } else { 0.0 };
+            }
+            let mut lu = Lu::new(n);
+            fill(&mut lu, &m);
+            lu.factor().expect("regular");
+            let b: Vec<f64> = (0..n).map(|i| (i as f64).sin()).collect();
+            let (mut x, mut y, mut z) = (b.clone(), b.clone(), b.clone());
+            let mut w = b.iter().map(|v| 2.0 * v).collect::<Vec<_>>();
+            lu.solve(&mut x);
+            lu.solve_transpose(&mut y);
+            lu.solve2(&mut z, &mut w);
+            let scale = m.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+            for i in 0..n {
+                let r: f64 = (0..n).map(|j| m[i * n + j] * x[j]).sum::<f64>() - b[i];
+                let rt: f64 = (0..n).map(|j| m[j * n + i] * y[j]).sum::<f64>() - b[i];
+                let xs = x.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+                let ys = y.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+                assert!(r.abs() <= 1e-12 * scale * xs.max(1.0), "kind {kind} row {i}: {r}");
+                assert!(rt.abs() <= 1e-12 * scale * ys.max(1.0), "kind {kind} col {i}: {rt}");
+                assert_eq!(z[i], x[i]);
+                assert!((w[i] - 2.0 * x[i]).abs() <= 1e-12 * xs.max(1.0));
+            }
         }
     }
 
