@@ -49,8 +49,33 @@ fn plan(t: &Train, compute: Compute) -> BatchPlan {
     BatchPlan::new(t, &spec).unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// One scenario on a prepared plan (the base row).
+/// Two rows that differ in a ratio by one ulp: alternating them, every
+/// scenario factors its matrices afresh (a worker reuses the factorisations
+/// of the previous row when the ratios are equal).
+fn rows(p: &BatchPlan) -> [Vec<f64>; 2] {
+    let a = p.base().to_vec();
+    let mut b = a.clone();
+    b[0] = f64::from_bits(b[0].to_bits() + 1);
+    [a, b]
+}
+
+/// One scenario on a prepared plan, factorisations included.
 fn scenario(b: Bencher, t: &Train, compute: Compute) {
+    let p = plan(t, compute);
+    let rows = rows(&p);
+    let mut out = vec![0.0; p.outputs().len()];
+    let mut w = p.worker();
+    let mut k = 0;
+    b.bench_local(|| {
+        k ^= 1;
+        w.eval(black_box(&rows[k]), black_box(&mut out))
+            .unwrap_or_else(|e| panic!("{e}"))
+    });
+}
+
+/// One scenario whose ratios equal the previous row's: the factorisations
+/// and condition estimates are reused, only the substitutions remain.
+fn scenario_same_ratios(b: Bencher, t: &Train, compute: Compute) {
     let p = plan(t, compute);
     let row = p.base().to_vec();
     let mut out = vec![0.0; p.outputs().len()];
@@ -106,6 +131,11 @@ macro_rules! phases {
             #[divan::bench(args = $sizes)]
             fn power_lossy(b: Bencher, links: usize) {
                 scenario(b, &build(&$make(links)), Compute::Power);
+            }
+
+            #[divan::bench(args = $sizes)]
+            fn inverse_dynamics_same_ratios(b: Bencher, links: usize) {
+                scenario_same_ratios(b, &build(&$make(links)), Compute::Dynamics);
             }
         }
     };
@@ -164,13 +194,24 @@ mod examples {
     fn zf_8hp_shift_table(b: Bencher) {
         let t = build(&example("zf_8hp70.toml"));
         let states = shift_table(&t, Compute::Power);
+        // Alternate two rows one ulp apart in a ratio: every scenario factors.
         let mut work: Vec<_> = states
             .iter()
-            .map(|(p, row)| (p.worker(), row.clone(), vec![0.0; p.outputs().len()]))
+            .map(|(p, row)| {
+                let mut other = row.clone();
+                other[0] = f64::from_bits(other[0].to_bits() + 1);
+                (
+                    p.worker(),
+                    [row.clone(), other],
+                    vec![0.0; p.outputs().len()],
+                )
+            })
             .collect();
+        let mut k = 0;
         b.counter(ItemsCount::new(work.len())).bench_local(|| {
-            for (w, row, out) in &mut work {
-                w.eval(black_box(row), out)
+            k ^= 1;
+            for (w, rows, out) in &mut work {
+                w.eval(black_box(&rows[k]), out)
                     .unwrap_or_else(|e| panic!("{e}"));
             }
         });
@@ -217,7 +258,8 @@ mod batch {
         });
     }
 
-    /// The 6-link 1-DOF chain: inverse dynamics, every row a different load.
+    /// The 6-link 1-DOF chain: inverse dynamics, every row a different load
+    /// (the ratios stay, so each worker factors once per run of equal ratios).
     #[divan::bench(sample_count = 10)]
     fn chain6_inverse_dynamics(b: Bencher) {
         let t = build(&chain(6));
@@ -234,20 +276,48 @@ mod batch {
         run(b, &p, &rows);
     }
 
+    /// The same with a different ratio in every row: every scenario factors.
+    #[divan::bench(sample_count = 10)]
+    fn chain6_inverse_dynamics_new_ratios(b: Bencher) {
+        let t = build(&chain(6));
+        let p = plan(&t, Compute::Dynamics);
+        let load = p
+            .parameter("torque.c2")
+            .unwrap_or_else(|| panic!("no load column"));
+        let mut rows = Vec::with_capacity(ROWS * p.parameters().len());
+        for r in 0..ROWS {
+            let mut row = p.base().to_vec();
+            row[load] = -40.0 - (r % 1000) as f64 * 0.1;
+            row[0] *= 1.0 + (r % 997) as f64 * 1e-4;
+            rows.extend(row);
+        }
+        run(b, &p, &rows);
+    }
+
     /// The ZF 8HP70 shift table: rows cycle through the gear states.
     #[divan::bench(sample_count = 10)]
     fn zf_8hp_shift_table(b: Bencher) {
         let t = build(&example("zf_8hp70.toml"));
         let states = shift_table(&t, Compute::Dynamics);
         let per = ROWS / states.len();
+        // Every row a different input torque; the ratios are the state's own.
+        let input = t
+            .transmission()
+            .map(|tr| t.link_name(tr.input).to_string())
+            .unwrap_or_default();
         let inputs: Vec<Vec<f64>> = states
             .iter()
             .map(|(p, row)| {
-                row.iter()
-                    .copied()
-                    .cycle()
-                    .take(per * p.parameters().len())
-                    .collect()
+                let c = p
+                    .parameter(&format!("torque.{input}"))
+                    .unwrap_or_else(|| panic!("no input torque column"));
+                let mut rows = Vec::with_capacity(per * row.len());
+                for r in 0..per {
+                    let mut x = row.clone();
+                    x[c] = 300.0 + (r % 1000) as f64 * 0.1;
+                    rows.extend(x);
+                }
+                rows
             })
             .collect();
         let mut outs: Vec<Vec<f64>> = states

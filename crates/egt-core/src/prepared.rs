@@ -283,6 +283,19 @@ pub struct Workspace {
     lossy: Vec<usize>,
     cond: [f64; 3],
     power: PowerSummary,
+    /// The ratios the factorisations below were made with, and which of them
+    /// are valid for those ratios: a batch that varies loads, speeds,
+    /// accelerations or inertias under fixed ratios factors once.
+    key: Vec<f64>,
+    cache: Cache,
+}
+
+/// Which factorisations in a [`Workspace`] hold for its `key` ratios.
+#[derive(Debug, Clone, Copy, Default)]
+struct Cache {
+    kin: bool,
+    acc: bool,
+    force: bool,
 }
 
 impl PreparedTrain {
@@ -415,6 +428,8 @@ impl PreparedTrain {
             lossy: Vec::with_capacity(g),
             cond: [1.0; 3],
             power: PowerSummary::default(),
+            key: vec![f64::NAN; g],
+            cache: Cache::default(),
         }
     }
 
@@ -601,16 +616,24 @@ impl PreparedTrain {
     /// [`COND_REFUSE`]) for eq. (8) or eq. (10); with losses, no consistent
     /// direction of power flow (self-locking).
     pub fn solve(&self, ws: &mut Workspace, s: &Scenario<'_>, what: Compute) -> Result<()> {
-        // Speeds: the Willis equations (eq. 2) completed by the input rows.
-        self.kinematic_matrix(s.ratios, ws.kin.matrix_mut());
-        ws.kin.factor().map_err(|_| {
-            singular(
-                "the speed system (eq. 2)",
-                "the inputs do not determine the motion",
-            )
-        })?;
-        ws.cond[0] = ws.kin.condition();
-        refuse(ws.cond[0], "the speed system (eq. 2)")?;
+        // The matrices depend on the ratios only: the factorisations (and
+        // their condition estimates) of the previous scenario are reused when
+        // its ratios were the same.
+        if !(ws.cache.kin && ws.key[..] == s.ratios[..]) {
+            ws.cache = Cache::default();
+            // Speeds: the Willis equations (eq. 2) completed by the input rows.
+            self.kinematic_matrix(s.ratios, ws.kin.matrix_mut());
+            ws.kin.factor().map_err(|_| {
+                singular(
+                    "the speed system (eq. 2)",
+                    "the inputs do not determine the motion",
+                )
+            })?;
+            ws.cond[0] = ws.kin.condition();
+            refuse(ws.cond[0], "the speed system (eq. 2)")?;
+            ws.key.copy_from_slice(s.ratios);
+            ws.cache.kin = true;
+        }
         self.input_rhs(s.speeds, &mut ws.speed);
         if what == Compute::Kinematics {
             ws.kin.solve(&mut ws.speed);
@@ -623,15 +646,18 @@ impl PreparedTrain {
             ws.kin.solve2(&mut ws.speed, &mut ws.accel);
         } else {
             ws.kin.solve(&mut ws.speed);
-            self.acceleration_matrix(s.ratios, ws.acc.matrix_mut());
-            ws.acc.factor().map_err(|_| {
-                singular(
-                    "[Psi_w] (eq. 8)",
-                    "the prescribed accelerations do not determine the motion",
-                )
-            })?;
-            ws.cond[1] = ws.acc.condition();
-            refuse(ws.cond[1], "[Psi_w] (eq. 8)")?;
+            if !ws.cache.acc {
+                self.acceleration_matrix(s.ratios, ws.acc.matrix_mut());
+                ws.acc.factor().map_err(|_| {
+                    singular(
+                        "[Psi_w] (eq. 8)",
+                        "the prescribed accelerations do not determine the motion",
+                    )
+                })?;
+                ws.cond[1] = ws.acc.condition();
+                refuse(ws.cond[1], "[Psi_w] (eq. 8)")?;
+                ws.cache.acc = true;
+            }
             ws.acc.solve(&mut ws.accel);
         }
         self.mass.fill(s.inertia, s.mass, &mut ws.m);
@@ -658,15 +684,21 @@ impl PreparedTrain {
             ws.cond[2] = ws.cond[1];
             return Ok(());
         }
-        self.force_matrix(&ws.tau, ws.force.matrix_mut());
-        ws.force.factor().map_err(|_| {
-            singular(
-                "the force system (eq. 10)",
-                "the driving links cannot balance the loads",
-            )
-        })?;
-        ws.cond[2] = ws.force.condition();
-        refuse(ws.cond[2], "the force system (eq. 10)")?;
+        // The ideal force matrix is cached with the others; a lossy one (its
+        // ratios depend on the power-flow directions) never is.
+        if !(ideal && ws.cache.force) {
+            ws.cache.force = false;
+            self.force_matrix(&ws.tau, ws.force.matrix_mut());
+            ws.force.factor().map_err(|_| {
+                singular(
+                    "the force system (eq. 10)",
+                    "the driving links cannot balance the loads",
+                )
+            })?;
+            ws.cond[2] = ws.force.condition();
+            refuse(ws.cond[2], "the force system (eq. 10)")?;
+            ws.cache.force = ideal;
+        }
         ws.force.solve_transpose(&mut ws.x);
         Ok(())
     }

@@ -259,3 +259,46 @@ fn ill_conditioned_rows_are_refused_not_returned() {
     }
     assert!(refused >= 2, "near-lock rows must be refused");
 }
+
+#[test]
+fn reused_factorisations_give_the_numbers_of_a_fresh_worker() {
+    // Rows that share ratios reuse the previous factorisations; interleave
+    // equal and different ratios, a refused row and lossy rows, and compare
+    // every row with a worker that has seen nothing before.
+    for compute in [Compute::Kinematics, Compute::Dynamics, Compute::Power] {
+        for t in [
+            crate::util::example("fig3_example61.toml"),
+            train(&egt_core::families::planetary_chain(3)),
+        ] {
+            let p = plan(&t, compute);
+            let ratio = 0;
+            let load = p
+                .parameters()
+                .iter()
+                .position(|n| n.starts_with("torque.") || n.starts_with("speed."))
+                .unwrap_or_else(|| panic!("{:?}", p.parameters()));
+            let mut rows = Vec::new();
+            for k in 0..12 {
+                let mut row = p.base().to_vec();
+                row[ratio] *= [1.0, 1.0, 1.1, 1.1, 1.0, 0.0][k % 6];
+                row[load] += k as f64;
+                rows.push(row);
+            }
+            let mut w = p.worker();
+            let mut a = vec![0.0; p.outputs().len()];
+            let mut b = vec![0.0; p.outputs().len()];
+            for (k, row) in rows.iter().enumerate() {
+                let ra = w.eval(row, &mut a);
+                let rb = p.worker().eval(row, &mut b);
+                assert_eq!(ra.is_ok(), rb.is_ok(), "row {k}");
+                assert_eq!(ra.is_ok(), k % 6 != 5, "row {k}: the zero ratio is refused");
+                for (x, y) in a.iter().zip(&b) {
+                    assert!(
+                        x == y || (x.is_nan() && y.is_nan()),
+                        "{compute:?} row {k}: {x} vs {y}"
+                    );
+                }
+            }
+        }
+    }
+}
