@@ -609,7 +609,10 @@ impl PreparedTrain {
         }
     }
 
-    /// Solve one scenario into `ws`. Allocates nothing.
+    /// Solve one scenario into `ws`. Allocates nothing. When the ratios equal
+    /// (bitwise) those of the last scenario solved in `ws`, its factorisations
+    /// and condition estimates are reused: the results are the same numbers
+    /// a fresh workspace gives.
     ///
     /// # Errors
     /// [`AnalysisError::Singular`] or [`AnalysisError::IllConditioned`] (past
