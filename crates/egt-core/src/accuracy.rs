@@ -480,7 +480,7 @@ impl Problem {
     }
 
     /// The true 1-norm condition numbers ||A||_1 ||A^-1||_1 of the speed
-    /// system, [Psi_w] (eq. 8) and the force system (eq. 10), from exact
+    /// system, \[Psi_w\] (eq. 8) and the force system (eq. 10), from exact
     /// inverses (infinite when singular).
     pub fn true_conditions(&self) -> [f64; 3] {
         let (_, _, mats) = self.exact_data();

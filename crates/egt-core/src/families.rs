@@ -14,7 +14,7 @@
 //!   locks at eps = 0 (w_2 = tau_1 tau_2 / (tau_1 tau_2 - 1) w_4, section 6.1).
 //! * [`stationary_planet`]: a planetary set whose planet-ring ratio is 1 + eps,
 //!   so the planet barely turns and prescribing its acceleration makes
-//!   [Psi_w] (eq. 8) nearly singular.
+//!   \[Psi_w\] (eq. 8) nearly singular.
 //!
 //! Every spec carries an `[analysis]` section: an input link with a speed and
 //! an acceleration (also the driving link) and a load torque on an output.
@@ -228,7 +228,7 @@ fn random_draw(seed: u64, sets: usize, inertia_decades: f64) -> String {
 
 /// Fig. 3's reduction gear (example 6.1) with ratios tau_1 = -2/3 and
 /// tau_2 = (1 + eps) / tau_1: as eps -> 0 the train locks and the condition
-/// number of [Psi_w] grows like 1 / eps.
+/// number of \[Psi_w\] grows like 1 / eps.
 pub fn near_locked(eps: f64) -> String {
     let t1 = -2.0 / 3.0;
     let t2 = (1.0 + eps) / t1;
@@ -249,7 +249,7 @@ pub fn near_locked(eps: f64) -> String {
 
 /// A planetary set (ring fixed) whose planet-ring ratio is 1 + eps, with the
 /// planet as the input: the planet's absolute speed is about eps times the
-/// carrier's, so [Psi_w] (eq. 8) is nearly singular.
+/// carrier's, so \[Psi_w\] (eq. 8) is nearly singular.
 pub fn stationary_planet(eps: f64) -> String {
     let mut s = format!("name = \"stationary planet, eps = {eps:e}\"\nframe = \"case\"\n\n");
     link(&mut s, "sun", 2.0e-4, None, 1);

@@ -503,7 +503,9 @@ mod tests {
         let n = 20;
         let mut seed = 7u64;
         let mut rand = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((seed >> 33) as f64 / (1u64 << 31) as f64) - 0.5
         };
         for kind in 0..3 {
@@ -536,8 +538,14 @@ mod tests {
                 let rt: f64 = (0..n).map(|j| m[j * n + i] * y[j]).sum::<f64>() - b[i];
                 let xs = x.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
                 let ys = y.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
-                assert!(r.abs() <= 1e-12 * scale * xs.max(1.0), "kind {kind} row {i}: {r}");
-                assert!(rt.abs() <= 1e-12 * scale * ys.max(1.0), "kind {kind} col {i}: {rt}");
+                assert!(
+                    r.abs() <= 1e-12 * scale * xs.max(1.0),
+                    "kind {kind} row {i}: {r}"
+                );
+                assert!(
+                    rt.abs() <= 1e-12 * scale * ys.max(1.0),
+                    "kind {kind} col {i}: {rt}"
+                );
                 assert_eq!(z[i], x[i]);
                 assert!((w[i] - 2.0 * x[i]).abs() <= 1e-12 * xs.max(1.0));
             }

@@ -6,7 +6,7 @@
 //!   slices, built once from the eq. (4) offset chains.
 //! * [`PreparedTrain`] (immutable, shared between threads) and [`Workspace`]
 //!   (one per thread): speeds from the Willis equations (eq. 2) completed by
-//!   the input rows; accelerations from [Psi_w] (eq. 8); multipliers and driving
+//!   the input rows; accelerations from \[Psi_w\] (eq. 8); multipliers and driving
 //!   torques from the transposed system (eq. 10); with mesh losses, the
 //!   power-flow directions found as in `power.rs`.
 //!
@@ -42,10 +42,10 @@ struct MassEntry {
     copies: f64,
 }
 
-/// The mass matrix [M] (eq. 3-5) prepared for varying inertias and masses.
+/// The mass matrix \[M\] (eq. 3-5) prepared for varying inertias and masses.
 ///
 /// Built once from the train's eq. (4) offset chains; [`MassModel::fill`] then
-/// writes [M] for any inertias and masses into a caller's buffer. With the
+/// writes \[M\] for any inertias and masses into a caller's buffer. With the
 /// train's own values it reproduces [`Train::mass_matrix`] exactly.
 #[derive(Debug, Clone)]
 pub struct MassModel {
@@ -115,7 +115,7 @@ impl MassModel {
         })
     }
 
-    /// Order of [M] (the number of coordinates).
+    /// Order of \[M\] (the number of coordinates).
     pub fn n(&self) -> usize {
         self.n
     }
@@ -147,7 +147,7 @@ impl MassModel {
         )
     }
 
-    /// Write [M] (row-major, n x n) for one inertia per [`MassModel::inertia_links`]
+    /// Write \[M\] (row-major, n x n) for one inertia per [`MassModel::inertia_links`]
     /// and one mass per [`MassModel::mass_links`]. Allocates nothing.
     pub fn fill(&self, inertia: &[f64], mass: &[f64], m: &mut [f64]) {
         let n = self.n;
@@ -171,7 +171,7 @@ impl MassModel {
 }
 
 impl MassModel {
-    /// [M] in exact rationals, from exact inertias and masses (the offsets
+    /// \[M\] in exact rationals, from exact inertias and masses (the offsets
     /// taken exactly as their f64 values): the reference of the accuracy study.
     pub(crate) fn fill_exact(&self, inertia: &[Q], mass: &[Q]) -> QMatrix {
         let n = self.n;
@@ -460,7 +460,7 @@ impl PreparedTrain {
         self.unit_rows(ratios, &self.inputs, out);
     }
 
-    /// [Psi_w] of eq. (8): constraint rows, then a unit row per accelerated link.
+    /// \[Psi_w\] of eq. (8): constraint rows, then a unit row per accelerated link.
     pub fn acceleration_matrix(&self, ratios: &[f64], out: &mut [f64]) {
         self.unit_rows(ratios, &self.accelerated, out);
     }
@@ -518,7 +518,7 @@ impl PreparedTrain {
         })
     }
 
-    /// Every entry of the speed system (`system` 0), [Psi_w] (1) or the force
+    /// Every entry of the speed system (`system` 0), \[Psi_w\] (1) or the force
     /// matrix (2) as a sum of terms `f(row, column, coefficient)` whose
     /// coefficients are the data themselves (1, -tau, tau, -1), so that a
     /// residual built from them carries no rounding of tau - 1.
@@ -557,7 +557,7 @@ impl PreparedTrain {
         }
     }
 
-    /// The speed system, [Psi_w] and the force matrix (not transposed) in
+    /// The speed system, \[Psi_w\] and the force matrix (not transposed) in
     /// exact rationals, for exact ratios: the reference of the accuracy study.
     pub(crate) fn exact_matrices(&self, ratios: &[Q]) -> [QMatrix; 3] {
         let n = self.n;
@@ -600,7 +600,7 @@ impl PreparedTrain {
         out[c..].copy_from_slice(values);
     }
 
-    /// The right-hand side of eq. (10), {Q} - [M]{w'}, into `out`.
+    /// The right-hand side of eq. (10), {Q} - \[M\]{w'}, into `out`.
     pub fn force_rhs(&self, mass: &[f64], torques: &[f64], accel: &[f64], out: &mut [f64]) {
         let n = self.n;
         for (i, o) in out.iter_mut().enumerate() {
@@ -907,7 +907,7 @@ impl Workspace {
     pub fn force_ratios(&self) -> &[f64] {
         &self.tau
     }
-    /// 1-norm condition estimates of the speed system, of [Psi_w] (eq. 8)
+    /// 1-norm condition estimates of the speed system, of \[Psi_w\] (eq. 8)
     /// and of the force system (eq. 10), from the last scenario.
     pub fn conditions(&self) -> [f64; 3] {
         self.cond
