@@ -34,7 +34,7 @@ pub enum Extra {
 }
 
 /// A column of the constraint Jacobian: a coordinate or the frame.
-type Col = Option<usize>;
+pub(crate) type Col = Option<usize>;
 
 /// Inverse dynamics prepared for one choice of prescribed coordinates, driving
 /// links and extra constraints. Buffers are sized once; [`InverseDynamicsPlan::solve`]
@@ -52,14 +52,87 @@ pub struct InverseDynamicsPlan {
     cond: [f64; 2],
 }
 
+/// The number of coordinates n and the DOF F = n - (j_G + extras) left by `extras`.
+///
+/// # Errors
+/// More constraints than coordinates.
+pub(crate) fn dof_with(train: &Train, extras: &[Extra]) -> Result<(usize, usize)> {
+    let n = train.coordinates().len();
+    let c = train.circuits().len() + extras.len();
+    let f = n.checked_sub(c).ok_or_else(|| {
+        AnalysisError::Other(format!(
+            "{c} constraints on {n} coordinates: over-constrained"
+        ))
+    })?;
+    Ok((n, f))
+}
+
+/// The coordinate columns of `links`, which must be F distinct non-frame links.
+///
+/// # Errors
+/// A wrong count (naming `what`), the frame, or a repeated link.
+pub(crate) fn link_columns(
+    train: &Train,
+    links: &[LinkId],
+    f: usize,
+    what: &str,
+) -> Result<Vec<usize>> {
+    if links.len() != f {
+        return Err(AnalysisError::WrongInputCount {
+            dof: f,
+            given: links.len(),
+            what: what.to_string(),
+        }
+        .into());
+    }
+    let mut out = Vec::with_capacity(f);
+    for &l in links {
+        let k = train
+            .coordinate(l)
+            .ok_or_else(|| AnalysisError::FrameInput {
+                link: train.link_name(l).to_string(),
+            })?;
+        if out.contains(&k) {
+            return Err(AnalysisError::Other(format!(
+                "link `{}` is listed twice among the {what}",
+                train.link_name(l)
+            ))
+            .into());
+        }
+        out.push(k);
+    }
+    Ok(out)
+}
+
 /// The constraint rows of a plan, by coordinate column.
 #[derive(Debug, Clone)]
-struct Rows {
-    circuits: Vec<[Col; 3]>,
-    extras: Vec<[(Col, f64); 2]>,
+pub(crate) struct Rows {
+    /// Columns of gear i, gear j and the carrier of each Willis row.
+    pub(crate) circuits: Vec<[Col; 3]>,
+    /// Columns and coefficients of each brake/clutch row.
+    pub(crate) extras: Vec<[(Col, f64); 2]>,
 }
 
 impl Rows {
+    /// The rows of the Willis equations and of `extras`.
+    pub(crate) fn new(train: &Train, extras: &[Extra]) -> Self {
+        let col = |l: LinkId| train.coordinate(l);
+        Rows {
+            circuits: train
+                .circuits()
+                .iter()
+                .map(|c| [col(c.gear_i), col(c.gear_j), col(c.carrier)])
+                .collect(),
+            extras: extras
+                .iter()
+                .map(|e| match *e {
+                    Extra::Hold(l) => [(col(l), 1.0), (None, 0.0)],
+                    Extra::Join(a, b) => [(col(a), 1.0), (col(b), -1.0)],
+                })
+                .collect(),
+        }
+    }
+
     /// Add the constraint rows into `out` (row-major with `stride` columns),
     /// using `taus` for the Willis rows (eq. 2).
     fn fill(&self, taus: &[f64], out: &mut [f64], stride: usize) {
@@ -92,59 +165,12 @@ impl InverseDynamicsPlan {
         driving: &[LinkId],
         extras: &[Extra],
     ) -> Result<Self> {
-        let n = train.coordinates().len();
-        let c = train.circuits().len() + extras.len();
-        let f = n.checked_sub(c).ok_or_else(|| {
-            AnalysisError::Other(format!(
-                "{c} constraints on {n} coordinates: over-constrained"
-            ))
-        })?;
-        let coords = |ls: &[LinkId], what: &str| -> Result<Vec<usize>> {
-            if ls.len() != f {
-                return Err(AnalysisError::WrongInputCount {
-                    dof: f,
-                    given: ls.len(),
-                    what: what.to_string(),
-                }
-                .into());
-            }
-            let mut out = Vec::with_capacity(ls.len());
-            for &l in ls {
-                let k = train
-                    .coordinate(l)
-                    .ok_or_else(|| AnalysisError::FrameInput {
-                        link: train.link_name(l).to_string(),
-                    })?;
-                if out.contains(&k) {
-                    return Err(AnalysisError::Other(format!(
-                        "link `{}` is listed twice among the {what}",
-                        train.link_name(l)
-                    ))
-                    .into());
-                }
-                out.push(k);
-            }
-            Ok(out)
-        };
-        let accel = coords(accelerated, "prescribed accelerations")?;
-        let driving = coords(driving, "driving (unknown-torque) links")?;
-        let col = |l: LinkId| train.coordinate(l);
+        let (n, f) = dof_with(train, extras)?;
+        let accel = link_columns(train, accelerated, f, "prescribed accelerations")?;
+        let driving = link_columns(train, driving, f, "driving (unknown-torque) links")?;
         Ok(InverseDynamicsPlan {
             n,
-            rows: Rows {
-                circuits: train
-                    .circuits()
-                    .iter()
-                    .map(|c| [col(c.gear_i), col(c.gear_j), col(c.carrier)])
-                    .collect(),
-                extras: extras
-                    .iter()
-                    .map(|e| match *e {
-                        Extra::Hold(l) => [(col(l), 1.0), (None, 0.0)],
-                        Extra::Join(a, b) => [(col(a), 1.0), (col(b), -1.0)],
-                    })
-                    .collect(),
-            },
+            rows: Rows::new(train, extras),
             accel,
             driving,
             kin: Lu::new(n),

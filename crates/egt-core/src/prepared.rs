@@ -18,7 +18,7 @@
 
 use std::ops::Range;
 
-use crate::dynamics::Extra;
+use crate::dynamics::{Extra, Rows, dof_with, link_columns};
 use num_traits::Zero;
 
 use crate::error::{AnalysisError, Error, Result};
@@ -314,58 +314,15 @@ impl PreparedTrain {
         driving: &[LinkId],
         extras: &[Extra],
     ) -> Result<Self> {
-        let n = train.coordinates().len();
-        let c = train.circuits().len() + extras.len();
-        let f = n.checked_sub(c).ok_or_else(|| {
-            AnalysisError::Other(format!(
-                "{c} constraints on {n} coordinates: over-constrained"
-            ))
-        })?;
-        let coords = |ls: &[LinkId], what: &str| -> Result<Vec<usize>> {
-            if ls.len() != f {
-                return Err(AnalysisError::WrongInputCount {
-                    dof: f,
-                    given: ls.len(),
-                    what: what.to_string(),
-                }
-                .into());
-            }
-            let mut out = Vec::with_capacity(f);
-            for &l in ls {
-                let k = train
-                    .coordinate(l)
-                    .ok_or_else(|| AnalysisError::FrameInput {
-                        link: train.link_name(l).to_string(),
-                    })?;
-                if out.contains(&k) {
-                    return Err(AnalysisError::Other(format!(
-                        "link `{}` is listed twice among the {what}",
-                        train.link_name(l)
-                    ))
-                    .into());
-                }
-                out.push(k);
-            }
-            Ok(out)
-        };
-        let inputs = coords(inputs, "input links")?;
-        let accelerated = coords(accelerated, "prescribed accelerations")?;
-        let driving = coords(driving, "driving (unknown-torque) links")?;
-        let col = |l: LinkId| train.coordinate(l);
+        let (n, f) = dof_with(train, extras)?;
+        let inputs = link_columns(train, inputs, f, "input links")?;
+        let accelerated = link_columns(train, accelerated, f, "prescribed accelerations")?;
+        let driving = link_columns(train, driving, f, "driving (unknown-torque) links")?;
+        let Rows { circuits, extras } = Rows::new(train, extras);
         Ok(PreparedTrain {
             n,
-            circuits: train
-                .circuits()
-                .iter()
-                .map(|c| [col(c.gear_i), col(c.gear_j), col(c.carrier)])
-                .collect(),
-            extras: extras
-                .iter()
-                .map(|e| match *e {
-                    Extra::Hold(l) => [(col(l), 1.0), (None, 0.0)],
-                    Extra::Join(a, b) => [(col(a), 1.0), (col(b), -1.0)],
-                })
-                .collect(),
+            circuits,
+            extras,
             accel_shared: inputs == accelerated,
             force_shared: accelerated == driving,
             inputs,
