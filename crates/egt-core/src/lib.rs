@@ -43,6 +43,7 @@ pub mod families;
 pub mod kinematics;
 pub mod linalg;
 pub mod mass;
+pub mod modp;
 pub mod parse;
 pub mod power;
 pub mod prepared;

@@ -17,6 +17,7 @@ use rustworkx_core::planar::is_planar;
 use crate::circuits::{self, FundamentalCircuit};
 use crate::error::TopologyError;
 use crate::exact::{self, Q, QMatrix};
+use crate::modp;
 use crate::train::{Edge, GearPair, Link, LinkId, Revolute, RevoluteId};
 
 /// The tree left by deleting the gear edges, rooted at the frame.
@@ -403,14 +404,6 @@ fn components_without(graph: &UnGraph<LinkId, Edge>, cut: NodeIndex) -> Vec<(Vec
     out
 }
 
-/// Generic ratios: distinct, deterministic, far from 0 and 1, so that a rank
-/// deficiency found with them is structural, not an accident of values.
-pub(crate) fn generic_ratio(m: usize) -> Q {
-    let num = 7 + ((m as i64 * 7919 + 104_729) % 9973);
-    let den = 3 + ((m as i64 * 6151 + 7_907) % 997);
-    -exact::frac(num, den)
-}
-
 /// The Willis Jacobian over the coordinates (every link but the frame), exactly.
 pub(crate) fn willis_exact(
     n_links: usize,
@@ -453,14 +446,42 @@ fn generic_mobility(
     circuits: &[FundamentalCircuit],
 ) -> Result<(), TopologyError> {
     let n = links.len();
-    let j = willis_exact(n, frame, circuits, generic_ratio);
     let cols = n - 1;
-    if exact::rank(&j) < circuits.len() {
+    let col = |l: LinkId| {
+        (l != frame).then(|| {
+            if l.index() < frame.index() {
+                l.index()
+            } else {
+                l.index() - 1
+            }
+        })
+    };
+    // The Willis Jacobian (eq. 2) with generic ratios, over GF(p) (see `modp`).
+    let j: Vec<Vec<u64>> = circuits
+        .iter()
+        .enumerate()
+        .map(|(m, c)| {
+            let t = modp::generic(m as u64);
+            let mut row = vec![0; cols];
+            for (l, v) in [
+                (c.gear_i, 1),
+                (c.gear_j, modp::neg(t)),
+                (c.carrier, modp::sub(t, 1)),
+            ] {
+                if let Some(k) = col(l) {
+                    row[k] = modp::add(row[k], v);
+                }
+            }
+            row
+        })
+        .collect();
+    let (null, rank) = modp::nullspace(&j, cols);
+    if rank < circuits.len() {
         // Rows with weight in a left null vector are the dependent ones.
-        let jt: QMatrix = (0..cols)
-            .map(|c| j.iter().map(|r| r[c].clone()).collect())
+        let jt: Vec<Vec<u64>> = (0..cols)
+            .map(|c| j.iter().map(|r| r[c]).collect())
             .collect();
-        let dependent = exact::support(&exact::nullspace(&jt, circuits.len()));
+        let dependent = modp::support(&modp::nullspace(&jt, circuits.len()).0, circuits.len());
         return Err(TopologyError::Redundant {
             pairs: dependent
                 .iter()
@@ -474,17 +495,7 @@ fn generic_mobility(
                 .collect(),
         });
     }
-    let null = exact::nullspace(&j, cols);
-    let col = |l: LinkId| {
-        (l != frame).then(|| {
-            if l.index() < frame.index() {
-                l.index()
-            } else {
-                l.index() - 1
-            }
-        })
-    };
-    let speed = |v: &Vec<Q>, l: LinkId| col(l).map_or_else(Q::zero, |c| v[c].clone());
+    let speed = |v: &Vec<u64>, l: LinkId| col(l).map_or(0, |c| v[c]);
     // A turning pair that never moves, for any motion, belongs to a locked sub-chain.
     let mut locked: Vec<LinkId> = Vec::new();
     for r in revolutes {
