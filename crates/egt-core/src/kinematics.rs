@@ -326,6 +326,17 @@ impl Train {
             (Some(t), Some(i)) => Some(self.solve_exact(&plan, &t, &i)?),
             _ => None,
         };
+        if let Some(e) = &exact {
+            // The exact solution, correctly rounded, is the best float answer.
+            debug_assert!(
+                e.iter().zip(&speed).all(
+                    |(q, f)| (exact::to_f64(q) - f).abs() <= 1e-9 * (1.0 + f.abs()) * condition
+                )
+            );
+            for (f, q) in speed.iter_mut().zip(e) {
+                *f = exact::to_f64(q);
+            }
+        }
         let known: Vec<bool> = self.links().iter().map(|l| l.sized).collect();
         let relative = self.relative_speeds(&speed, exact.as_deref(), &known);
         let residual = willis_residual(self, &ratios, &speed);
