@@ -275,7 +275,8 @@ impl InverseDynamicsPlan {
     }
 }
 
-fn singular(what: &str, detail: &str) -> Error {
+/// A singular system, in words.
+pub(crate) fn singular(what: &str, detail: &str) -> Error {
     AnalysisError::Singular {
         what: what.into(),
         detail: detail.into(),
@@ -283,7 +284,8 @@ fn singular(what: &str, detail: &str) -> Error {
     .into()
 }
 
-fn refuse(cond: f64, what: &str) -> Result<()> {
+/// Refuse a result whose condition estimate is past [`COND_REFUSE`].
+pub(crate) fn refuse(cond: f64, what: &str) -> Result<()> {
     if cond > COND_REFUSE {
         return Err(AnalysisError::IllConditioned {
             what: what.into(),

@@ -18,12 +18,12 @@
 
 use std::ops::Range;
 
-use crate::dynamics::{Extra, Rows, dof_with, link_columns};
+use crate::dynamics::{Extra, Rows, dof_with, link_columns, refuse, singular};
 use num_traits::Zero;
 
-use crate::error::{AnalysisError, Error, Result};
+use crate::error::{AnalysisError, Result};
 use crate::exact::{self, Q, QMatrix};
-use crate::linalg::{COND_REFUSE, Lu};
+use crate::linalg::Lu;
 use crate::power::Driver;
 use crate::train::{LinkId, Train};
 
@@ -873,26 +873,6 @@ impl Workspace {
     pub fn power(&self) -> PowerSummary {
         self.power
     }
-}
-
-fn singular(what: &str, detail: &str) -> Error {
-    AnalysisError::Singular {
-        what: what.into(),
-        detail: detail.into(),
-    }
-    .into()
-}
-
-fn refuse(cond: f64, what: &str) -> Result<()> {
-    if cond > COND_REFUSE {
-        return Err(AnalysisError::IllConditioned {
-            what: what.into(),
-            condition: cond,
-            threshold: COND_REFUSE,
-        }
-        .into());
-    }
-    Ok(())
 }
 
 #[cfg(test)]
