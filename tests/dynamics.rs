@@ -2,6 +2,9 @@
 //! paper's example 6.1, power balance on random trains, hand statics of a
 //! planetary set, textbook planetary efficiencies, and 2K / w^2.
 
+// A panic is how a test reports; unwrapping here is the point.
+#![allow(clippy::unwrap_used)]
+
 use egt_core::{DynamicsRequest, Format, LinkId, PowerRequest, SpeedInput, Train};
 use proptest::prelude::*;
 
@@ -161,7 +164,7 @@ proptest! {
             let w: Vec<f64> = t.coordinates().iter().map(|l| pf.speeds.speed[l.index()]).collect();
             let wd: Vec<f64> = t.coordinates().iter().map(|l| pf.dynamics.acceleration[l.index()]).collect();
             let mut kdot = 0.0;
-            for i in 0..w.len() { for j in 0..w.len() { kdot += w[i] * mass.matrix[(i, j)] * wd[j]; } }
+            for (i, wi) in w.iter().enumerate() { for (j, wdj) in wd.iter().enumerate() { kdot += wi * mass.matrix[(i, j)] * wdj; } }
             prop_assert!((kdot - pf.kinetic_rate).abs() <= 1e-10 * kdot.abs().max(1e-9));
             if !losses { prop_assert_eq!(pf.loss, 0.0); }
             prop_assert!(pf.meshes.iter().all(|m| m.loss >= -1e-9 * scale), "losses are dissipative");
