@@ -359,7 +359,8 @@ pub fn suggest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) ->
     let mut best: Option<(usize, &str)> = None;
     for c in candidates {
         let d = edit_distance(name, c);
-        if d <= 2.max(name.len() / 3) && best.is_none_or(|(bd, _)| d < bd) {
+        // A typo, not a different name: at most a third of the letters, never all of them.
+        if d <= (name.len() / 3).max(1) && d < name.len() && best.is_none_or(|(bd, _)| d < bd) {
             best = Some((d, c));
         }
     }
@@ -392,5 +393,10 @@ mod tests {
             Some("sun".into())
         );
         assert_eq!(suggest("xyzzy", ["sun", "ring"]), None);
+        assert_eq!(suggest("x", ["f", "sun"]), None);
+        assert_eq!(
+            suggest("carier", ["carrier", "sun"]),
+            Some("carrier".into())
+        );
     }
 }

@@ -47,7 +47,8 @@ pub fn parse_spec(text: &str, format: Format, source_name: &str) -> Result<Spec>
                 Error::Syntax(SyntaxError {
                     source_name: source_name.to_string(),
                     line: inner.line(),
-                    column: inner.column(),
+                    // serde_json counts 0 at the start of a line (e.g. at end of input).
+                    column: inner.column().max(1),
                     path,
                     message: strip_position(&inner.to_string()),
                 })
