@@ -425,3 +425,17 @@ fn fixtures_are_valid_without_the_fault() {
     let t = toml(&fig3_with(""));
     assert_eq!(t.dof(), 1);
 }
+
+/// A planetary set whose sun and ring are one link is refused by name.
+#[test]
+fn planetary_members_on_one_link() {
+    let e = toml_err(
+        "frame = \"f\"\n[[planetary]]\nname = \"P\"\nsun = \"s\"\nring = \"s\"\ncarrier = \"c\"\nteeth = { sun = 20, ring = 60 }\n",
+    );
+    let msg = e.to_string();
+    assert!(
+        matches!(e, egt_core::Error::Spec { ref path, .. } if path == "planetary[0]"),
+        "{msg}"
+    );
+    assert!(msg.contains("same link `s`"), "{msg}");
+}

@@ -210,6 +210,18 @@ fn expand_planetary(d: &mut Draft, set: &PlanetarySpec, frame: &str, path: &str)
     if let Some(s2) = &set.sun2 {
         central.push(s2.clone());
     }
+    // Two members of one set on one link would lock the set (or mesh a gear with itself).
+    for (k, a) in central.iter().enumerate() {
+        if central[..k].contains(a) {
+            return Err(Error::invalid(
+                path,
+                format!(
+                    "two central members of set `{}` are the same link `{a}`; join members with a clutch or name distinct links",
+                    set.name
+                ),
+            ));
+        }
+    }
     for c in &central {
         d.declare(c);
         mount(
