@@ -148,7 +148,7 @@ pub enum SpecErrorKind {
         value: f64,
     },
     /// A number outside its range.
-    #[error("{value} is out of range: {expected}")]
+    #[error("{} is out of range: {expected}", readable(*value))]
     OutOfRange {
         /// The value written.
         value: f64,
@@ -347,6 +347,15 @@ pub enum AnalysisError {
     /// Anything else, in words.
     #[error("{0}")]
     Other(String),
+}
+
+/// A number as a person reads it: plain, or in exponent form when tiny or huge.
+fn readable(v: f64) -> String {
+    if v != 0.0 && !(1e-4..1e9).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
 }
 
 fn list(items: &[String]) -> String {
