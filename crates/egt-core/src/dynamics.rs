@@ -297,6 +297,16 @@ pub(crate) fn refuse(cond: f64, what: &str) -> Result<()> {
     Ok(())
 }
 
+/// A request checked once: its plan, applied torques, prescribed accelerations
+/// and row-major mass matrix.
+#[derive(Debug, Clone)]
+pub(crate) struct DynamicsSetup {
+    plan: InverseDynamicsPlan,
+    q: Vec<f64>,
+    alpha: Vec<f64>,
+    mass: Vec<f64>,
+}
+
 /// What an inverse-dynamics (or static) analysis asks.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct DynamicsRequest {
@@ -390,8 +400,19 @@ impl Train {
         ratios: &[f64],
         force_ratios: &[f64],
     ) -> Result<InverseDynamics> {
+        let mut setup = self.dynamics_setup(req, mass)?;
+        self.inverse_dynamics_in(&mut setup, req, mass, ratios, force_ratios)
+    }
+
+    /// The plan and the dense data of a request, checked once, for solving it
+    /// repeatedly with different force rows (the mesh-loss directions of `power.rs`).
+    pub(crate) fn dynamics_setup(
+        &self,
+        req: &DynamicsRequest,
+        mass: Option<&MassMatrix>,
+    ) -> Result<DynamicsSetup> {
         let n = self.coordinates().len();
-        let mut plan = self.inverse_dynamics_plan(req)?;
+        let plan = self.inverse_dynamics_plan(req)?;
         let mut q = vec![0.0; n];
         for &(l, t) in &req.torques {
             if !t.is_finite() {
@@ -412,7 +433,30 @@ impl Train {
             Some(mm) => mm.matrix.transpose().iter().copied().collect(),
             None => vec![0.0; n * n],
         };
-        plan.solve(ratios, force_ratios, &mvec, &q, &alpha)?;
+        Ok(DynamicsSetup {
+            plan,
+            q,
+            alpha,
+            mass: mvec,
+        })
+    }
+
+    /// Solve a prepared request with the given Willis and force-row ratios.
+    pub(crate) fn inverse_dynamics_in(
+        &self,
+        setup: &mut DynamicsSetup,
+        req: &DynamicsRequest,
+        mass: Option<&MassMatrix>,
+        ratios: &[f64],
+        force_ratios: &[f64],
+    ) -> Result<InverseDynamics> {
+        let DynamicsSetup {
+            plan,
+            q,
+            alpha,
+            mass: mvec,
+        } = setup;
+        plan.solve(ratios, force_ratios, mvec, q, alpha)?;
 
         let mut acceleration = vec![0.0; self.links().len()];
         for (k, l) in self.coordinates().iter().enumerate() {

@@ -196,7 +196,11 @@ impl Train {
         };
 
         let mut dirs = vec![Driver::None; taus.len()];
-        let mut dynamics = self.inverse_dynamics_with(&req.dynamics, mass, &taus, &taus)?;
+        // The plan is checked and sized once; each direction assignment only re-solves.
+        let mut setup = self.dynamics_setup(&req.dynamics, mass)?;
+        let mut solve =
+            |fr: &[f64]| self.inverse_dynamics_in(&mut setup, &req.dynamics, mass, &taus, fr);
+        let mut dynamics = solve(&taus)?;
         let mut iterations = 0;
         let mut notes = Vec::new();
         if !lossy.is_empty() {
@@ -209,8 +213,7 @@ impl Train {
                     break;
                 }
                 dirs = next;
-                dynamics =
-                    self.inverse_dynamics_with(&req.dynamics, mass, &taus, &force_ratios(&dirs))?;
+                dynamics = solve(&force_ratios(&dirs))?;
             }
             if !converged {
                 let k = lossy.len();
@@ -227,12 +230,7 @@ impl Train {
                             Driver::GearI
                         };
                     }
-                    let Ok(d) = self.inverse_dynamics_with(
-                        &req.dynamics,
-                        mass,
-                        &taus,
-                        &force_ratios(&trial),
-                    ) else {
+                    let Ok(d) = solve(&force_ratios(&trial)) else {
                         continue;
                     };
                     if lossy
