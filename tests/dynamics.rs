@@ -615,3 +615,95 @@ fn self_locking_is_reported() {
     let err = run(l4, l2).unwrap_err().to_string();
     assert!(err.contains("self-locks"), "{err}");
 }
+
+/// Nested carriers, eq. (4): the planet P rides on C2, which rides on C1. Its
+/// centre is p = delta_ab e(theta_1) + delta_bc e(theta_2) with the offsets
+/// fixed in C1 and C2; differentiating that position numerically at the aligned
+/// configuration gives the centre's speed, and so the kinetic energy that
+/// w^T M w / 2 must reproduce, off-diagonal coupling term included.
+#[test]
+fn nested_carrier_mass_matrix_matches_the_moving_centre() {
+    let (dab, dbc, m, copies) = (0.1, 0.03, 2.0, 3u32);
+    let t = train(&format!(
+        r#"
+        frame = "f"
+        links = [{{ name = "S" }}, {{ name = "S2" }}, {{ name = "C1" }}, {{ name = "C2" }}, {{ name = "G" }},
+                 {{ name = "P", mass = {m}, copies = {copies} }}]
+        revolutes = [{{ links = ["f", "S"], level = "a" }}, {{ links = ["f", "S2"], level = "a" }},
+                     {{ links = ["f", "C1"], level = "a" }}, {{ links = ["C1", "C2"], level = "b" }},
+                     {{ links = ["C1", "G"], level = "b" }}, {{ links = ["C2", "P"], level = "c" }}]
+        gears = [{{ links = ["S", "C2"], ratio = -2.5 }}, {{ links = ["S2", "G"], ratio = -1.5 }},
+                 {{ links = ["P", "G"], ratio = 3.0 }}]
+        offsets = [{{ levels = ["a", "b"], distance = {dab} }}, {{ levels = ["b", "c"], distance = {dbc} }}]
+        "#
+    ));
+    let mass = t.mass_matrix().unwrap();
+    assert!(
+        mass.notes
+            .iter()
+            .any(|n| n.contains("`P` rides on nested carriers")),
+        "{:?}",
+        mass.notes
+    );
+    let (c1, c2) = (id(&t, "C1"), id(&t, "C2"));
+    let centre = |th1: f64, th2: f64| {
+        [
+            dab * th1.cos() + dbc * th2.cos(),
+            dab * th1.sin() + dbc * th2.sin(),
+        ]
+    };
+    for &(w1, w2) in &[(1.0, 0.0), (0.0, 1.0), (3.0, -7.0), (-2.0, 5.5)] {
+        let h = 1e-6;
+        let (p, q) = (centre(w1 * h, w2 * h), centre(-w1 * h, -w2 * h));
+        let v2 = ((p[0] - q[0]) / (2.0 * h)).powi(2) + ((p[1] - q[1]) / (2.0 * h)).powi(2);
+        let kinetic = 0.5 * f64::from(copies) * m * v2;
+        let mut speed = vec![0.0; t.links().len()];
+        speed[c1.index()] = w1;
+        speed[c2.index()] = w2;
+        assert!(
+            close(t.kinetic_energy(&mass, &speed), kinetic, 1e-8),
+            "w = ({w1}, {w2})"
+        );
+    }
+}
+
+/// Offsets: derived from pitch radii when the spec gives none; the spec's value
+/// wins when both are given, and a disagreement is reported. Checked on the
+/// carrier's diagonal entry I_2 + n_s3 m_3 delta_ab^2 (example 6.1).
+#[test]
+fn spec_offsets_win_over_radii_and_disagreement_is_reported() {
+    let text = std::fs::read_to_string(example("fig3_example61.toml")).unwrap();
+    let (i2, m3, n3) = (2.0e-3, 0.12, 3.0); // from the example file
+    let carrier = |t: &Train, mass: &egt_core::MassMatrix| {
+        mass.matrix[(
+            t.coordinate(id(t, "2")).unwrap(),
+            t.coordinate(id(t, "2")).unwrap(),
+        )]
+    };
+    let derived = train(&text);
+    let m = derived.mass_matrix().unwrap();
+    // Module 2 mm, teeth 30 and 20: delta_ab = 30 mm + 20 mm.
+    assert!(close(
+        carrier(&derived, &m),
+        i2 + n3 * m3 * 0.05f64.powi(2),
+        1e-12
+    ));
+    assert!(m.notes.is_empty(), "{:?}", m.notes);
+    // A top-level `[[offsets]]` header may follow `[analysis]` in TOML.
+    let given = train(&format!(
+        "{text}\n[[offsets]]\nlevels = [\"a\", \"b\"]\ndistance = 0.06\n"
+    ));
+    let m = given.mass_matrix().unwrap();
+    assert!(close(
+        carrier(&given, &m),
+        i2 + n3 * m3 * 0.06f64.powi(2),
+        1e-12
+    ));
+    assert!(
+        m.notes
+            .iter()
+            .any(|n| n.contains("spec gives 0.06") && n.contains("0.05")),
+        "{:?}",
+        m.notes
+    );
+}
