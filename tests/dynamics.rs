@@ -20,6 +20,32 @@ fn close(a: f64, b: f64, rel: f64) -> bool {
     (a - b).abs() <= rel * a.abs().max(b.abs()).max(1e-300)
 }
 
+/// Steady (static) power flow of a 1-DOF train: `speed` on link `moving`, the
+/// torque of `driving` solved against `load` on `loaded`.
+fn steady_power(
+    t: &Train,
+    moving: LinkId,
+    speed: f64,
+    driving: LinkId,
+    loaded: LinkId,
+    load: f64,
+    losses: bool,
+) -> egt_core::Result<egt_core::PowerFlow> {
+    t.power_flow(
+        &PowerRequest {
+            speeds: vec![SpeedInput::from((moving, speed))],
+            dynamics: DynamicsRequest {
+                torques: vec![(loaded, load)],
+                accelerations: vec![],
+                driving: vec![driving],
+                extras: vec![],
+            },
+            losses,
+        },
+        None,
+    )
+}
+
 /// The paper's Fig. 3 train with pitch radii r11, r31 (pair 1) and r32, r42 (pair 2).
 #[allow(clippy::too_many_arguments)]
 fn fig3(r11: f64, r31: f64, r32: f64, i2: f64, i3: f64, m3: f64, n3: u32, i4: f64) -> Train {
@@ -343,21 +369,7 @@ fn planetary_efficiency_matches_textbook() {
         }
         let t = Train::from_spec(&explicit).unwrap();
         let (li, lo) = (id(&t, input), id(&t, output));
-        let pf = t
-            .power_flow(
-                &PowerRequest {
-                    speeds: vec![SpeedInput::from((li, 150.0))],
-                    dynamics: DynamicsRequest {
-                        torques: vec![(lo, -80.0)],
-                        accelerations: vec![],
-                        driving: vec![li],
-                        extras: vec![],
-                    },
-                    losses: true,
-                },
-                None,
-            )
-            .unwrap();
+        let pf = steady_power(&t, li, 150.0, li, lo, -80.0, true).unwrap();
         let eff = pf.efficiency.unwrap();
         assert!(
             close(eff, expected, 1e-12),
@@ -368,21 +380,7 @@ fn planetary_efficiency_matches_textbook() {
             "power balance"
         );
         // Ideal meshes give exactly 1.
-        let ideal = t
-            .power_flow(
-                &PowerRequest {
-                    speeds: vec![SpeedInput::from((li, 150.0))],
-                    dynamics: DynamicsRequest {
-                        torques: vec![(lo, -80.0)],
-                        accelerations: vec![],
-                        driving: vec![li],
-                        extras: vec![],
-                    },
-                    losses: false,
-                },
-                None,
-            )
-            .unwrap();
+        let ideal = steady_power(&t, li, 150.0, li, lo, -80.0, false).unwrap();
         assert!(close(ideal.efficiency.unwrap(), 1.0, 1e-14));
     }
 }
@@ -411,21 +409,7 @@ fn circulating_power_is_detected_and_named() {
         "#,
     );
     let (li, lo) = (id(&t, "in"), id(&t, "out"));
-    let pf = t
-        .power_flow(
-            &PowerRequest {
-                speeds: vec![SpeedInput::from((li, 100.0))],
-                dynamics: DynamicsRequest {
-                    torques: vec![(lo, -50.0)],
-                    accelerations: vec![],
-                    driving: vec![li],
-                    extras: vec![],
-                },
-                losses: false,
-            },
-            None,
-        )
-        .unwrap();
+    let pf = steady_power(&t, li, 100.0, li, lo, -50.0, false).unwrap();
     assert!(close(pf.speeds.speed[lo.index()], 140.0, 1e-12));
     assert!(close(pf.dynamics.driving_torques[0].1, 70.0, 1e-12));
     assert!(close(pf.input_power, pf.output_power, 1e-12));
@@ -587,21 +571,8 @@ fn self_locking_is_reported() {
         "#,
     );
     let (l2, l4) = (id(&t, "2"), id(&t, "4"));
-    let run = |driving: LinkId, loaded: LinkId| {
-        t.power_flow(
-            &PowerRequest {
-                speeds: vec![SpeedInput::from((l2, 31.0))],
-                dynamics: DynamicsRequest {
-                    torques: vec![(loaded, -10.0)],
-                    accelerations: vec![],
-                    driving: vec![driving],
-                    extras: vec![],
-                },
-                losses: true,
-            },
-            None,
-        )
-    };
+    let run =
+        |driving: LinkId, loaded: LinkId| steady_power(&t, l2, 31.0, driving, loaded, -10.0, true);
     let forward = run(l2, l4).unwrap();
     // Forward it runs, at the low efficiency typical of such reductions, and
     // balances power: input = output + mesh losses.
