@@ -30,3 +30,6 @@ mod transmission;
 
 // Issue 4: stability (example 6.2, eigenvalues vs simulation) and forward dynamics, with the failure edges.
 mod stability;
+
+// Issue 11: round-off never decides the direction of power (random teeth, exact reference).
+mod efficiency;

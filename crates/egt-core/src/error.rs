@@ -344,6 +344,21 @@ pub enum AnalysisError {
         /// Where to give it.
         hint: String,
     },
+    /// No consistent direction of power flow exists through the lossy meshes.
+    #[error(
+        "no consistent direction of power flow exists through the lossy meshes: the train self-locks under these loads (or the driving torque cannot overcome friction)"
+    )]
+    SelfLocking,
+    /// The direction search did not settle and enumeration would be too large.
+    #[error(
+        "power-flow directions did not settle and {meshes} loaded lossy meshes are too many to enumerate (at most {limit})"
+    )]
+    DirectionsUndecided {
+        /// Loaded lossy meshes.
+        meshes: usize,
+        /// The enumeration limit.
+        limit: usize,
+    },
     /// Anything else, in words.
     #[error("{0}")]
     Other(String),

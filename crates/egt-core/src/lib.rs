@@ -42,6 +42,7 @@ mod expand;
 pub mod families;
 pub mod kinematics;
 pub mod linalg;
+mod losses;
 pub mod mass;
 pub mod modp;
 pub mod parse;

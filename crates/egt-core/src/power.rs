@@ -14,16 +14,12 @@
 
 use serde::Serialize;
 
-use crate::dynamics::{DynamicsRequest, InverseDynamics};
-use crate::error::{AnalysisError, Result};
+use crate::dynamics::{DynamicsRequest, DynamicsSetup, InverseDynamics};
+use crate::error::Result;
 use crate::kinematics::{SpeedInput, Speeds};
+use crate::losses::{Directions, LossySolver, Meshes, mesh_torque};
 use crate::mass::MassMatrix;
 use crate::train::{GearId, LinkId, Train};
-
-/// Relative size under which a rolling speed or power counts as zero.
-const ZERO_REL: f64 = 1e-12;
-/// Largest number of rolling meshes whose directions are enumerated when iteration fails.
-const MAX_ENUMERATED_MESHES: usize = 16;
 
 /// Which gear drives a mesh in the carrier's frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -163,95 +159,36 @@ impl Train {
             .iter()
             .map(|c| w[c.gear_j.index()] - w[c.carrier.index()])
             .collect();
-        let rolls: Vec<bool> = rolling
-            .iter()
-            .map(|r| r.abs() > ZERO_REL * wscale)
-            .collect();
-        let lossy: Vec<usize> = (0..taus.len())
-            .filter(|&m| rolls[m] && etas[m] < 1.0)
-            .collect();
-
-        let force_ratios = |dirs: &[Driver]| -> Vec<f64> {
-            taus.iter()
-                .zip(&etas)
-                .zip(dirs)
-                .map(|((&t, &e), d)| match d {
-                    Driver::GearI => t * e,
-                    Driver::GearJ => t / e,
-                    Driver::None => t,
-                })
-                .collect()
+        let mesh_data = Meshes {
+            ratios: &taus,
+            efficiency: &etas,
+            rolling: &rolling,
+            speed_scale: wscale,
         };
-        // The driver implied by a solution: gear i drives when lambda tau (w_j - w_k) > 0.
-        let implied = |dynamics: &InverseDynamics, m: usize| -> Driver {
-            let x = dynamics.multipliers[m] * taus[m] * rolling[m];
-            let scale = dynamics.multipliers[m].abs() * taus[m].abs() * wscale;
-            if !rolls[m] || x.abs() <= ZERO_REL * scale.max(f64::MIN_POSITIVE) {
-                Driver::None
-            } else if x > 0.0 {
-                Driver::GearI
-            } else {
-                Driver::GearJ
-            }
-        };
-
-        let mut dirs = vec![Driver::None; taus.len()];
         // The plan is checked and sized once; each direction assignment only re-solves.
-        let mut setup = self.dynamics_setup(&req.dynamics, mass)?;
-        let mut solve =
-            |fr: &[f64]| self.inverse_dynamics_in(&mut setup, &req.dynamics, mass, &taus, fr);
-        let mut dynamics = solve(&taus)?;
-        let mut iterations = 0;
-        let mut notes = Vec::new();
-        if !lossy.is_empty() {
-            let mut converged = false;
-            for _ in 0..(2 * lossy.len() + 4) {
-                iterations += 1;
-                let next: Vec<Driver> = (0..taus.len()).map(|m| implied(&dynamics, m)).collect();
-                if next == dirs && iterations > 1 {
-                    converged = true;
-                    break;
-                }
-                dirs = next;
-                dynamics = solve(&force_ratios(&dirs))?;
-            }
-            if !converged {
-                let k = lossy.len();
-                if k > MAX_ENUMERATED_MESHES {
-                    return Err(AnalysisError::Other(format!("power-flow directions did not settle and {k} lossy meshes are too many to enumerate")).into());
-                }
-                let mut found = None;
-                for bits in 0..(1u32 << k) {
-                    let mut trial = vec![Driver::None; taus.len()];
-                    for (b, &m) in lossy.iter().enumerate() {
-                        trial[m] = if bits >> b & 1 == 1 {
-                            Driver::GearJ
-                        } else {
-                            Driver::GearI
-                        };
-                    }
-                    let Ok(d) = solve(&force_ratios(&trial)) else {
-                        continue;
-                    };
-                    if lossy
-                        .iter()
-                        .all(|&m| implied(&d, m) == trial[m] || implied(&d, m) == Driver::None)
-                    {
-                        found = Some((trial, d));
-                        break;
-                    }
-                }
-                let (d0, d1) = found.ok_or_else(|| {
-                    AnalysisError::Other(
-                        "no consistent direction of power flow exists through the lossy meshes: the train self-locks under these loads (or the driving torque cannot overcome friction)".into(),
-                    )
-                })?;
-                notes.push("power-flow directions found by enumeration".into());
-                dirs = d0;
-                dynamics = d1;
-            }
-        }
-        let tp = force_ratios(&dirs);
+        let setup = self.dynamics_setup(&req.dynamics, mass)?;
+        let mut sys = LossyFlow {
+            train: self,
+            setup,
+            req: &req.dynamics,
+            mass,
+            meshes: mesh_data,
+            dynamics: None,
+        };
+        sys.solve_directions(&vec![Driver::None; taus.len()])?;
+        let mut directions = Directions::new(taus.len());
+        let iterations = directions.settle(&mut sys, &mesh_data)?;
+        let dirs = directions.dirs;
+        let tp: Vec<f64> = (0..taus.len())
+            .map(|m| mesh_data.force_ratio(m, dirs[m]))
+            .collect();
+        let implied: Vec<Driver> = (0..taus.len())
+            .map(|m| mesh_data.implied(&sys, m))
+            .collect();
+        let Some(dynamics) = sys.dynamics else {
+            unreachable!("solved above")
+        };
+        let notes: Vec<String> = Vec::new();
 
         let mut meshes = Vec::with_capacity(taus.len());
         for (m, c) in self.circuits().iter().enumerate() {
@@ -264,7 +201,7 @@ impl Train {
             let driver = if dirs[m] != Driver::None {
                 dirs[m]
             } else {
-                implied(&dynamics, m)
+                implied[m]
             };
             let p_i = lam * taus[m] * rolling[m];
             meshes.push(MeshPower {
@@ -390,5 +327,46 @@ impl Train {
             iterations,
             notes,
         })
+    }
+}
+
+/// The single-scenario force system as the direction search sees it.
+struct LossyFlow<'a> {
+    train: &'a Train,
+    setup: DynamicsSetup,
+    req: &'a DynamicsRequest,
+    mass: Option<&'a MassMatrix>,
+    meshes: Meshes<'a>,
+    dynamics: Option<InverseDynamics>,
+}
+
+impl LossySolver for LossyFlow<'_> {
+    fn solve_directions(&mut self, directions: &[Driver]) -> Result<()> {
+        let force: Vec<f64> = (0..directions.len())
+            .map(|m| self.meshes.force_ratio(m, directions[m]))
+            .collect();
+        self.dynamics = Some(self.train.inverse_dynamics_in(
+            &mut self.setup,
+            self.req,
+            self.mass,
+            self.meshes.ratios,
+            &force,
+        )?);
+        Ok(())
+    }
+    fn multiplier(&self, m: usize) -> f64 {
+        self.dynamics.as_ref().map_or(0.0, |d| d.multipliers[m])
+    }
+    fn torque_scale(&self) -> f64 {
+        let Some(d) = &self.dynamics else { return 0.0 };
+        let external = d.torque.iter().map(|t| t.abs());
+        let meshes = d
+            .meshes
+            .iter()
+            .map(|l| mesh_torque(l.multiplier, self.meshes.ratios[l.gear.index()]));
+        external.chain(meshes).fold(0.0, f64::max)
+    }
+    fn condition(&self) -> f64 {
+        self.dynamics.as_ref().map_or(1.0, |d| d.conditions[1])
     }
 }

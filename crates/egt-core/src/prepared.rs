@@ -21,16 +21,12 @@ use std::ops::Range;
 use crate::dynamics::{Extra, Rows, dof_with, link_columns, refuse, singular};
 use num_traits::Zero;
 
-use crate::error::{AnalysisError, Result};
+use crate::error::Result;
 use crate::exact::{self, Q, QMatrix};
 use crate::linalg::Lu;
+use crate::losses::{Directions, LossySolver, Meshes, mesh_torque, willis_row};
 use crate::power::Driver;
 use crate::train::{LinkId, Train};
-
-/// Relative size under which a rolling speed or power counts as zero (as in `power.rs`).
-const ZERO_REL: f64 = 1e-12;
-/// Largest number of lossy meshes whose directions are enumerated when iteration fails.
-const MAX_ENUMERATED_MESHES: usize = 16;
 
 /// One link's share of the mass matrix.
 #[derive(Debug, Clone)]
@@ -278,9 +274,7 @@ pub struct Workspace {
     rhs: Vec<f64>,
     tau: Vec<f64>,
     rolling: Vec<f64>,
-    dirs: Vec<Driver>,
-    next: Vec<Driver>,
-    lossy: Vec<usize>,
+    directions: Directions,
     cond: [f64; 3],
     power: PowerSummary,
     /// The ratios the factorisations below were made with, and which of them
@@ -380,9 +374,7 @@ impl PreparedTrain {
             rhs: vec![0.0; n],
             tau: vec![0.0; g],
             rolling: vec![0.0; g],
-            dirs: vec![Driver::None; g],
-            next: vec![Driver::None; g],
-            lossy: Vec::with_capacity(g),
+            directions: Directions::new(g),
             cond: [1.0; 3],
             power: PowerSummary::default(),
             key: vec![f64::NAN; g],
@@ -395,7 +387,7 @@ impl PreparedTrain {
     fn fill_constraints(&self, taus: &[f64], out: &mut [f64]) {
         let n = self.n;
         for (m, (cols, &t)) in self.circuits.iter().zip(taus).enumerate() {
-            for (k, v) in cols.iter().zip([1.0, -t, t - 1.0]) {
+            for (k, v) in cols.iter().zip(willis_row(t)) {
                 if let Some(k) = k {
                     out[m * n + k] += v;
                 }
@@ -668,39 +660,34 @@ impl PreparedTrain {
         k.map_or(0.0, |k| ws.speed[k])
     }
 
-    /// Mesh losses: find the direction of rolling power in every lossy mesh
-    /// (iteration, then enumeration, as `power.rs`), then the power balance.
+    /// Mesh losses: the direction of rolling power in every lossy mesh (the
+    /// one search of `losses.rs`), then the power balance.
     fn power(&self, ws: &mut Workspace, s: &Scenario<'_>) -> Result<()> {
-        let g = self.circuits.len();
         let wscale = ws.speed.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-        ws.lossy.clear();
         for (m, cols) in self.circuits.iter().enumerate() {
             ws.rolling[m] = Self::w(ws, cols[1]) - Self::w(ws, cols[2]);
-            if ws.rolling[m].abs() > ZERO_REL * wscale && s.efficiency[m] < 1.0 {
-                ws.lossy.push(m);
-            }
-            ws.dirs[m] = Driver::None;
         }
-        let mut iterations = 0;
-        if !ws.lossy.is_empty() {
-            let mut converged = false;
-            for _ in 0..(2 * ws.lossy.len() + 4) {
-                iterations += 1;
-                for m in 0..g {
-                    ws.next[m] = self.implied(ws, s, m, wscale);
-                }
-                if ws.next == ws.dirs && iterations > 1 {
-                    converged = true;
-                    break;
-                }
-                ws.dirs.copy_from_slice(&ws.next);
-                self.lossy_ratios(ws, s);
-                self.solve_forces(ws, false)?;
-            }
-            if !converged {
-                self.enumerate_directions(ws, s, wscale)?;
-            }
-        }
+        // The search's buffers leave the workspace while it solves (moving
+        // them allocates nothing).
+        let mut directions = std::mem::replace(&mut ws.directions, Directions::new(0));
+        let rolling = std::mem::take(&mut ws.rolling);
+        let meshes = Meshes {
+            ratios: s.ratios,
+            efficiency: s.efficiency,
+            rolling: &rolling,
+            speed_scale: wscale,
+        };
+        let settled = directions.settle(
+            &mut LossyScenario {
+                plan: self,
+                ws,
+                meshes,
+            },
+            &meshes,
+        );
+        ws.rolling = rolling;
+        ws.directions = directions;
+        let iterations = settled?;
         // The balance.
         let (mut input, mut output, mut kinetic_rate) = (0.0, 0.0, 0.0);
         let c = self.constraints();
@@ -719,7 +706,7 @@ impl PreparedTrain {
             let mw: f64 = (0..n).map(|j| ws.m[k * n + j] * ws.accel[j]).sum();
             kinetic_rate += mw * ws.speed[k];
         }
-        let loss = (0..g)
+        let loss = (0..self.circuits.len())
             .map(|m| ws.x[m] * (s.ratios[m] - ws.tau[m]) * ws.rolling[m])
             .sum();
         ws.power = PowerSummary {
@@ -730,77 +717,6 @@ impl PreparedTrain {
             iterations,
         };
         Ok(())
-    }
-
-    /// Force ratios for the directions in `ws.dirs`: tau eta when gear i drives, tau / eta when gear j does.
-    fn lossy_ratios(&self, ws: &mut Workspace, s: &Scenario<'_>) {
-        for (m, t) in ws.tau.iter_mut().enumerate() {
-            let (tau, eta) = (s.ratios[m], s.efficiency[m]);
-            *t = match ws.dirs[m] {
-                Driver::GearI => tau * eta,
-                Driver::GearJ => tau / eta,
-                Driver::None => tau,
-            };
-        }
-    }
-
-    /// The driver implied by the current multipliers: gear i drives when lambda tau (w_j - w_k) > 0.
-    fn implied(&self, ws: &Workspace, s: &Scenario<'_>, m: usize, wscale: f64) -> Driver {
-        let lam = ws.x[m];
-        let x = lam * s.ratios[m] * ws.rolling[m];
-        let scale = lam.abs() * s.ratios[m].abs() * wscale;
-        if ws.rolling[m].abs() <= ZERO_REL * wscale
-            || x.abs() <= ZERO_REL * scale.max(f64::MIN_POSITIVE)
-        {
-            Driver::None
-        } else if x > 0.0 {
-            Driver::GearI
-        } else {
-            Driver::GearJ
-        }
-    }
-
-    /// Try every assignment of directions to the lossy meshes; keep the first consistent one.
-    fn enumerate_directions(
-        &self,
-        ws: &mut Workspace,
-        s: &Scenario<'_>,
-        wscale: f64,
-    ) -> Result<()> {
-        let k = ws.lossy.len();
-        if k > MAX_ENUMERATED_MESHES {
-            return Err(AnalysisError::Other(format!(
-                "power-flow directions did not settle and {k} lossy meshes are too many to enumerate"
-            ))
-            .into());
-        }
-        for bits in 0..(1u32 << k) {
-            ws.dirs.iter_mut().for_each(|d| *d = Driver::None);
-            for b in 0..k {
-                let m = ws.lossy[b];
-                ws.dirs[m] = if bits >> b & 1 == 1 {
-                    Driver::GearJ
-                } else {
-                    Driver::GearI
-                };
-            }
-            self.lossy_ratios(ws, s);
-            if self.solve_forces(ws, false).is_err() {
-                continue;
-            }
-            let consistent = (0..k).all(|b| {
-                let m = ws.lossy[b];
-                let d = self.implied(ws, s, m, wscale);
-                d == ws.dirs[m] || d == Driver::None
-            });
-            if consistent {
-                return Ok(());
-            }
-        }
-        Err(AnalysisError::Other(
-            "no consistent direction of power flow exists through the lossy meshes: the train self-locks under these loads (or the driving torque cannot overcome friction)".into(),
-        )
-        .into())
     }
 
     /// max |M w' + psi~^T lambda - Q - D^T T_d| relative to the largest torque (eq. 6).
@@ -815,7 +731,7 @@ impl PreparedTrain {
             scale = scale.max(s.torques[k].abs());
             for (m, cols) in self.circuits.iter().enumerate() {
                 let t = ws.tau[m];
-                for (col, v) in cols.iter().zip([1.0, -t, t - 1.0]) {
+                for (col, v) in cols.iter().zip(willis_row(t)) {
                     if *col == Some(k) {
                         r += v * ws.x[m];
                         scale = scale.max((v * ws.x[m]).abs());
@@ -836,6 +752,35 @@ impl PreparedTrain {
             worst = worst.max(r.abs());
         }
         worst / scale
+    }
+}
+
+/// One scenario's force system as the direction search sees it.
+struct LossyScenario<'a, 'b> {
+    plan: &'a PreparedTrain,
+    ws: &'a mut Workspace,
+    meshes: Meshes<'b>,
+}
+
+impl LossySolver for LossyScenario<'_, '_> {
+    fn solve_directions(&mut self, directions: &[Driver]) -> Result<()> {
+        for (m, t) in self.ws.tau.iter_mut().enumerate() {
+            *t = self.meshes.force_ratio(m, directions[m]);
+        }
+        self.plan.solve_forces(self.ws, false)
+    }
+    fn multiplier(&self, m: usize) -> f64 {
+        self.ws.x[m]
+    }
+    fn torque_scale(&self) -> f64 {
+        let c = self.plan.constraints();
+        let applied = self.ws.rhs.iter().chain(&self.ws.x[c..]);
+        let meshes =
+            (0..self.plan.circuits.len()).map(|m| mesh_torque(self.ws.x[m], self.ws.tau[m]));
+        applied.map(|v| v.abs()).chain(meshes).fold(0.0, f64::max)
+    }
+    fn condition(&self) -> f64 {
+        self.ws.cond[2]
     }
 }
 
