@@ -921,3 +921,130 @@ fn docs_stability_block_is_current() {
     }
     assert!(checked >= 12, "{checked}");
 }
+
+/// A power split (a planetary differential: sun and carrier driven by motors
+/// with falling curves, the ring loaded with `ring_slope`) whose sun, carrier
+/// and planet have inertia `small` against a ring of `ring`.
+fn power_split(small: f64, ring: f64, ring_slope: f64) -> (Train, Vec<Curve>) {
+    let t = train(&format!(
+        r#"
+        frame = "case"
+        links = [{{ name = "sun", inertia = {small:e} }}, {{ name = "carrier", inertia = {small:e} }},
+                 {{ name = "ring", inertia = {ring:e} }}, {{ name = "P.planet", inertia = {small:e}, copies = 1 }}]
+        [[planetary]]
+        name = "P"
+        sun = "sun"
+        ring = "ring"
+        carrier = "carrier"
+        teeth = {{ sun = 30, ring = 72, planet = 21 }}
+        "#
+    ));
+    let curves = vec![
+        curve(&t, "sun", 0.0, -1.0, 0.0),
+        curve(&t, "carrier", 0.0, -0.5, 0.0),
+        curve(&t, "ring", 0.0, ring_slope, 0.0),
+    ];
+    (t, curves)
+}
+
+/// The verdict from the exact pencil: det(K - lambda M) = a lambda^2 + b lambda + c
+/// with [M] and [K] reduced exactly on an exact null-space basis of the Willis
+/// equations, and the sign of its largest root read off a, b and c (Vieta).
+fn exact_pencil_verdict(t: &Train, inertia: &[(&str, f64)], curves: &[Curve]) -> Verdict {
+    use egt_core::exact::{self, Q};
+    use num_traits::{Signed, Zero};
+    let psi = t.willis_jacobian_exact().unwrap();
+    let n = t.coordinates().len();
+    let basis = exact::nullspace(&psi, n);
+    assert_eq!(basis.len(), 2);
+    let diag = |values: &dyn Fn(LinkId) -> f64| -> Vec<Q> {
+        t.coordinates()
+            .iter()
+            .map(|&l| exact::from_f64(values(l)).unwrap())
+            .collect()
+    };
+    let m = diag(&|l| {
+        inertia
+            .iter()
+            .find(|(name, _)| id(t, name) == l)
+            .map_or(0.0, |p| p.1)
+    });
+    let k = diag(&|l| curves.iter().filter(|c| c.link == l).map(|c| c.slope).sum());
+    let reduce = |d: &[Q]| -> [[Q; 2]; 2] {
+        let e =
+            |a: usize, b: usize| -> Q { (0..n).map(|c| &basis[a][c] * &basis[b][c] * &d[c]).sum() };
+        [[e(0, 0), e(0, 1)], [e(1, 0), e(1, 1)]]
+    };
+    let (mr, kr) = (reduce(&m), reduce(&k));
+    let a = &mr[0][0] * &mr[1][1] - &mr[0][1] * &mr[0][1];
+    let b = -(&kr[0][0] * &mr[1][1] + &kr[1][1] * &mr[0][0] - exact::q(2) * &kr[0][1] * &mr[0][1]);
+    let c = &kr[0][0] * &kr[1][1] - &kr[0][1] * &kr[0][1];
+    assert!(a.is_positive());
+    if c.is_negative() || (!c.is_negative() && (-&b).is_positive()) {
+        Verdict::Unstable
+    } else if c.is_zero() || b.is_zero() {
+        Verdict::Marginal
+    } else {
+        Verdict::Stable
+    }
+}
+
+/// Issue 11, class 3: verdicts on badly scaled trains. Inertia ratios from
+/// 1e-12 to 1e12 (and the reported case, 1e-9 against 1e3), rising, falling
+/// and absent ring slopes: the verdict equals the sign of the largest root of
+/// the exact pencil, and a simulation with the L-stable implicit method
+/// grows exactly when the verdict is unstable.
+#[test]
+fn badly_scaled_verdicts_equal_the_exact_pencil_and_simulation() {
+    let mut cases: Vec<(f64, f64)> = (-12..=12).map(|k| (10f64.powi(k), 1.0)).collect();
+    cases.extend([(1e-9, 1e3), (2e-10, 1e3), (1e-8, 1e3)]);
+    for &(small, ring) in &cases {
+        for ring_slope in [2.5, -2.5, 0.0] {
+            let (t, curves) = power_split(small, ring, ring_slope);
+            let rep = t
+                .stability(&StabilityRequest {
+                    curves: Some(curves.clone()),
+                    speeds: Some(vec![(id(&t, "sun"), 100.0), (id(&t, "carrier"), 40.0)]),
+                    ..Default::default()
+                })
+                .unwrap();
+            let inertia = [
+                ("sun", small),
+                ("carrier", small),
+                ("P.planet", small),
+                ("ring", ring),
+            ];
+            let expected = exact_pencil_verdict(&t, &inertia, &curves);
+            let st = &rep.stability;
+            assert_eq!(
+                st.verdict, expected,
+                "small {small:e}, ring {ring:e}, slope {ring_slope}: {}",
+                st.reason
+            );
+            if expected == Verdict::Marginal {
+                continue;
+            }
+            // The deviation dynamics over five slow time constants.
+            let slow = st
+                .eigenvalues
+                .iter()
+                .fold(f64::INFINITY, |m, l| m.min(l.abs()));
+            let end = 5.0 / slow;
+            let torque = LinearCurves::new(&t, &curves).unwrap();
+            let mut dynamics = ReducedDynamics::new(&t, &torque).unwrap();
+            let coords = rep.model.coordinates.clone();
+            let start = [(coords[0], 1.0), (coords[1], 0.3)];
+            let sim = dynamics
+                .simulate(&start, &opts(end, end / 2000.0, Method::Implicit))
+                .unwrap();
+            let zero = vec![0.0; t.links().len()];
+            let d0 = energy_norm(&t, &sim.samples[0].speed, &zero);
+            let d1 = energy_norm(&t, &sim.samples.last().unwrap().speed, &zero);
+            assert_eq!(
+                d1 > d0,
+                expected == Verdict::Unstable,
+                "small {small:e}, ring {ring:e}, slope {ring_slope}: energy norm {d0:e} -> {d1:e}"
+            );
+        }
+    }
+}

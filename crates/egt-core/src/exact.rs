@@ -221,6 +221,69 @@ pub fn abs(x: &Q) -> Q {
     x.abs()
 }
 
+/// The inertia of a symmetric matrix: how many eigenvalues are positive,
+/// zero and negative (Sylvester's law: invariant under congruence).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+pub struct Inertia {
+    /// Positive eigenvalues.
+    pub positive: usize,
+    /// Zero eigenvalues.
+    pub zero: usize,
+    /// Negative eigenvalues.
+    pub negative: usize,
+}
+
+/// The exact inertia of the symmetric matrix `a`, by congruence to a
+/// diagonal matrix (symmetric elimination; where every remaining diagonal
+/// entry is zero, row and column j are added to row and column i, which
+/// puts 2 a_ij on the diagonal).
+pub fn symmetric_inertia(a: &QMatrix) -> Inertia {
+    let mut a = a.clone();
+    let mut left: Vec<usize> = (0..a.len()).collect();
+    let mut inertia = Inertia::default();
+    while !left.is_empty() {
+        let pivot = match left.iter().position(|&p| !a[p][p].is_zero()) {
+            Some(k) => k,
+            None => {
+                let pair = left.iter().enumerate().find_map(|(ki, &i)| {
+                    left.iter()
+                        .find(|&&j| !a[i][j].is_zero())
+                        .map(|&j| (ki, i, j))
+                });
+                let Some((ki, i, j)) = pair else {
+                    inertia.zero += left.len();
+                    break;
+                };
+                let n = a.len();
+                for c in 0..n {
+                    let v = a[j][c].clone();
+                    a[i][c] += v;
+                }
+                for r in 0..n {
+                    let v = a[r][j].clone();
+                    a[r][i] += v;
+                }
+                ki
+            }
+        };
+        let p = left.swap_remove(pivot);
+        let d = a[p][p].clone();
+        if d.is_positive() {
+            inertia.positive += 1;
+        } else {
+            inertia.negative += 1;
+        }
+        for &r in &left {
+            let f = &a[r][p] / &d;
+            for &c in &left {
+                let v = &f * &a[p][c];
+                a[r][c] -= v;
+            }
+        }
+    }
+    inertia
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -263,5 +326,32 @@ mod tests {
                 assert!(s.is_zero());
             }
         }
+    }
+
+    #[test]
+    fn inertia_by_congruence_matches_known_spectra() {
+        let m = |rows: &[&[i64]]| -> QMatrix {
+            rows.iter()
+                .map(|r| r.iter().map(|&v| q(v)).collect())
+                .collect()
+        };
+        let count = |p, z, n| Inertia {
+            positive: p,
+            zero: z,
+            negative: n,
+        };
+        // Eigenvalues 3 and -1.
+        assert_eq!(symmetric_inertia(&m(&[&[1, 2], &[2, 1]])), count(1, 0, 1));
+        // A zero diagonal: eigenvalues +-1 (needs the row-addition step).
+        assert_eq!(symmetric_inertia(&m(&[&[0, 1], &[1, 0]])), count(1, 0, 1));
+        // Rank one: eigenvalues 0, 0, 3.
+        assert_eq!(
+            symmetric_inertia(&m(&[&[1, 1, 1], &[1, 1, 1], &[1, 1, 1]])),
+            count(1, 2, 0)
+        );
+        // Negative definite (eigenvalues -1, -3).
+        assert_eq!(symmetric_inertia(&m(&[&[-2, 1], &[1, -2]])), count(0, 0, 2));
+        // Negative semidefinite, singular (eigenvalues 0, -2).
+        assert_eq!(symmetric_inertia(&m(&[&[-1, 1], &[1, -1]])), count(0, 1, 1));
     }
 }

@@ -53,9 +53,11 @@ use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use serde::{Serialize, Serializer};
 
 use crate::error::{AnalysisError, Error, Result, SpecErrorKind};
+use crate::exact::{self, Q};
 use crate::kinematics::SpeedInput;
 use crate::linalg::{COND_REFUSE, COND_WARN, Lu};
 use crate::train::{Curve, LinkId, Train};
+use num_traits::Zero;
 
 /// Largest relative ||psi_w V|| (eq. 24) accepted without a warning.
 pub const ORTHOGONALITY_TOL: f64 = 1e-10;
@@ -66,9 +68,9 @@ pub const MASSLESS_REL: f64 = 1e-12;
 /// Below this fraction of the largest inertia (but above [`MASSLESS_REL`]) a
 /// direction is nearly massless: kept, but reported, since it makes the model stiff.
 pub const NEARLY_MASSLESS_REL: f64 = 1e-8;
-/// Eigenvalues within this fraction of the largest |eigenvalue| of zero
-/// count as zero (marginal): below the resolution of the double-precision
-/// eigenproblem.
+/// A massless direction whose torque slope is within this fraction of the
+/// largest slope of zero has neither inertia nor a slope: its speed is
+/// undetermined.
 pub const MARGINAL_REL: f64 = 1e-10;
 /// The operating point is steady when |V^T T| is below this fraction of the
 /// torques that enter it.
@@ -81,6 +83,15 @@ const OVERFLOW_GUARD: f64 = 1e150;
 /// Smallest relative residual of a row of the null-space basis for a link to
 /// be picked as an independent driving coordinate.
 const SELECT_REL: f64 = 1e-6;
+/// Resolution of the scaled eigenproblem: eigenvalues within this multiple of
+/// machine epsilon times the order and the norm of the scaled matrix are
+/// indistinguishable from zero in double precision.
+const EIGEN_RESOLUTION: f64 = 64.0 * f64::EPSILON;
+/// Relative eigen residual of the modes past which a warning says their rates are approximate.
+pub const MODE_RESIDUAL_WARN: f64 = 1e-8;
+/// Largest degree of freedom for which the signs of the eigenvalues are
+/// decided exactly.
+pub const EXACT_INERTIA_MAX_DOF: usize = 16;
 
 /// A matrix as a list of rows (for reports).
 pub fn matrix_rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
@@ -148,6 +159,13 @@ pub struct ReducedModel {
     pub link_offset: Vec<f64>,
     /// True for links carrying at least one curve.
     pub has_curve: Vec<bool>,
+    /// The signs of the eigenvalues of N^T diag(K) N, decided in exact
+    /// rational arithmetic from the ratios and slopes as given (None past
+    /// [`EXACT_INERTIA_MAX_DOF`] degrees of freedom). With [M] positive
+    /// (semi)definite, Sylvester's law of inertia makes them the signs of the
+    /// eigenvalues of the pencil (lambda [M] - [K]): the verdict does not
+    /// depend on the inertias, however badly scaled they are.
+    pub slope_inertia: Option<exact::Inertia>,
     /// Link names (by link index), for messages.
     #[serde(skip)]
     pub link_names: Vec<String>,
@@ -517,6 +535,49 @@ impl Train {
         Ok(basis)
     }
 
+    /// The exact inertia of N^T diag(K) N for any exact basis N of the
+    /// motions the Willis equations allow (congruence leaves it unchanged):
+    /// the ratios and slopes are taken as the exact values of the numbers given.
+    fn exact_slope_inertia(&self, link_slope: &[f64]) -> Option<exact::Inertia> {
+        if self.dof() > EXACT_INERTIA_MAX_DOF {
+            return None;
+        }
+        let taus: Vec<Q> = self
+            .gears()
+            .iter()
+            .map(|g| {
+                let r = g.ratio.as_ref()?;
+                r.exact.clone().or_else(|| exact::from_f64(r.value))
+            })
+            .collect::<Option<_>>()?;
+        let n = self.coordinates().len();
+        let psi =
+            crate::topology::willis_exact(self.links().len(), self.frame(), self.circuits(), |m| {
+                taus[m].clone()
+            });
+        let basis = exact::nullspace(&psi, n);
+        let slopes: Vec<Q> = self
+            .coordinates()
+            .iter()
+            .map(|l| exact::from_f64(link_slope[l.index()]))
+            .collect::<Option<_>>()?;
+        let k: exact::QMatrix = basis
+            .iter()
+            .map(|a| {
+                basis
+                    .iter()
+                    .map(|b| {
+                        (0..n)
+                            .filter(|&c| !slopes[c].is_zero())
+                            .map(|c| &a[c] * &b[c] * &slopes[c])
+                            .sum()
+                    })
+                    .collect()
+            })
+            .collect();
+        Some(exact::symmetric_inertia(&k))
+    }
+
     /// The reduced model (eq. 23-27) for the driving links `coordinates` and
     /// the linearised torque-speed `curves` on any links.
     ///
@@ -598,6 +659,7 @@ impl Train {
         }
         let basis_mass = sym(&(nb.transpose() * &mm.matrix * &nb));
         let basis_slope = slope_matrix(&basis, &link_slope);
+        let slope_inertia = self.exact_slope_inertia(&link_slope);
         Ok(ReducedModel {
             coordinates: coordinates.to_vec(),
             source,
@@ -613,6 +675,7 @@ impl Train {
             link_slope,
             link_offset,
             has_curve,
+            slope_inertia,
             link_names: self.links().iter().map(|l| l.name.clone()).collect(),
             warnings,
         })
@@ -724,6 +787,12 @@ impl Train {
         let operating = self.operating_point(&model, speeds)?;
         let stability = model.stability()?;
         let mut warnings = model.warnings.clone();
+        if stability.residual > MODE_RESIDUAL_WARN {
+            warnings.push(format!(
+                "the modes satisfy (lambda [M] - [K]) X = 0 only to {:.1e} relative: the inertias span too many decades for double precision to keep every mode's rate exact; the verdict (decided exactly) is not affected",
+                stability.residual
+            ));
+        }
         if !operating.steady {
             let r: Vec<String> = operating
                 .reduced_torque
@@ -951,8 +1020,7 @@ impl ReducedModel {
                 speeds,
             });
         }
-        debug_assert!(residual < 1e-8, "eigen residual {residual}");
-        let tolerance = a.norm() * MARGINAL_REL;
+        let tolerance = a.norm() * EIGEN_RESOLUTION * r.max(1) as f64;
         let margin = lambda.first().copied().unwrap_or(f64::NEG_INFINITY);
         let runaway: Vec<&MasslessDirection> = massless.iter().filter(|m| m.slope > 0.0).collect();
         let (verdict, reason) = if !runaway.is_empty() {
@@ -968,6 +1036,8 @@ impl ReducedModel {
                 Verdict::Stable,
                 "every direction is massless with a falling torque: the train sits at the torque balance".into(),
             )
+        } else if let Some(inertia) = self.slope_inertia {
+            exact_verdict(inertia, margin, tolerance)
         } else if margin > tolerance {
             (
                 Verdict::Unstable,
@@ -990,7 +1060,7 @@ impl ReducedModel {
             (
                 Verdict::Marginal,
                 format!(
-                    "the largest eigenvalue {margin:.3e} is zero within {tolerance:.1e}: perturbations along its mode neither grow nor decay"
+                    "the largest eigenvalue {margin:.3e} is zero within its resolution {tolerance:.1e} and its sign could not be decided exactly: perturbations along its mode may neither grow nor decay"
                 ),
             )
         };
@@ -1017,6 +1087,48 @@ impl ReducedModel {
             stiffness,
             residual,
         })
+    }
+}
+
+/// The verdict from the exact signs of the eigenvalues (Sylvester's law of
+/// inertia), with the computed largest eigenvalue for the words.
+fn exact_verdict(inertia: exact::Inertia, margin: f64, tolerance: f64) -> (Verdict, String) {
+    let resolved = margin.abs() > tolerance;
+    let note = if resolved {
+        String::new()
+    } else {
+        format!(
+            " (the computed eigenvalue {} is below the double-precision resolution {tolerance:.1e} of the scaled problem; its sign is decided exactly from [K] by Sylvester's law of inertia)",
+            num(margin)
+        )
+    };
+    if inertia.positive > 0 {
+        (
+            Verdict::Unstable,
+            format!(
+                "{} eigenvalue(s) > 0 (largest {}): a perturbation grows as e^({} t){note}",
+                inertia.positive,
+                num(margin),
+                num(margin)
+            ),
+        )
+    } else if inertia.zero > 0 {
+        (
+            Verdict::Marginal,
+            format!(
+                "{} eigenvalue(s) are exactly zero ([K] is singular: a motion meets no torque slope): perturbations along it neither grow nor decay",
+                inertia.zero
+            ),
+        )
+    } else {
+        (
+            Verdict::Stable,
+            format!(
+                "every eigenvalue is negative (largest {}): perturbations decay at least as e^({} t){note}",
+                num(margin),
+                num(margin)
+            ),
+        )
     }
 }
 
