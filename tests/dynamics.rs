@@ -678,3 +678,61 @@ fn spec_offsets_win_over_radii_and_disagreement_is_reported() {
         m.notes
     );
 }
+
+/// Issue 11, class 2: circulation is found per shaft, not per carrier. Two
+/// simple sets (ring/sun ratios k1 = 72/30, k2 = 80/28) whose loops pass
+/// through a shared carrier, a shared ring and a shared sun; the largest
+/// power a shaft exchanges with one set, over the input power, derived by
+/// hand from the set torque ratios sun : ring : carrier = 1 : k : -(1 + k),
+/// the balance of the free shaft and Willis' equation of each set.
+#[test]
+fn circulation_through_shared_members_matches_hand_statics() {
+    let (k1, k2): (f64, f64) = (72.0 / 30.0, 80.0 / 28.0);
+    let set = |name: &str, sun: &str, ring: &str, carrier: &str, z: [u32; 2]| {
+        format!(
+            "[[planetary]]\nname = \"{name}\"\nsun = \"{sun}\"\nring = \"{ring}\"\ncarrier = \"{carrier}\"\nteeth = {{ sun = {}, ring = {} }}\n",
+            z[0], z[1]
+        )
+    };
+    let cases = [
+        // Shared carrier C, ring 1 = sun 2 (X, free), ring 2 held, sun 1 in, C out:
+        // w_s1 = w_C (1 - k1 k2), X and C carry k1 (1 + k2) / |1 - k1 k2| of the input.
+        (
+            "shared carrier, ring 1 = sun 2",
+            set("A", "in", "X", "C", [30, 72]) + &set("B", "X", "case", "C", [28, 80]),
+            "in",
+            "C",
+            k1 * (1.0 + k2) / (1.0 - k1 * k2).abs(),
+        ),
+        // Shared ring R (free) and carrier C, two suns: sun 2 held, sun 1 in, C out:
+        // w_s1 = w_C (1 - k1 / k2); C exchanges (1 + k1) k2 / |k2 - k1| with set A.
+        (
+            "shared ring and carrier, two suns",
+            set("A", "in", "R", "C", [30, 72]) + &set("B", "case", "R", "C", [28, 80]),
+            "in",
+            "C",
+            (1.0 + k1) * k2 / (k2 - k1).abs(),
+        ),
+        // Shared sun S (free) and carrier C, two rings: ring 2 held, ring 1 in, C out:
+        // w_r1 = w_C (1 - k2 / k1); C exchanges (1 + max k) / |k1 - k2|.
+        (
+            "shared sun and carrier, two rings",
+            set("A", "S", "in", "C", [30, 72]) + &set("B", "S", "case", "C", [28, 80]),
+            "in",
+            "C",
+            (1.0 + k1.max(k2)) / (k1 - k2).abs(),
+        ),
+    ];
+    for (what, body, input, output, expected) in cases {
+        let t = train(&format!("frame = \"case\"\n{body}"));
+        let (li, lo) = (id(&t, input), id(&t, output));
+        let pf = steady_power(&t, li, 1.0, lo, li, 1.0, false).unwrap();
+        assert!(close(pf.input_power, pf.output_power, 1e-12), "{what}");
+        assert!(
+            close(pf.circulation_ratio, expected, 1e-12),
+            "{what}: circulation {} against {expected} by hand",
+            pf.circulation_ratio
+        );
+        assert!(pf.circulating.is_some(), "{what}: no loop named");
+    }
+}

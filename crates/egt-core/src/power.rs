@@ -247,27 +247,18 @@ impl Train {
         let efficiency = (input_power > 0.0).then(|| output_power / input_power);
 
         // Branch powers: what each shaft (a link turning about a frame axis)
-        // exchanges with each planetary unit (all meshes sharing a moving
-        // carrier) or with each fixed-axis mesh (carrier = frame).
+        // exchanges with each planetary unit. A unit is a set of meshes joined
+        // through floating links (planets, and carriers that ride on other
+        // carriers): its meshes share bodies whose bearing forces pass power
+        // between them. Sets that only share a shaft (a common carrier, sun or
+        // ring turning about a frame axis) are distinct units, so power that
+        // circulates through that shaft between them is seen.
         let shaft = |l: LinkId| {
             self.tree()
                 .parent(l)
                 .is_some_and(|(p, _)| p == self.frame())
         };
-        let mut units: Vec<Vec<usize>> = Vec::new();
-        for (m, c) in self.circuits().iter().enumerate() {
-            let same = (c.carrier != self.frame())
-                .then(|| {
-                    units
-                        .iter_mut()
-                        .find(|u| self.circuits()[u[0]].carrier == c.carrier)
-                })
-                .flatten();
-            match same {
-                Some(u) => u.push(m),
-                None => units.push(vec![m]),
-            }
-        }
+        let units = self.planetary_units(&shaft);
         let mut circ_ratio: f64 = 0.0;
         let (mut hot_meshes, mut hot_links) = (Vec::new(), Vec::new());
         let threshold = input_power * (1.0 + 1e-9);
@@ -368,5 +359,50 @@ impl LossySolver for LossyFlow<'_> {
     }
     fn condition(&self) -> f64 {
         self.dynamics.as_ref().map_or(1.0, |d| d.conditions[1])
+    }
+}
+
+impl Train {
+    /// The meshes grouped into planetary units: two meshes are in one unit
+    /// when they share a floating link (neither the frame nor a shaft). A
+    /// fixed-axis mesh whose members are all shafts is a unit of its own.
+    fn planetary_units(&self, shaft: &impl Fn(LinkId) -> bool) -> Vec<Vec<usize>> {
+        let g = self.circuits().len();
+        let mut root: Vec<usize> = (0..g).collect();
+        fn find(root: &mut [usize], mut m: usize) -> usize {
+            while root[m] != m {
+                root[m] = root[root[m]];
+                m = root[m];
+            }
+            m
+        }
+        let mut holder: Vec<Option<usize>> = vec![None; self.links().len()];
+        for (m, c) in self.circuits().iter().enumerate() {
+            for l in [c.gear_i, c.gear_j, c.carrier] {
+                if l == self.frame() || shaft(l) {
+                    continue;
+                }
+                match holder[l.index()] {
+                    Some(other) => {
+                        let (a, b) = (find(&mut root, m), find(&mut root, other));
+                        root[a] = b;
+                    }
+                    None => holder[l.index()] = Some(m),
+                }
+            }
+        }
+        let mut units: Vec<Vec<usize>> = Vec::new();
+        let mut unit_of: Vec<Option<usize>> = vec![None; g];
+        for m in 0..g {
+            let r = find(&mut root, m);
+            match unit_of[r] {
+                Some(u) => units[u].push(m),
+                None => {
+                    unit_of[r] = Some(units.len());
+                    units.push(vec![m]);
+                }
+            }
+        }
+        units
     }
 }
