@@ -254,14 +254,13 @@ pub fn symmetric_inertia(a: &QMatrix) -> Inertia {
                     inertia.zero += left.len();
                     break;
                 };
-                let n = a.len();
-                for c in 0..n {
-                    let v = a[j][c].clone();
-                    a[i][c] += v;
+                let row_j = a[j].clone();
+                for (x, v) in a[i].iter_mut().zip(row_j) {
+                    *x += v;
                 }
-                for r in 0..n {
-                    let v = a[r][j].clone();
-                    a[r][i] += v;
+                for row in &mut a {
+                    let v = row[j].clone();
+                    row[i] += v;
                 }
                 ki
             }
