@@ -736,3 +736,53 @@ fn circulation_through_shared_members_matches_hand_statics() {
         assert!(pf.circulating.is_some(), "{what}: no loop named");
     }
 }
+
+/// Prescribed accelerations are data: the result echoes them bit for bit
+/// (0.7 stays 0.7, not 0.6999999999999998; 0 stays 0, not -0), in the
+/// single-scenario and the prepared path. Example 6.2 with two of its
+/// floating links accelerated and the motors driving.
+#[test]
+fn prescribed_accelerations_are_echoed_exactly() {
+    let t = crate::util::example("fig5_example62.toml");
+    let mass = t.mass_matrix().unwrap();
+    let [l2, l3, l4, l5] = ["2", "3", "4", "5"].map(|n| id(&t, n));
+    for accelerations in [
+        [(l5, 0.0), (l3, 0.7)],
+        [(l3, 0.0), (l5, 1.5)],
+        [(l5, -1e-9), (l3, 1.0 / 3.0)],
+    ] {
+        let req = DynamicsRequest {
+            torques: vec![],
+            accelerations: accelerations.to_vec(),
+            driving: vec![l2, l4],
+            extras: vec![],
+        };
+        let d = t.inverse_dynamics(&req, Some(&mass)).unwrap();
+        let plan = egt_core::prepared::PreparedTrain::new(&t, &[l2, l4], &[l5, l3], &[l2, l4], &[])
+            .unwrap();
+        let mut ws = plan.workspace();
+        let (inertia, masses) = plan.mass_model().train_values(&t);
+        let ratios = t.ratios().unwrap();
+        let alpha = accelerations.map(|a| a.1);
+        let scenario = egt_core::prepared::Scenario {
+            ratios: &ratios,
+            speeds: &[300.0, 100.0],
+            accelerations: if accelerations[0].0 == l5 {
+                &alpha
+            } else {
+                &[alpha[1], alpha[0]]
+            },
+            torques: &vec![0.0; plan.n()],
+            inertia: &inertia,
+            mass: &masses,
+            efficiency: &vec![1.0; ratios.len()],
+        };
+        plan.solve(&mut ws, &scenario, egt_core::prepared::Compute::Dynamics)
+            .unwrap();
+        for (l, a) in accelerations {
+            assert_eq!(d.acceleration[l.index()].to_bits(), a.to_bits(), "{a}");
+            let k = t.coordinate(l).unwrap();
+            assert_eq!(ws.accelerations()[k].to_bits(), a.to_bits(), "prepared {a}");
+        }
+    }
+}

@@ -192,6 +192,10 @@ fn check_layout(example: &str, draws: usize, seed: u64) {
                 )
             });
             let expected = exact::to_f64(&reference);
+            // A direct gear (nothing rolls) is exactly lossless, not 1 + round-off.
+            if expected == 1.0 {
+                assert_eq!(power.efficiency, 1.0, "{example}, gear {}", gear.state);
+            }
             assert!(
                 (power.efficiency - expected).abs() <= 1e-12 * expected.abs(),
                 "{example}, gear {}: efficiency {} against the exact {expected}\n{text}",

@@ -1,6 +1,9 @@
 //! One test per class of bad input. Each asserts the error variant and that
 //! the message names the offending link, pair or field.
 
+// A failed unwrap is a failed test, with its location.
+#![allow(clippy::unwrap_used)]
+
 use egt_core::exact;
 use egt_core::{AnalysisError, Error, Format, SpecErrorKind, TopologyError, Train};
 
@@ -438,4 +441,93 @@ fn planetary_members_on_one_link() {
         "{msg}"
     );
     assert!(msg.contains("same link `s`"), "{msg}");
+}
+
+/// Tooth counts that are valid but suspect are warned about, by set and
+/// with the numbers: a ring not larger than its sun, non-coaxial planets of
+/// unshifted gears, equally spaced planets that cannot be assembled; the
+/// counts that satisfy both conditions give no warning.
+#[test]
+fn planetary_design_warnings_name_the_set_and_the_condition() {
+    let set = |teeth: &str, copies: u32| {
+        crate::util::toml(&format!(
+            r#"
+            frame = "ring"
+            links = [{{ name = "P.planet", copies = {copies} }}]
+            [[planetary]]
+            name = "P"
+            sun = "sun"
+            ring = "ring"
+            carrier = "carrier"
+            teeth = {teeth}
+            "#
+        ))
+    };
+    // 30 + 2 * 21 = 72 and (30 + 72) / 3 = 34: clean.
+    assert!(
+        set("{ sun = 30, ring = 72, planet = 21 }", 3)
+            .design_warnings()
+            .is_empty()
+    );
+    let w = set("{ sun = 30, ring = 72, planet = 20 }", 3)
+        .design_warnings()
+        .to_vec();
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].contains("`P`") && w[0].contains("70") && w[0].contains("coaxial"),
+        "{w:?}"
+    );
+    let w = set("{ sun = 30, ring = 72, planet = 21 }", 4)
+        .design_warnings()
+        .to_vec();
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].contains("(30 + 72) / 4") && w[0].contains("assembled"),
+        "{w:?}"
+    );
+    let w = set("{ sun = 72, ring = 30 }", 1).design_warnings().to_vec();
+    assert!(
+        w.len() == 1 && w[0].contains("not larger than the sun"),
+        "{w:?}"
+    );
+}
+
+/// Issue 11: a JSON spec and the equal TOML spec read every decimal as the
+/// same double, the correctly rounded one (serde_json's `float_roundtrip`).
+#[test]
+fn json_and_toml_decimals_are_the_same_doubles() {
+    let mut x: u64 = 0x9e37_79b9_7f4a_7c15;
+    let mut mismatches = Vec::new();
+    for _ in 0..2000 {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        let digits = format!("{:017}", x % 100_000_000_000_000_000);
+        let exp = i32::try_from(x % 41).unwrap() - 20;
+        let text = format!("0.{digits}e{exp}");
+        let expected: f64 = text.parse().unwrap();
+        for (format, spec) in [
+            (
+                Format::Json,
+                format!(r#"{{"frame": "f", "links": [{{"name": "a", "inertia": {text}}}]}}"#),
+            ),
+            (
+                Format::Toml,
+                format!("frame = \"f\"\nlinks = [{{ name = \"a\", inertia = {text} }}]\n"),
+            ),
+        ] {
+            let read = egt_core::parse_spec(&spec, format, "test").unwrap().links[0]
+                .inertia
+                .unwrap();
+            if read.to_bits() != expected.to_bits() {
+                mismatches.push(format!("{format:?} {text}: {read:e} != {expected:e}"));
+            }
+        }
+    }
+    assert!(
+        mismatches.is_empty(),
+        "{} misread, e.g. {:?}",
+        mismatches.len(),
+        &mismatches[..mismatches.len().min(3)]
+    );
 }

@@ -458,7 +458,7 @@ impl Worker<'_> {
             put(p.loss);
             put(p.kinetic_rate);
             put(if p.input > 0.0 {
-                p.output / p.input
+                crate::power::efficiency(p.input, p.loss, p.kinetic_rate)
             } else {
                 f64::NAN
             });

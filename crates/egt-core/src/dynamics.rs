@@ -462,6 +462,10 @@ impl Train {
         for (k, l) in self.coordinates().iter().enumerate() {
             acceleration[l.index()] = plan.accelerations()[k];
         }
+        // The prescribed accelerations are data: echo them, not their round-off.
+        for &(l, a) in &req.accelerations {
+            acceleration[l.index()] = a;
+        }
         let lambda = plan.multipliers().to_vec();
         let td = plan.driving_torques();
         let mut torque = vec![0.0; self.links().len()];

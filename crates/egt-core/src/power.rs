@@ -244,7 +244,7 @@ impl Train {
             });
         }
         let loss: f64 = meshes.iter().map(|m| m.loss).sum();
-        let efficiency = (input_power > 0.0).then(|| output_power / input_power);
+        let efficiency = (input_power > 0.0).then(|| efficiency(input_power, loss, kinetic_rate));
 
         // Branch powers: what each shaft (a link turning about a frame axis)
         // exchanges with each planetary unit. A unit is a set of meshes joined
@@ -319,6 +319,14 @@ impl Train {
             notes,
         })
     }
+}
+
+/// Output power over input power, written as 1 - (loss + dK/dt) / input
+/// (equal by the power balance): a train that loses nothing and stores
+/// nothing has exactly 1, not 1 + round-off, and a high efficiency keeps its
+/// digits instead of the difference of two nearly equal powers.
+pub fn efficiency(input: f64, loss: f64, kinetic_rate: f64) -> f64 {
+    1.0 - (loss + kinetic_rate) / input
 }
 
 /// The single-scenario force system as the direction search sees it.

@@ -612,6 +612,10 @@ impl PreparedTrain {
             }
             ws.acc.solve(&mut ws.accel);
         }
+        // The prescribed accelerations are data: keep them, not their round-off.
+        for (&k, &a) in self.accelerated.iter().zip(s.accelerations) {
+            ws.accel[k] = a;
+        }
         self.mass.fill(s.inertia, s.mass, &mut ws.m);
         self.force_rhs(&ws.m, s.torques, &ws.accel, &mut ws.rhs);
         ws.tau.copy_from_slice(s.ratios);

@@ -217,6 +217,7 @@ pub struct Train {
     pub(crate) transmission: Option<Transmission>,
     pub(crate) analysis: Analysis,
     pub(crate) checks: Vec<String>,
+    pub(crate) design_warnings: Vec<String>,
 }
 
 /// An edge of the typed graph.
@@ -348,6 +349,14 @@ impl Train {
     /// The topology checks that passed, in words.
     pub fn checks(&self) -> &[String] {
         &self.checks
+    }
+    /// Tooth counts that a valid train may have but that a designer should
+    /// see: a ring smaller than its sun, planets that fail the coaxial
+    /// condition of unshifted gears, or equally spaced planets that cannot
+    /// be assembled. Warnings, not errors (profile shift and unequal spacing
+    /// are legitimate).
+    pub fn design_warnings(&self) -> &[String] {
+        &self.design_warnings
     }
     /// True when every gear pair has an exact ratio.
     pub fn has_exact_ratios(&self) -> bool {
@@ -818,9 +827,51 @@ fn build(spec: &Spec, draft: &Draft) -> Result<Train> {
         transmission: None,
         analysis: Analysis::default(),
         checks: topo.checks,
+        design_warnings: Vec::new(),
     };
     resolve_extras(spec, &mut train)?;
+    train.design_warnings = planetary_warnings(spec, &train);
     Ok(train)
+}
+
+/// The design warnings of the simple planetary sets of `spec` (see
+/// [`Train::design_warnings`]).
+fn planetary_warnings(spec: &Spec, train: &Train) -> Vec<String> {
+    let mut out = Vec::new();
+    for (i, set) in spec.planetary.iter().enumerate() {
+        if set.kind != crate::spec::PlanetaryKind::Simple {
+            continue;
+        }
+        let (Some(zs), Some(zr)) = (set.teeth.sun, set.teeth.ring) else {
+            continue;
+        };
+        let at = format!("planetary[{i}] (`{}`)", set.name);
+        if zr <= zs {
+            out.push(format!(
+                "{at}: the ring ({zr} teeth) is not larger than the sun ({zs}): no planet fits between them"
+            ));
+            continue;
+        }
+        if let Some(zp) = set.teeth.planet
+            && zr != zs + 2 * zp
+        {
+            out.push(format!(
+                "{at}: z_ring = {zr} differs from z_sun + 2 z_planet = {}: the planets are not coaxial unless the gears are profile-shifted",
+                zs + 2 * zp
+            ));
+        }
+        let planet = set
+            .planet
+            .clone()
+            .unwrap_or_else(|| format!("{}.planet", set.name));
+        let copies = train.link_id(&planet).map_or(1, |l| train.link(l).copies);
+        if copies >= 2 && (zs + zr) % i64::from(copies) != 0 {
+            out.push(format!(
+                "{at}: (z_sun + z_ring) / n = ({zs} + {zr}) / {copies} is not an integer: {copies} equally spaced planets cannot be assembled"
+            ));
+        }
+    }
+    out
 }
 
 fn node(l: LinkId) -> NodeIndex {

@@ -29,6 +29,7 @@ struct Report {
     dof: usize,
     checks: Vec<String>,
     circuits: Vec<CircuitRow>,
+    warnings: Vec<String>,
 }
 
 /// Run `egt check`.
@@ -48,6 +49,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         dof: train.dof(),
         checks: train.checks().to_vec(),
         circuits: circuits::rows(train),
+        warnings: train.design_warnings().to_vec(),
     };
     match args.spec.format {
         OutputFormat::Json => report::json(out, &report),
@@ -72,6 +74,9 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
             }
             writeln!(out, "fundamental circuits:")?;
             circuits::write_table(out, &report.circuits, 2)?;
+            for w in &report.warnings {
+                writeln!(out, "warning: {w}")?;
+            }
             Ok(())
         }
     }

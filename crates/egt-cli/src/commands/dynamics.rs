@@ -357,7 +357,7 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
             row.push(m.force.map_or_else(dash, |x| f(x[0])));
             row.push(m.force.map_or_else(dash, |x| f(x[1])));
             row.push(m.copies.to_string());
-            row.push(m.force_per_copy.map_or_else(dash, |x| f(x[0].abs())));
+            row.push(m.force_per_copy.map_or_else(dash, |x| f(x[0])));
         }
         t.row(row);
     }
