@@ -587,53 +587,212 @@ fn self_locking_is_reported() {
     assert!(err.contains("self-locks"), "{err}");
 }
 
-/// Nested carriers, eq. (4): the planet P rides on C2, which rides on C1. Its
-/// centre is p = delta_ab e(theta_1) + delta_bc e(theta_2) with the offsets
-/// fixed in C1 and C2; differentiating that position numerically at the aligned
-/// configuration gives the centre's speed, and so the kinetic energy that
-/// w^T M w / 2 must reproduce, off-diagonal coupling term included.
-#[test]
-fn nested_carrier_mass_matrix_matches_the_moving_centre() {
-    let (dab, dbc, m, copies) = (0.1, 0.03, 2.0, 3u32);
-    let t = train(&format!(
+/// Issue 11, class 1: a satellite P on a carrier C2 that rides on a carrier
+/// C1 (arms d_ab on C1, d_bc on C2), with `copies` satellites evenly spaced on
+/// C2 and the carrier angles `angles` (none when not given). All other links
+/// are massless, so [M] is P's alone.
+fn nested(copies: u32, angles: Option<[f64; 2]>) -> Train {
+    let angles = angles.map_or(String::new(), |[a, b]| {
+        format!("[analysis]\nspeeds = {{ S = 3.0, S2 = -2.0, C1 = 1.5 }}\nangles = {{ C1 = {a:e}, C2 = {b:e} }}\n")
+    });
+    train(&format!(
         r#"
         frame = "f"
         links = [{{ name = "S" }}, {{ name = "S2" }}, {{ name = "C1" }}, {{ name = "C2" }}, {{ name = "G" }},
-                 {{ name = "P", mass = {m}, copies = {copies} }}]
+                 {{ name = "P", mass = {NESTED_M}, copies = {copies} }}]
         revolutes = [{{ links = ["f", "S"], level = "a" }}, {{ links = ["f", "S2"], level = "a" }},
                      {{ links = ["f", "C1"], level = "a" }}, {{ links = ["C1", "C2"], level = "b" }},
                      {{ links = ["C1", "G"], level = "b" }}, {{ links = ["C2", "P"], level = "c" }}]
         gears = [{{ links = ["S", "C2"], ratio = -2.5 }}, {{ links = ["S2", "G"], ratio = -1.5 }},
                  {{ links = ["P", "G"], ratio = 3.0 }}]
-        offsets = [{{ levels = ["a", "b"], distance = {dab} }}, {{ levels = ["b", "c"], distance = {dbc} }}]
+        offsets = [{{ levels = ["a", "b"], distance = {NESTED_DAB} }}, {{ levels = ["b", "c"], distance = {NESTED_DBC} }}]
+        {angles}
         "#
-    ));
-    let mass = t.mass_matrix().unwrap();
+    ))
+}
+const NESTED_M: f64 = 2.0;
+const NESTED_DAB: f64 = 0.1;
+const NESTED_DBC: f64 = 0.03;
+
+/// The kinetic energy of the satellites from their explicit positions: copy
+/// c's centre is d_ab e^(i th1) + d_bc e^(i (th2 + 2 pi c / n)), so its
+/// velocity is i (d_ab w1 e^(i th1) + d_bc w2 e^(i (th2 + 2 pi c / n))).
+fn nested_energy(copies: u32, th: [f64; 2], w: [f64; 2]) -> f64 {
+    let n = f64::from(copies);
+    (0..copies)
+        .map(|c| {
+            let b = th[1] + 2.0 * std::f64::consts::PI * f64::from(c) / n;
+            let vx = -NESTED_DAB * w[0] * th[0].sin() - NESTED_DBC * w[1] * b.sin();
+            let vy = NESTED_DAB * w[0] * th[0].cos() + NESTED_DBC * w[1] * b.cos();
+            0.5 * NESTED_M * (vx * vx + vy * vy)
+        })
+        .sum()
+}
+
+/// Two or more evenly spaced satellites on a nested carrier: the coupling of
+/// the two carriers cancels exactly, [M] needs no angle, and the kinetic
+/// energy equals that of the explicit copies at any angle and speed.
+#[test]
+fn nested_carrier_with_spaced_satellites_has_no_coupling() {
+    for copies in [2, 3, 4] {
+        let t = nested(copies, None);
+        let mass = t.mass_matrix().unwrap();
+        let (c1, c2) = (id(&t, "C1"), id(&t, "C2"));
+        let (k1, k2) = (t.coordinate(c1).unwrap(), t.coordinate(c2).unwrap());
+        assert_eq!(mass.matrix[(k1, k2)], 0.0, "{copies} copies");
+        assert!(mass.configuration.is_empty());
+        for &(th, w) in &[
+            ([0.0, 0.0], [1.0, 0.0]),
+            ([0.3, 2.1], [3.0, -7.0]),
+            ([-1.2, 0.4], [-2.0, 5.5]),
+        ] {
+            let mut speed = vec![0.0; t.links().len()];
+            speed[c1.index()] = w[0];
+            speed[c2.index()] = w[1];
+            let explicit = nested_energy(copies, th, w);
+            assert!(
+                close(t.kinetic_energy(&mass, &speed), explicit, 1e-8),
+                "{copies} copies at {th:?}"
+            );
+        }
+    }
+}
+
+/// One satellite: [M] depends on the carrier angles, which must then be
+/// given (and are named when missing); at any angles it reproduces the
+/// explicit kinetic energy, and its velocity-squared torques make
+/// M w' - (velocity torques) equal the Lagrange derivative
+/// d/dt dK/dw - dK/dtheta of the explicit kinetic energy (by differences).
+#[test]
+fn nested_carrier_with_one_satellite_follows_the_lagrangian() {
+    let err = nested(1, None).mass_matrix().unwrap_err().to_string();
     assert!(
-        mass.notes
-            .iter()
-            .any(|n| n.contains("`P` rides on nested carriers")),
-        "{:?}",
-        mass.notes
+        err.contains("`C1`") && err.contains("`C2`") && err.contains("angles"),
+        "{err}"
     );
-    let (c1, c2) = (id(&t, "C1"), id(&t, "C2"));
-    let centre = |th1: f64, th2: f64| {
-        [
-            dab * th1.cos() + dbc * th2.cos(),
-            dab * th1.sin() + dbc * th2.sin(),
-        ]
+    let mut seed = 0x1234_5678_u64;
+    let mut unit = || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed % 1_000_000) as f64 / 1e6 * 2.0 - 1.0
     };
-    for &(w1, w2) in &[(1.0, 0.0), (0.0, 1.0), (3.0, -7.0), (-2.0, 5.5)] {
-        let h = 1e-6;
-        let (p, q) = (centre(w1 * h, w2 * h), centre(-w1 * h, -w2 * h));
-        let v2 = ((p[0] - q[0]) / (2.0 * h)).powi(2) + ((p[1] - q[1]) / (2.0 * h)).powi(2);
-        let kinetic = 0.5 * f64::from(copies) * m * v2;
+    for _ in 0..20 {
+        let th = [3.0 * unit(), 3.0 * unit()];
+        let (w, wd) = ([5.0 * unit(), 5.0 * unit()], [50.0 * unit(), 50.0 * unit()]);
+        let t = nested(1, Some(th));
+        let mass = t.mass_matrix().unwrap();
+        let (c1, c2) = (id(&t, "C1"), id(&t, "C2"));
+        let k = [t.coordinate(c1).unwrap(), t.coordinate(c2).unwrap()];
         let mut speed = vec![0.0; t.links().len()];
-        speed[c1.index()] = w1;
-        speed[c2.index()] = w2;
+        speed[c1.index()] = w[0];
+        speed[c2.index()] = w[1];
         assert!(
-            close(t.kinetic_energy(&mass, &speed), kinetic, 1e-8),
-            "w = ({w1}, {w2})"
+            close(
+                t.kinetic_energy(&mass, &speed),
+                nested_energy(1, th, w),
+                1e-8
+            ),
+            "K at {th:?}"
+        );
+        let v = t.velocity_torques(&mass, &speed);
+        // The explicit Lagrangian, differentiated numerically.
+        let energy = |th: [f64; 2], w: [f64; 2]| nested_energy(1, th, w);
+        let h = 1e-4;
+        let shift = |x: [f64; 2], i: usize, d: f64| {
+            let mut y = x;
+            y[i] += d;
+            y
+        };
+        let momentum = |th: [f64; 2], w: [f64; 2], a: usize| {
+            (energy(th, shift(w, a, h)) - energy(th, shift(w, a, -h))) / (2.0 * h)
+        };
+        for a in 0..2 {
+            let mut dp = 0.0;
+            for b in 0..2 {
+                dp += (momentum(shift(th, b, h), w, a) - momentum(shift(th, b, -h), w, a))
+                    / (2.0 * h)
+                    * w[b];
+                dp += (momentum(th, shift(w, b, h), a) - momentum(th, shift(w, b, -h), a))
+                    / (2.0 * h)
+                    * wd[b];
+            }
+            let dk = (energy(shift(th, a, h), w) - energy(shift(th, a, -h), w)) / (2.0 * h);
+            let lagrange = dp - dk;
+            let egt =
+                mass.matrix[(k[a], k[0])] * wd[0] + mass.matrix[(k[a], k[1])] * wd[1] - v[k[a]];
+            assert!(
+                (egt - lagrange).abs() <= 1e-6 * (1.0 + lagrange.abs()),
+                "coordinate {a} at {th:?}: {egt} against {lagrange}"
+            );
+        }
+    }
+}
+
+/// One satellite, whole inverse dynamics: the applied and driving torques'
+/// power equals dK/dt of the explicit kinetic energy along the motion, and
+/// the analyses that need a constant [M] refuse the train by name.
+#[test]
+fn nested_carrier_inverse_dynamics_balances_the_explicit_energy_rate() {
+    let th = [0.7, 2.3];
+    let t = nested(1, Some(th));
+    let mass = t.mass_matrix().unwrap();
+    let [s, s2, c1, c2] = ["S", "S2", "C1", "C2"].map(|n| id(&t, n));
+    let req = DynamicsRequest {
+        torques: vec![],
+        accelerations: vec![(s, 4.0), (s2, -1.0), (c1, 2.5)],
+        driving: vec![s, s2, c1],
+        extras: vec![],
+    };
+    let d = t.inverse_dynamics(&req, Some(&mass)).unwrap();
+    let k = t
+        .kinematics(
+            &t.analysis()
+                .speeds
+                .iter()
+                .map(|&(l, v, _)| SpeedInput::from((l, v)))
+                .collect::<Vec<_>>(),
+        )
+        .unwrap();
+    let power: f64 = d.torque.iter().zip(&k.speed).map(|(q, w)| q * w).sum();
+    let (w, wd) = (
+        [k.speed[c1.index()], k.speed[c2.index()]],
+        [d.acceleration[c1.index()], d.acceleration[c2.index()]],
+    );
+    let h = 1e-5;
+    let rate = (nested_energy(
+        1,
+        [th[0] + h * w[0], th[1] + h * w[1]],
+        [w[0] + h * wd[0], w[1] + h * wd[1]],
+    ) - nested_energy(
+        1,
+        [th[0] - h * w[0], th[1] - h * w[1]],
+        [w[0] - h * wd[0], w[1] - h * wd[1]],
+    )) / (2.0 * h);
+    assert!(
+        (power - rate).abs() <= 1e-6 * (1.0 + rate.abs()),
+        "power {power} against dK/dt {rate}"
+    );
+    assert!(d.velocity_torque.iter().any(|&v| v != 0.0));
+    for err in [
+        t.stability(&egt_core::StabilityRequest {
+            curves: Some(vec![egt_core::train::Curve {
+                link: s,
+                torque: 1.0,
+                slope: -1.0,
+                speed: 3.0,
+            }]),
+            ..Default::default()
+        })
+        .map(|_| ())
+        .unwrap_err(),
+        egt_core::prepared::MassModel::new(&t)
+            .map(|_| ())
+            .unwrap_err(),
+    ] {
+        assert!(
+            matches!(err, egt_core::Error::Analysis(egt_core::AnalysisError::ConfigurationDependent { ref links, .. }) if links == &["P".to_string()]),
+            "{err}"
         );
     }
 }

@@ -303,6 +303,8 @@ pub(crate) fn refuse(cond: f64, what: &str) -> Result<()> {
 pub(crate) struct DynamicsSetup {
     plan: InverseDynamicsPlan,
     q: Vec<f64>,
+    /// Velocity-squared torques of a configuration-dependent [M], by coordinate (in `q` too).
+    velocity: Vec<f64>,
     alpha: Vec<f64>,
     mass: Vec<f64>,
 }
@@ -357,6 +359,9 @@ pub struct InverseDynamics {
     pub meshes: Vec<MeshLoad>,
     /// Condition estimates of [Psi_w] (eq. 8) and of the force system (eq. 10).
     pub conditions: [f64; 2],
+    /// The velocity-squared torques of a mass matrix that varies with the
+    /// configuration ([`Train::velocity_torques`]), by link; zero otherwise.
+    pub velocity_torque: Vec<f64>,
     /// Warnings.
     pub warnings: Vec<String>,
 }
@@ -400,16 +405,21 @@ impl Train {
         ratios: &[f64],
         force_ratios: &[f64],
     ) -> Result<InverseDynamics> {
-        let mut setup = self.dynamics_setup(req, mass)?;
+        let mut setup = self.dynamics_setup(req, mass, None)?;
         self.inverse_dynamics_in(&mut setup, req, mass, ratios, force_ratios)
     }
 
     /// The plan and the dense data of a request, checked once, for solving it
     /// repeatedly with different force rows (the mesh-loss directions of `power.rs`).
+    ///
+    /// When [M] varies with the configuration, its velocity-squared torques
+    /// join the applied ones: at `speeds` (by link), else at the spec's
+    /// `[analysis] speeds`.
     pub(crate) fn dynamics_setup(
         &self,
         req: &DynamicsRequest,
         mass: Option<&MassMatrix>,
+        speeds: Option<&[f64]>,
     ) -> Result<DynamicsSetup> {
         let n = self.coordinates().len();
         let plan = self.inverse_dynamics_plan(req)?;
@@ -433,9 +443,23 @@ impl Train {
             Some(mm) => mm.matrix.transpose().iter().copied().collect(),
             None => vec![0.0; n * n],
         };
+        let velocity = match mass {
+            Some(mm) if !mm.configuration.is_empty() => {
+                let w = match speeds {
+                    Some(w) => w.to_vec(),
+                    None => self.analysis_speeds(&req.extras)?,
+                };
+                self.velocity_torques(mm, &w)
+            }
+            _ => vec![0.0; n],
+        };
+        for (qk, v) in q.iter_mut().zip(&velocity) {
+            *qk += v;
+        }
         Ok(DynamicsSetup {
             plan,
             q,
+            velocity,
             alpha,
             mass: mvec,
         })
@@ -453,6 +477,7 @@ impl Train {
         let DynamicsSetup {
             plan,
             q,
+            velocity,
             alpha,
             mass: mvec,
         } = setup;
@@ -510,16 +535,25 @@ impl Train {
         if let Some(mm) = mass {
             warnings.extend(mm.notes.iter().cloned());
         }
-        debug_assert!(
+        let mut velocity_torque = vec![0.0; self.links().len()];
+        for (k, l) in self.coordinates().iter().enumerate() {
+            velocity_torque[l.index()] = velocity[k];
+        }
+        debug_assert!({
+            let effective: Vec<f64> = torque
+                .iter()
+                .zip(&velocity_torque)
+                .map(|(a, b)| a + b)
+                .collect();
             self.residual_of_motion(
                 mass,
                 &acceleration,
-                &torque,
+                &effective,
                 &lambda,
                 force_ratios,
-                &req.extras
+                &req.extras,
             ) < 1e-8
-        );
+        });
         Ok(InverseDynamics {
             acceleration,
             torque,
@@ -528,6 +562,7 @@ impl Train {
             element_torques,
             meshes,
             conditions,
+            velocity_torque,
             warnings,
         })
     }
@@ -651,5 +686,37 @@ impl Train {
             .into());
         }
         Ok(self.reduced_mass_matrix(&[link], &[])?[(0, 0)])
+    }
+}
+
+impl Train {
+    /// Every link's speed at the spec's `[analysis] speeds`, under `extras`.
+    ///
+    /// # Errors
+    /// [`AnalysisError::MissingData`] when the spec gives no speeds; the kinematics' errors.
+    pub(crate) fn analysis_speeds(&self, extras: &[Extra]) -> Result<Vec<f64>> {
+        let inputs: Vec<crate::kinematics::SpeedInput> = self
+            .analysis()
+            .speeds
+            .iter()
+            .map(|&(link, speed, _)| crate::kinematics::SpeedInput {
+                link,
+                speed,
+                exact: None,
+            })
+            .collect();
+        if inputs.is_empty() {
+            return Err(AnalysisError::MissingData {
+                what: "the link speeds".into(),
+                analysis: "the velocity-squared torques of a mass matrix that varies with the carrier angles".into(),
+                hint: "give [analysis] speeds".into(),
+            }
+            .into());
+        }
+        Ok(if extras.is_empty() {
+            self.kinematics(&inputs)?.speed
+        } else {
+            self.constrained_speeds(&inputs, extras)?.speed
+        })
     }
 }

@@ -359,6 +359,17 @@ pub enum AnalysisError {
         /// The enumeration limit.
         limit: usize,
     },
+    /// The mass matrix varies with the configuration, which this analysis cannot follow.
+    #[error(
+        "{analysis} needs a constant mass matrix, but {} ride(s) on nested carriers whose arms do not balance, so [M] varies with the carrier angles; use the single-scenario dynamics with [analysis] angles",
+        list(links)
+    )]
+    ConfigurationDependent {
+        /// The floating links that couple the carriers.
+        links: Vec<String>,
+        /// The analysis.
+        analysis: String,
+    },
     /// Anything else, in words.
     #[error("{0}")]
     Other(String),

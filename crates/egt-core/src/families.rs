@@ -111,7 +111,11 @@ pub fn planetary_chain(k: usize) -> String {
 
 /// Planetary stages nested `links - 1` deep: link 1 turns on the frame, link
 /// k on link k - 1 (each at its own level), and gear pair (k - 2, k) meshes
-/// across carrier k - 1. `links` links (at least 3), 1 DOF.
+/// across carrier k - 1. `links` links (at least 3), 1 DOF. Links 2 and 3
+/// carry a mass (link 3 as two evenly spaced copies, so that its coupling of
+/// carriers 1 and 2 cancels); deeper links would couple carriers through
+/// angle-dependent terms, which a prepared train does not model, so they
+/// carry inertia only.
 pub fn nest(links: usize) -> String {
     assert!(links >= 3, "a nest needs at least 3 links");
     let n = links - 1;
@@ -121,8 +125,8 @@ pub fn nest(links: usize) -> String {
             &mut s,
             &k.to_string(),
             1.0e-3 * (1 + k % 3) as f64,
-            (k >= 2).then_some(0.2 + 0.05 * k as f64),
-            1,
+            (k == 2 || k == 3).then_some(0.2 + 0.05 * k as f64),
+            if k == 3 { 2 } else { 1 },
         );
     }
     for k in 1..=n {

@@ -7,6 +7,17 @@
 //! delta_xy and adds w_{l_t} x delta_xy to the centre's velocity. Identical
 //! satellites count `copies` times. Offsets come from the spec or are derived
 //! from the pitch radii of the gears meshing across two levels.
+//!
+//! The offsets rotate with their carriers: the centre of a link on nested
+//! carriers is p = sum_s d_s e^(i theta_s), theta_s the direction of carrier
+//! s's arm, so its squared speed has cross terms 2 d_s d_t w_s w_t
+//! cos(theta_s - theta_t) (eq. 4 draws the arms aligned, cos = 1). Copies
+//! are evenly spaced about the axis of the last carrier: for two or more the
+//! cross terms with the last arm cancel exactly (sum_c cos(x + 2 pi c / n) = 0).
+//! The remaining cross terms (one satellite, or three or more nested arms)
+//! make [M] depend on the configuration: they are [`ConfigurationTerm`]s,
+//! evaluated at the carrier angles the analysis gives, and they add the
+//! velocity-squared torques of [`Train::velocity_torques`] to eq. (6).
 
 use nalgebra::DMatrix;
 use serde::Serialize;
@@ -29,11 +40,41 @@ pub struct Offset {
     pub source: String,
 }
 
+/// A term of [M] that varies with the configuration: M_ab = M_ba =
+/// coefficient cos(theta_a - theta_b), with theta the direction of a
+/// carrier's offset arm.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ConfigurationTerm {
+    /// The floating link whose centre couples the two carriers.
+    pub link: LinkId,
+    /// The two carriers.
+    pub carriers: [LinkId; 2],
+    /// Their coordinates.
+    pub coordinates: [usize; 2],
+    /// m d_a d_b (times the copies when neither arm is the last).
+    pub coefficient: f64,
+}
+
+/// The eq. (4) share of a floating link: its offset terms (coordinate of the
+/// carrying link, distance) and the cross terms that depend on the configuration.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct FloatingTerms {
+    /// (coordinate, d) of every carrier on the path with a level change.
+    pub arms: Vec<(usize, f64)>,
+    /// Cross terms that do not cancel, per unit mass: (s, t, factor) over `arms`.
+    pub varying: Vec<(usize, usize, f64)>,
+}
+
 /// The mass matrix over the coordinates (every link but the frame).
 #[derive(Debug, Clone, PartialEq)]
 pub struct MassMatrix {
-    /// [M], symmetric, `coordinates().len()` square.
+    /// [M], symmetric, `coordinates().len()` square, at `angles` when it
+    /// depends on the configuration.
     pub matrix: DMatrix<f64>,
+    /// The terms that vary with the carrier angles (empty for most trains).
+    pub configuration: Vec<ConfigurationTerm>,
+    /// The carrier angles [M] was evaluated at (empty when it does not depend on them).
+    pub angles: Vec<(LinkId, f64)>,
     /// The offsets used.
     pub offsets: Vec<Offset>,
     /// Notes: disagreeing offsets, configuration-dependent coupling.
@@ -115,7 +156,8 @@ impl Train {
     pub fn mass_matrix(&self) -> Result<MassMatrix> {
         let n = self.coordinates().len();
         let mut m = DMatrix::zeros(n, n);
-        let (offsets, mut notes) = self.axis_offsets();
+        let (offsets, notes) = self.axis_offsets();
+        let mut configuration = Vec::new();
         for (li, link) in self.links().iter().enumerate() {
             let l = LinkId::from_index(li);
             let Some(c) = self.coordinate(l) else {
@@ -136,37 +178,168 @@ impl Train {
             let Some(mass) = link.mass.filter(|&v| v > 0.0) else {
                 continue;
             };
-            let chain = self.offset_chain(l);
-            let mut terms: Vec<(usize, f64)> = Vec::with_capacity(chain.len());
-            for (carrier, lv) in &chain {
-                let d = offsets.iter().find(|o| o.levels == *lv).map(|o| o.distance).ok_or_else(|| {
-                    AnalysisError::MissingData {
-                        what: format!("the offset between axis levels `{}` and `{}`", self.level_name(lv[0]), self.level_name(lv[1])),
-                        analysis: format!("the kinetic energy of link `{}` (eq. 4)", link.name),
-                        hint: "give [[offsets]] or the pitch radii (radii, or module and teeth) of a gear pair meshing across those levels".into(),
-                    }
-                })?;
-                if let Some(k) = self.coordinate(*carrier) {
-                    terms.push((k, d));
-                }
+            let f = self.floating_terms(l, &offsets)?;
+            for &(a, d) in &f.arms {
+                m[(a, a)] += copies * mass * d * d;
             }
-            if terms.len() > 1 {
-                notes.push(format!(
-                    "link `{}` rides on nested carriers: its coupling terms vary with their relative angle; evaluated with the offsets aligned, as eq. (4) draws them",
-                    link.name
-                ));
+            for &(s, t, factor) in &f.varying {
+                let carrier = |k: usize| self.coordinates()[f.arms[k].0];
+                configuration.push(ConfigurationTerm {
+                    link: l,
+                    carriers: [carrier(s), carrier(t)],
+                    coordinates: [f.arms[s].0, f.arms[t].0],
+                    coefficient: mass * factor,
+                });
             }
-            for &(a, da) in &terms {
-                for &(b, db) in &terms {
-                    m[(a, b)] += copies * mass * da * db;
-                }
-            }
+        }
+        let angles = if configuration.is_empty() {
+            Vec::new()
+        } else {
+            self.configuration_angles(&configuration)?
+        };
+        let angle = |l: LinkId| angles.iter().find(|a| a.0 == l).map_or(0.0, |a| a.1);
+        for c in &configuration {
+            let [a, b] = c.coordinates;
+            let v = c.coefficient * (angle(c.carriers[0]) - angle(c.carriers[1])).cos();
+            m[(a, b)] += v;
+            m[(b, a)] += v;
         }
         Ok(MassMatrix {
             matrix: m,
+            configuration,
+            angles,
             offsets,
             notes,
         })
+    }
+
+    /// The eq. (4) terms of floating link `l`: its arms, and the cross terms
+    /// between them that do not cancel over its evenly spaced copies.
+    ///
+    /// # Errors
+    /// [`AnalysisError::MissingData`] naming an offset that is not known.
+    pub(crate) fn floating_terms(&self, l: LinkId, offsets: &[Offset]) -> Result<FloatingTerms> {
+        let link = self.link(l);
+        let mut arms = Vec::new();
+        for (carrier, lv) in self.offset_chain(l) {
+            let d = offsets.iter().find(|o| o.levels == lv).map(|o| o.distance).ok_or_else(|| {
+                AnalysisError::MissingData {
+                    what: format!("the offset between axis levels `{}` and `{}`", self.level_name(lv[0]), self.level_name(lv[1])),
+                    analysis: format!("the kinetic energy of link `{}` (eq. 4)", link.name),
+                    hint: "give [[offsets]] or the pitch radii (radii, or module and teeth) of a gear pair meshing across those levels".into(),
+                }
+            })?;
+            if let Some(k) = self.coordinate(carrier) {
+                arms.push((k, d));
+            }
+        }
+        let copies = f64::from(link.copies);
+        let last = arms.len().saturating_sub(1);
+        let mut varying = Vec::new();
+        for s in 0..arms.len() {
+            for t in s + 1..arms.len() {
+                // Copies spread over the last arm: its cross terms cancel for n >= 2.
+                if t == last && link.copies >= 2 {
+                    continue;
+                }
+                let n = if t == last { 1.0 } else { copies };
+                varying.push((s, t, n * arms[s].1 * arms[t].1));
+            }
+        }
+        Ok(FloatingTerms { arms, varying })
+    }
+
+    /// The floating links with a mass whose arms do not balance: [M] varies
+    /// with the carrier angles because of them (empty for most trains).
+    pub fn configuration_links(&self) -> Vec<LinkId> {
+        let (offsets, _) = self.axis_offsets();
+        (0..self.links().len())
+            .map(LinkId::from_index)
+            .filter(|&l| self.link(l).mass.is_some_and(|m| m > 0.0))
+            .filter(|&l| {
+                self.floating_terms(l, &offsets)
+                    .is_ok_and(|f| !f.varying.is_empty())
+            })
+            .collect()
+    }
+
+    /// [M] for an analysis that needs it constant (the reduced model of
+    /// stability and simulation).
+    ///
+    /// # Errors
+    /// [`AnalysisError::ConfigurationDependent`] naming the links that make it
+    /// vary; the errors of [`Train::mass_matrix`].
+    pub(crate) fn constant_mass_matrix(&self, analysis: &str) -> Result<MassMatrix> {
+        let varying = self.configuration_links();
+        if !varying.is_empty() {
+            return Err(AnalysisError::ConfigurationDependent {
+                links: varying
+                    .iter()
+                    .map(|&l| self.link_name(l).to_string())
+                    .collect(),
+                analysis: analysis.to_string(),
+            }
+            .into());
+        }
+        self.mass_matrix()
+    }
+
+    /// The carrier angles the configuration terms need, from `[analysis] angles`.
+    ///
+    /// # Errors
+    /// [`AnalysisError::MissingData`] naming the carriers whose angles are needed.
+    fn configuration_angles(&self, terms: &[ConfigurationTerm]) -> Result<Vec<(LinkId, f64)>> {
+        let mut needed: Vec<LinkId> = Vec::new();
+        for t in terms {
+            for c in t.carriers {
+                if !needed.contains(&c) {
+                    needed.push(c);
+                }
+            }
+        }
+        let given = &self.analysis().angles;
+        let missing: Vec<String> = needed
+            .iter()
+            .filter(|l| !given.iter().any(|a| a.0 == **l))
+            .map(|&l| format!("`{}`", self.link_name(l)))
+            .collect();
+        if !missing.is_empty() {
+            let riders: Vec<String> = terms
+                .iter()
+                .map(|t| format!("`{}`", self.link_name(t.link)))
+                .collect();
+            return Err(AnalysisError::MissingData {
+                what: format!("the angles of carriers {}", missing.join(", ")),
+                analysis: format!(
+                    "the mass matrix: {} ride(s) on nested carriers with arms that do not balance, so [M] varies with their relative angle",
+                    riders.join(", ")
+                ),
+                hint: "give [analysis] angles = { <carrier> = <rad>, ... }, the direction of each carrier's offset arm".into(),
+            }
+            .into());
+        }
+        Ok(needed
+            .iter()
+            .map(|&l| (l, given.iter().find(|a| a.0 == l).map_or(0.0, |a| a.1)))
+            .collect())
+    }
+
+    /// The velocity-squared torques of a configuration-dependent [M], one per
+    /// coordinate: -(d/dt(M) w - dK/dq) from the Lagrangian (eq. 5), so that
+    /// eq. (6) reads M w' + psi^T lambda = Q + these. For a term c cos(theta_a -
+    /// theta_b) they are -c sin(theta_a - theta_b) w_b^2 on a and
+    /// +c sin(theta_a - theta_b) w_a^2 on b. Zero when [M] is constant.
+    pub fn velocity_torques(&self, mass: &MassMatrix, speed: &[f64]) -> Vec<f64> {
+        let mut out = vec![0.0; self.coordinates().len()];
+        let angle = |l: LinkId| mass.angles.iter().find(|a| a.0 == l).map_or(0.0, |a| a.1);
+        for c in &mass.configuration {
+            let [a, b] = c.coordinates;
+            let [la, lb] = c.carriers;
+            let sine = c.coefficient * (angle(la) - angle(lb)).sin();
+            out[a] -= sine * speed[lb.index()].powi(2);
+            out[b] += sine * speed[la.index()].powi(2);
+        }
+        out
     }
 
     /// Kinetic energy K = w^T M w / 2 for link speeds `speed` (one per link).

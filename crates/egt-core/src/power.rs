@@ -107,7 +107,7 @@ pub struct PowerRequest {
 impl Train {
     /// Speeds under brakes/clutches as well as the Willis equations:
     /// w = [V] w_in with [V] from eq. (23).
-    fn constrained_speeds(
+    pub(crate) fn constrained_speeds(
         &self,
         inputs: &[SpeedInput],
         extras: &[crate::dynamics::Extra],
@@ -166,7 +166,7 @@ impl Train {
             speed_scale: wscale,
         };
         // The plan is checked and sized once; each direction assignment only re-solves.
-        let setup = self.dynamics_setup(&req.dynamics, mass)?;
+        let setup = self.dynamics_setup(&req.dynamics, mass, Some(w))?;
         let mut sys = LossyFlow {
             train: self,
             setup,
@@ -230,7 +230,8 @@ impl Train {
         let (mut input_power, mut output_power, mut kinetic_rate) = (0.0, 0.0, 0.0);
         for (k, &l) in self.coordinates().iter().enumerate() {
             let external = dynamics.torque[l.index()] * w[l.index()];
-            let inertial = mw[k] * w[l.index()];
+            // w (M w' - velocity torques) = dK/dt, with d/dt M when [M] varies.
+            let inertial = (mw[k] - dynamics.velocity_torque[l.index()]) * w[l.index()];
             kinetic_rate += inertial;
             if external > 0.0 {
                 input_power += external;

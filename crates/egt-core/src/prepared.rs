@@ -21,7 +21,7 @@ use std::ops::Range;
 use crate::dynamics::{Extra, Rows, dof_with, link_columns, refuse, singular};
 use num_traits::Zero;
 
-use crate::error::Result;
+use crate::error::{AnalysisError, Result};
 use crate::exact::{self, Q, QMatrix};
 use crate::linalg::Lu;
 use crate::losses::{Directions, LossySolver, Meshes, mesh_torque, willis_row};
@@ -61,12 +61,13 @@ impl MassModel {
     /// As [`Train::mass_matrix`]: a link with a mass whose offsets are unknown,
     /// or an inertia given for a planet whose speed is unknown.
     pub fn new(train: &Train) -> Result<Self> {
-        // The offsets and the errors come from the one definition in mass.rs.
-        let reference = train.mass_matrix()?;
+        // The offsets, the arms and the errors come from the one definition in mass.rs.
+        let (offsets, notes) = train.axis_offsets();
         let n = train.coordinates().len();
         let mut entries = Vec::new();
         let mut terms = Vec::new();
         let (mut inertia_links, mut mass_links) = (Vec::new(), Vec::new());
+        let mut varying = Vec::new();
         for (li, link) in train.links().iter().enumerate() {
             let l = LinkId::from_index(li);
             let Some(c) = train.coordinate(l) else {
@@ -76,38 +77,58 @@ impl MassModel {
                 inertia_links.push(l);
                 (c, inertia_links.len() - 1)
             });
-            let start = terms.len();
-            let mut complete = true;
-            for (carrier, lv) in train.offset_chain(l) {
-                match reference.offsets.iter().find(|o| o.levels == lv) {
-                    Some(o) => {
-                        if let Some(k) = train.coordinate(carrier) {
-                            terms.push((k, o.distance));
-                        }
+            let copies = f64::from(link.copies);
+            // A satellite's arms add w_k^2 d^2 each; their cross terms cancel
+            // over evenly spaced copies or vary with the configuration.
+            let arms = match train.floating_terms(l, &offsets) {
+                // No mass slot where the arms do not balance: [M] would vary.
+                Ok(f) if !f.varying.is_empty() => {
+                    if link.mass.is_some_and(|m| m > 0.0) {
+                        varying.push(link.name.clone());
                     }
-                    None => complete = false,
+                    Vec::new()
                 }
-            }
-            let float = if complete && terms.len() > start {
-                mass_links.push(l);
-                Some((mass_links.len() - 1, start..terms.len()))
-            } else {
-                terms.truncate(start);
-                None
+                Ok(f) => f.arms,
+                Err(_) => Vec::new(),
             };
+            let mut float = None;
+            if !arms.is_empty() {
+                mass_links.push(l);
+                float = Some(mass_links.len() - 1);
+            }
             entries.push(MassEntry {
                 spin,
-                float,
-                copies: f64::from(link.copies),
+                float: float.map(|s| (s, terms.len()..terms.len() + 1)),
+                copies,
             });
+            if let Some(s) = float {
+                terms.push(arms[0]);
+                for &arm in &arms[1..] {
+                    entries.push(MassEntry {
+                        spin: None,
+                        float: Some((s, terms.len()..terms.len() + 1)),
+                        copies,
+                    });
+                    terms.push(arm);
+                }
+            }
         }
+        if !varying.is_empty() {
+            return Err(AnalysisError::ConfigurationDependent {
+                links: varying,
+                analysis: "a prepared (batch) train".into(),
+            }
+            .into());
+        }
+        // The errors of the one definition: missing offsets, unsized planets.
+        train.mass_matrix()?;
         Ok(MassModel {
             n,
             entries,
             terms,
             inertia_links,
             mass_links,
-            notes: reference.notes,
+            notes,
         })
     }
 

@@ -540,7 +540,7 @@ impl<'a> ReducedDynamics<'a> {
             driving: self.model.coordinates.clone(),
             extras: vec![],
         };
-        let mass = self.train.mass_matrix()?;
+        let mass = self.train.constant_mass_matrix("the simulation")?;
         self.train.inverse_dynamics(&req, Some(&mass))
     }
 
@@ -645,7 +645,7 @@ impl<'a> ReducedDynamics<'a> {
                 }
             }
         }
-        let mass = self.train.mass_matrix()?;
+        let mass = self.train.constant_mass_matrix("the simulation")?;
         let mut samples = Vec::with_capacity(steps / every + 2);
         let (_, p0) = self.g(0.0, &x);
         samples.push(self.sample(0.0, &x, 0.0, p0, &mass));

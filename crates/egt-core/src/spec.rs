@@ -328,6 +328,11 @@ pub struct AnalysisSpec {
     /// Links whose driving torque is unknown and solved for (as many as DOF).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub driving: Vec<String>,
+    /// Angles of carriers, link -> rad: the direction of each carrier's
+    /// offset arm. Asked for only when the mass matrix depends on them (a
+    /// single planet, or unevenly loaded arms, on nested carriers).
+    #[serde(default, skip_serializing_if = "IndexMap::is_empty")]
+    pub angles: IndexMap<String, f64>,
     /// Link to which the equivalent inertia is reduced.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reduce_to: Option<String>,

@@ -648,7 +648,8 @@ impl Train {
                 "the orthogonality [psi_w][V] = 0 (eq. 24) holds only to {orthogonality:.2e}"
             ));
         }
-        let mm = self.mass_matrix()?;
+        let mm =
+            self.constant_mass_matrix("the reduced model of stability and simulation (eq. 23-27)")?;
         warnings.extend(mm.notes.iter().cloned());
         let mass = sym(&(v.transpose() * &mm.matrix * &v));
         let slope = slope_matrix(&velocity, &link_slope);

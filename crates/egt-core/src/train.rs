@@ -176,6 +176,8 @@ pub struct Analysis {
     pub accelerations: Vec<(LinkId, f64)>,
     /// Links with unknown driving torque.
     pub driving: Vec<LinkId>,
+    /// Carrier angles (rad), for a mass matrix that depends on them.
+    pub angles: Vec<(LinkId, f64)>,
     /// Link for the equivalent inertia.
     pub reduce_to: Option<LinkId>,
     /// Torque-speed curves.
@@ -1040,6 +1042,11 @@ fn resolve_extras(spec: &Spec, train: &mut Train) -> Result<()> {
         for (k, name) in a.driving.iter().enumerate() {
             out.driving
                 .push(train.resolve(name, &format!("analysis.driving[{k}]"))?);
+        }
+        for (name, v) in &a.angles {
+            let path = format!("analysis.angles.{name}");
+            out.angles
+                .push((train.resolve(name, &path)?, finite(path, *v)?));
         }
         if let Some(r) = &a.reduce_to {
             out.reduce_to = Some(train.resolve(r, "analysis.reduce_to")?);
