@@ -19,6 +19,7 @@
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
+use crate::equations::willis_row;
 use crate::error::{AnalysisError, Error, Result};
 use crate::linalg::{COND_REFUSE, COND_WARN, Lu};
 use crate::mass::MassMatrix;
@@ -137,7 +138,7 @@ impl Rows {
     /// using `taus` for the Willis rows (eq. 2).
     fn fill(&self, taus: &[f64], out: &mut [f64], stride: usize) {
         for (m, (ids, &t)) in self.circuits.iter().zip(taus).enumerate() {
-            for (k, v) in ids.iter().zip([1.0, -t, t - 1.0]) {
+            for (k, v) in ids.iter().zip(willis_row(t)) {
                 if let Some(k) = k {
                     out[m * stride + *k] += v;
                 }
@@ -508,7 +509,7 @@ impl Train {
         for (m, (c, g)) in self.circuits().iter().zip(self.gears()).enumerate() {
             let t = force_ratios[m];
             let lam = lambda[m];
-            let (ti, tj, tk) = (lam, -t * lam, (t - 1.0) * lam);
+            let [ti, tj, tk] = willis_row(t).map(|v| v * lam);
             for (l, v) in [(c.gear_i, ti), (c.gear_j, tj), (c.carrier, tk)] {
                 if l == self.frame() {
                     torque[l.index()] += v;
@@ -585,7 +586,10 @@ impl Train {
         };
         for (m, c) in self.circuits().iter().enumerate() {
             let t = taus[m];
-            for (l, v) in [(c.gear_i, 1.0), (c.gear_j, -t), (c.carrier, t - 1.0)] {
+            for (l, v) in [c.gear_i, c.gear_j, c.carrier]
+                .into_iter()
+                .zip(willis_row(t))
+            {
                 if let Some(k) = self.coordinate(l) {
                     r[k] += v * lambda[m];
                 }

@@ -11,6 +11,7 @@ use nalgebra::DMatrix;
 use num_traits::Zero;
 use serde::Serialize;
 
+use crate::equations::{self, willis_row};
 use crate::error::{AnalysisError, Error, Result};
 use crate::exact::{self, Q, QMatrix};
 use crate::linalg::{COND_REFUSE, COND_WARN, Lu};
@@ -170,7 +171,7 @@ impl KinematicsPlan {
         a.iter_mut().for_each(|v| *v = 0.0);
         self.rhs.iter_mut().for_each(|v| *v = 0.0);
         for (m, (ids, &tau)) in self.circuits.iter().zip(ratios).enumerate() {
-            for (l, coef) in ids.iter().zip([1.0, -tau, tau - 1.0]) {
+            for (l, coef) in ids.iter().zip(willis_row(tau)) {
                 match self.slots[l.index()] {
                     Slot::Frame => {}
                     Slot::Input(k) => self.rhs[m] -= coef * input_speeds[k],
@@ -228,8 +229,10 @@ pub fn willis_residual(train: &Train, ratios: &[f64], speeds: &[f64]) -> f64 {
         .iter()
         .zip(ratios)
         .map(|(c, &t)| {
-            (speeds[c.gear_i.index()] - t * speeds[c.gear_j.index()]
-                + (t - 1.0) * speeds[c.carrier.index()])
+            equations::willis_residual(
+                t,
+                [c.gear_i, c.gear_j, c.carrier].map(|l| speeds[l.index()]),
+            )
             .abs()
         })
         .fold(0.0, f64::max)
@@ -246,7 +249,10 @@ impl Train {
         let ratios = self.ratios()?;
         let mut j = DMatrix::zeros(self.circuits().len(), self.coordinates().len());
         for (m, (c, &t)) in self.circuits().iter().zip(&ratios).enumerate() {
-            for (l, v) in [(c.gear_i, 1.0), (c.gear_j, -t), (c.carrier, t - 1.0)] {
+            for (l, v) in [c.gear_i, c.gear_j, c.carrier]
+                .into_iter()
+                .zip(willis_row(t))
+            {
                 if let Some(k) = self.coordinate(l) {
                     j[(m, k)] += v;
                 }

@@ -36,6 +36,7 @@ pub mod accuracy;
 pub mod batch;
 pub mod circuits;
 pub mod dynamics;
+pub mod equations;
 pub mod error;
 pub mod exact;
 mod expand;

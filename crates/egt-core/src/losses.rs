@@ -34,13 +34,6 @@ pub(crate) fn mesh_torque(lambda: f64, tau: f64) -> f64 {
     lambda.abs() * 1f64.max(tau.abs()).max((tau - 1.0).abs())
 }
 
-/// The Willis row of eq. (2) for gear i, gear j and the carrier: psi_m =
-/// w_i - tau w_j + (tau - 1) w_k. With a force ratio tau' in place of tau it
-/// is also the lossy force row.
-pub(crate) fn willis_row(tau: f64) -> [f64; 3] {
-    [1.0, -tau, tau - 1.0]
-}
-
 /// A force solver whose lossy meshes need directions: eq. (10) re-solved for
 /// given force ratios, and read back.
 pub(crate) trait LossySolver {

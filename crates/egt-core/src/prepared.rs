@@ -21,10 +21,11 @@ use std::ops::Range;
 use crate::dynamics::{Extra, Rows, dof_with, link_columns, refuse, singular};
 use num_traits::Zero;
 
+use crate::equations::willis_row;
 use crate::error::{AnalysisError, Result};
 use crate::exact::{self, Q, QMatrix};
 use crate::linalg::Lu;
-use crate::losses::{Directions, LossySolver, Meshes, mesh_torque, willis_row};
+use crate::losses::{Directions, LossySolver, Meshes, mesh_torque};
 use crate::power::Driver;
 use crate::train::{LinkId, Train};
 

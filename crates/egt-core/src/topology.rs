@@ -16,7 +16,7 @@ use rustworkx_core::planar::is_planar;
 
 use crate::circuits::{self, FundamentalCircuit};
 use crate::error::TopologyError;
-use crate::exact::{self, Q, QMatrix};
+use crate::exact::{Q, QMatrix};
 use crate::modp;
 use crate::train::{Edge, GearPair, Link, LinkId, Revolute, RevoluteId};
 
@@ -425,11 +425,10 @@ pub(crate) fn willis_exact(
             let t = tau(m);
             let mut row = vec![Q::zero(); n_links - 1];
             // eq. (2): psi_m = w_i - tau w_j + (tau - 1) w_k
-            for (l, v) in [
-                (c.gear_i, exact::q(1)),
-                (c.gear_j, -t.clone()),
-                (c.carrier, t - exact::q(1)),
-            ] {
+            for (l, v) in [c.gear_i, c.gear_j, c.carrier]
+                .into_iter()
+                .zip(crate::equations::willis_row_exact(&t))
+            {
                 if let Some(k) = col(l) {
                     row[k] += v;
                 }
