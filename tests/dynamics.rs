@@ -588,10 +588,12 @@ fn self_locking_is_reported() {
 }
 
 /// Issue 11, class 1: a satellite P on a carrier C2 that rides on a carrier
-/// C1 (arms d_ab on C1, d_bc on C2), with `copies` satellites evenly spaced on
-/// C2 and the carrier angles `angles` (none when not given). All other links
-/// are massless, so [M] is P's alone.
-fn nested(copies: u32, angles: Option<[f64; 2]>) -> Train {
+/// C1 (arms d_ab on C1, d_bc on C2), with `copies` satellites on C2 (evenly
+/// spaced, or at `phases` degrees from C2's arm) and the carrier angles
+/// `angles` (none when not given). All other links are massless, so [M] is
+/// P's alone.
+fn nested(copies: u32, phases: Option<&[f64]>, angles: Option<[f64; 2]>) -> Train {
+    let phases = phases.map_or(String::new(), |p| format!(", phases = {p:?}"));
     let angles = angles.map_or(String::new(), |[a, b]| {
         format!("[analysis]\nspeeds = {{ S = 3.0, S2 = -2.0, C1 = 1.5 }}\nangles = {{ C1 = {a:e}, C2 = {b:e} }}\n")
     });
@@ -599,7 +601,7 @@ fn nested(copies: u32, angles: Option<[f64; 2]>) -> Train {
         r#"
         frame = "f"
         links = [{{ name = "S" }}, {{ name = "S2" }}, {{ name = "C1" }}, {{ name = "C2" }}, {{ name = "G" }},
-                 {{ name = "P", mass = {NESTED_M}, copies = {copies} }}]
+                 {{ name = "P", mass = {NESTED_M}, copies = {copies}{phases} }}]
         revolutes = [{{ links = ["f", "S"], level = "a" }}, {{ links = ["f", "S2"], level = "a" }},
                      {{ links = ["f", "C1"], level = "a" }}, {{ links = ["C1", "C2"], level = "b" }},
                      {{ links = ["C1", "G"], level = "b" }}, {{ links = ["C2", "P"], level = "c" }}]
@@ -615,13 +617,17 @@ const NESTED_DAB: f64 = 0.1;
 const NESTED_DBC: f64 = 0.03;
 
 /// The kinetic energy of the satellites from their explicit positions: copy
-/// c's centre is d_ab e^(i th1) + d_bc e^(i (th2 + 2 pi c / n)), so its
-/// velocity is i (d_ab w1 e^(i th1) + d_bc w2 e^(i (th2 + 2 pi c / n))).
-fn nested_energy(copies: u32, th: [f64; 2], w: [f64; 2]) -> f64 {
+/// c's centre is d_ab e^(i th1) + d_bc e^(i (th2 + psi_c)), so its velocity
+/// is i (d_ab w1 e^(i th1) + d_bc w2 e^(i (th2 + psi_c))); psi_c = 2 pi c / n
+/// unless `phases` (degrees) are given.
+fn nested_energy(copies: u32, phases: Option<&[f64]>, th: [f64; 2], w: [f64; 2]) -> f64 {
     let n = f64::from(copies);
     (0..copies)
         .map(|c| {
-            let b = th[1] + 2.0 * std::f64::consts::PI * f64::from(c) / n;
+            let psi = phases.map_or(2.0 * std::f64::consts::PI * f64::from(c) / n, |p| {
+                p[c as usize].to_radians()
+            });
+            let b = th[1] + psi;
             let vx = -NESTED_DAB * w[0] * th[0].sin() - NESTED_DBC * w[1] * b.sin();
             let vy = NESTED_DAB * w[0] * th[0].cos() + NESTED_DBC * w[1] * b.cos();
             0.5 * NESTED_M * (vx * vx + vy * vy)
@@ -635,7 +641,7 @@ fn nested_energy(copies: u32, th: [f64; 2], w: [f64; 2]) -> f64 {
 #[test]
 fn nested_carrier_with_spaced_satellites_has_no_coupling() {
     for copies in [2, 3, 4] {
-        let t = nested(copies, None);
+        let t = nested(copies, None, None);
         let mass = t.mass_matrix().unwrap();
         let (c1, c2) = (id(&t, "C1"), id(&t, "C2"));
         let (k1, k2) = (t.coordinate(c1).unwrap(), t.coordinate(c2).unwrap());
@@ -649,7 +655,7 @@ fn nested_carrier_with_spaced_satellites_has_no_coupling() {
             let mut speed = vec![0.0; t.links().len()];
             speed[c1.index()] = w[0];
             speed[c2.index()] = w[1];
-            let explicit = nested_energy(copies, th, w);
+            let explicit = nested_energy(copies, None, th, w);
             assert!(
                 close(t.kinetic_energy(&mass, &speed), explicit, 1e-8),
                 "{copies} copies at {th:?}"
@@ -658,18 +664,23 @@ fn nested_carrier_with_spaced_satellites_has_no_coupling() {
     }
 }
 
-/// One satellite: [M] depends on the carrier angles, which must then be
-/// given (and are named when missing); at any angles it reproduces the
-/// explicit kinetic energy, and its velocity-squared torques make
-/// M w' - (velocity torques) equal the Lagrange derivative
+/// One satellite, or unevenly spaced ones: [M] depends on the carrier
+/// angles, which must then be given (and are named when missing); at any
+/// angles it reproduces the explicit kinetic energy, and its velocity-squared
+/// torques make M w' - (velocity torques) equal the Lagrange derivative
 /// d/dt dK/dw - dK/dtheta of the explicit kinetic energy (by differences).
+/// Evenly spaced phases given explicitly need no angles.
 #[test]
-fn nested_carrier_with_one_satellite_follows_the_lagrangian() {
-    let err = nested(1, None).mass_matrix().unwrap_err().to_string();
+fn nested_carrier_with_unbalanced_satellites_follows_the_lagrangian() {
+    let err = nested(1, None, None).mass_matrix().unwrap_err().to_string();
     assert!(
         err.contains("`C1`") && err.contains("`C2`") && err.contains("angles"),
         "{err}"
     );
+    let even = nested(3, Some(&[10.0, 130.0, 250.0]), None)
+        .mass_matrix()
+        .unwrap();
+    assert!(even.configuration.is_empty());
     let mut seed = 0x1234_5678_u64;
     let mut unit = || {
         seed ^= seed << 13;
@@ -677,54 +688,53 @@ fn nested_carrier_with_one_satellite_follows_the_lagrangian() {
         seed ^= seed << 17;
         (seed % 1_000_000) as f64 / 1e6 * 2.0 - 1.0
     };
-    for _ in 0..20 {
-        let th = [3.0 * unit(), 3.0 * unit()];
-        let (w, wd) = ([5.0 * unit(), 5.0 * unit()], [50.0 * unit(), 50.0 * unit()]);
-        let t = nested(1, Some(th));
-        let mass = t.mass_matrix().unwrap();
-        let (c1, c2) = (id(&t, "C1"), id(&t, "C2"));
-        let k = [t.coordinate(c1).unwrap(), t.coordinate(c2).unwrap()];
-        let mut speed = vec![0.0; t.links().len()];
-        speed[c1.index()] = w[0];
-        speed[c2.index()] = w[1];
-        assert!(
-            close(
-                t.kinetic_energy(&mass, &speed),
-                nested_energy(1, th, w),
-                1e-8
-            ),
-            "K at {th:?}"
-        );
-        let v = t.velocity_torques(&mass, &speed);
-        // The explicit Lagrangian, differentiated numerically.
-        let energy = |th: [f64; 2], w: [f64; 2]| nested_energy(1, th, w);
-        let h = 1e-4;
-        let shift = |x: [f64; 2], i: usize, d: f64| {
-            let mut y = x;
-            y[i] += d;
-            y
-        };
-        let momentum = |th: [f64; 2], w: [f64; 2], a: usize| {
-            (energy(th, shift(w, a, h)) - energy(th, shift(w, a, -h))) / (2.0 * h)
-        };
-        for a in 0..2 {
-            let mut dp = 0.0;
-            for b in 0..2 {
-                dp += (momentum(shift(th, b, h), w, a) - momentum(shift(th, b, -h), w, a))
-                    / (2.0 * h)
-                    * w[b];
-                dp += (momentum(th, shift(w, b, h), a) - momentum(th, shift(w, b, -h), a))
-                    / (2.0 * h)
-                    * wd[b];
-            }
-            let dk = (energy(shift(th, a, h), w) - energy(shift(th, a, -h), w)) / (2.0 * h);
-            let lagrange = dp - dk;
-            let egt =
-                mass.matrix[(k[a], k[0])] * wd[0] + mass.matrix[(k[a], k[1])] * wd[1] - v[k[a]];
+    let uneven: &[f64] = &[0.0, 100.0, 230.0];
+    for (copies, phases) in [(1, None), (3, Some(uneven)), (2, Some(&[0.0, 90.0][..]))] {
+        for _ in 0..10 {
+            let th = [3.0 * unit(), 3.0 * unit()];
+            let (w, wd) = ([5.0 * unit(), 5.0 * unit()], [50.0 * unit(), 50.0 * unit()]);
+            let t = nested(copies, phases, Some(th));
+            let mass = t.mass_matrix().unwrap();
+            let (c1, c2) = (id(&t, "C1"), id(&t, "C2"));
+            let k = [t.coordinate(c1).unwrap(), t.coordinate(c2).unwrap()];
+            let mut speed = vec![0.0; t.links().len()];
+            speed[c1.index()] = w[0];
+            speed[c2.index()] = w[1];
+            let energy = |th: [f64; 2], w: [f64; 2]| nested_energy(copies, phases, th, w);
             assert!(
-                (egt - lagrange).abs() <= 1e-6 * (1.0 + lagrange.abs()),
-                "coordinate {a} at {th:?}: {egt} against {lagrange}"
+                close(t.kinetic_energy(&mass, &speed), energy(th, w), 1e-12),
+                "K at {th:?}, {phases:?}"
             );
+            let v = t.velocity_torques(&mass, &speed);
+            // The explicit Lagrangian, differentiated numerically.
+            let h = 1e-4;
+            let shift = |x: [f64; 2], i: usize, d: f64| {
+                let mut y = x;
+                y[i] += d;
+                y
+            };
+            let momentum = |th: [f64; 2], w: [f64; 2], a: usize| {
+                (energy(th, shift(w, a, h)) - energy(th, shift(w, a, -h))) / (2.0 * h)
+            };
+            for a in 0..2 {
+                let mut dp = 0.0;
+                for b in 0..2 {
+                    dp += (momentum(shift(th, b, h), w, a) - momentum(shift(th, b, -h), w, a))
+                        / (2.0 * h)
+                        * w[b];
+                    dp += (momentum(th, shift(w, b, h), a) - momentum(th, shift(w, b, -h), a))
+                        / (2.0 * h)
+                        * wd[b];
+                }
+                let dk = (energy(shift(th, a, h), w) - energy(shift(th, a, -h), w)) / (2.0 * h);
+                let lagrange = dp - dk;
+                let egt =
+                    mass.matrix[(k[a], k[0])] * wd[0] + mass.matrix[(k[a], k[1])] * wd[1] - v[k[a]];
+                assert!(
+                    (egt - lagrange).abs() <= 1e-6 * (1.0 + lagrange.abs()),
+                    "coordinate {a} at {th:?}, {phases:?}: {egt} against {lagrange}"
+                );
+            }
         }
     }
 }
@@ -735,7 +745,7 @@ fn nested_carrier_with_one_satellite_follows_the_lagrangian() {
 #[test]
 fn nested_carrier_inverse_dynamics_balances_the_explicit_energy_rate() {
     let th = [0.7, 2.3];
-    let t = nested(1, Some(th));
+    let t = nested(1, None, Some(th));
     let mass = t.mass_matrix().unwrap();
     let [s, s2, c1, c2] = ["S", "S2", "C1", "C2"].map(|n| id(&t, n));
     let req = DynamicsRequest {
@@ -762,10 +772,12 @@ fn nested_carrier_inverse_dynamics_balances_the_explicit_energy_rate() {
     let h = 1e-5;
     let rate = (nested_energy(
         1,
+        None,
         [th[0] + h * w[0], th[1] + h * w[1]],
         [w[0] + h * wd[0], w[1] + h * wd[1]],
     ) - nested_energy(
         1,
+        None,
         [th[0] - h * w[0], th[1] - h * w[1]],
         [w[0] - h * wd[0], w[1] - h * wd[1]],
     )) / (2.0 * h);

@@ -26,6 +26,9 @@ use crate::error::{AnalysisError, Result};
 use crate::spec::MeshKind;
 use crate::train::{LevelId, LinkId, Train};
 
+/// |sum_c e^(i psi_c)| at or below this multiple of the copies counts as
+/// balanced (evenly spaced phases given in degrees sum to round-off).
+const PHASE_BALANCE: f64 = 1e-12;
 /// Relative tolerance for comparing offsets from different sources.
 const OFFSET_AGREEMENT: f64 = 1e-9;
 
@@ -41,7 +44,7 @@ pub struct Offset {
 }
 
 /// A term of [M] that varies with the configuration: M_ab = M_ba =
-/// coefficient cos(theta_a - theta_b), with theta the direction of a
+/// coefficient cos(theta_a - theta_b + phase), with theta the direction of a
 /// carrier's offset arm.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ConfigurationTerm {
@@ -51,8 +54,12 @@ pub struct ConfigurationTerm {
     pub carriers: [LinkId; 2],
     /// Their coordinates.
     pub coordinates: [usize; 2],
-    /// m d_a d_b (times the copies when neither arm is the last).
+    /// m d_a d_b (times the copies when neither arm is the last; times
+    /// |sum_c e^(i psi_c)| over the copies' phases psi_c when one is).
     pub coefficient: f64,
+    /// The phase: minus the argument of sum_c e^(i psi_c) for a term with the
+    /// last arm, else 0.
+    pub phase: f64,
 }
 
 /// The eq. (4) share of a floating link: its offset terms (coordinate of the
@@ -61,8 +68,8 @@ pub struct ConfigurationTerm {
 pub(crate) struct FloatingTerms {
     /// (coordinate, d) of every carrier on the path with a level change.
     pub arms: Vec<(usize, f64)>,
-    /// Cross terms that do not cancel, per unit mass: (s, t, factor) over `arms`.
-    pub varying: Vec<(usize, usize, f64)>,
+    /// Cross terms that do not cancel, per unit mass: (s, t, factor, phase) over `arms`.
+    pub varying: Vec<(usize, usize, f64, f64)>,
 }
 
 /// The mass matrix over the coordinates (every link but the frame).
@@ -182,13 +189,14 @@ impl Train {
             for &(a, d) in &f.arms {
                 m[(a, a)] += copies * mass * d * d;
             }
-            for &(s, t, factor) in &f.varying {
+            for &(s, t, factor, phase) in &f.varying {
                 let carrier = |k: usize| self.coordinates()[f.arms[k].0];
                 configuration.push(ConfigurationTerm {
                     link: l,
                     carriers: [carrier(s), carrier(t)],
                     coordinates: [f.arms[s].0, f.arms[t].0],
                     coefficient: mass * factor,
+                    phase,
                 });
             }
         }
@@ -200,7 +208,7 @@ impl Train {
         let angle = |l: LinkId| angles.iter().find(|a| a.0 == l).map_or(0.0, |a| a.1);
         for c in &configuration {
             let [a, b] = c.coordinates;
-            let v = c.coefficient * (angle(c.carriers[0]) - angle(c.carriers[1])).cos();
+            let v = c.coefficient * (angle(c.carriers[0]) - angle(c.carriers[1]) + c.phase).cos();
             m[(a, b)] += v;
             m[(b, a)] += v;
         }
@@ -235,15 +243,27 @@ impl Train {
         }
         let copies = f64::from(link.copies);
         let last = arms.len().saturating_sub(1);
+        // The copies' positions about the last carrier's axis: the cross terms
+        // with the last arm sum to Re(S e^(i (theta_last - theta_s))) with
+        // S = sum_c e^(i psi_c), zero for evenly spaced copies.
+        let (re, im) = match &link.phases {
+            Some(p) => p
+                .iter()
+                .fold((0.0, 0.0), |(a, b), psi| (a + psi.cos(), b + psi.sin())),
+            None if link.copies == 1 => (1.0, 0.0),
+            None => (0.0, 0.0),
+        };
+        let spread = re.hypot(im);
+        let balanced = spread <= PHASE_BALANCE * copies;
         let mut varying = Vec::new();
         for s in 0..arms.len() {
             for t in s + 1..arms.len() {
-                // Copies spread over the last arm: its cross terms cancel for n >= 2.
-                if t == last && link.copies >= 2 {
-                    continue;
+                let d = arms[s].1 * arms[t].1;
+                if t < last {
+                    varying.push((s, t, copies * d, 0.0));
+                } else if !balanced {
+                    varying.push((s, t, spread * d, -im.atan2(re)));
                 }
-                let n = if t == last { 1.0 } else { copies };
-                varying.push((s, t, n * arms[s].1 * arms[t].1));
             }
         }
         Ok(FloatingTerms { arms, varying })
@@ -335,7 +355,7 @@ impl Train {
         for c in &mass.configuration {
             let [a, b] = c.coordinates;
             let [la, lb] = c.carriers;
-            let sine = c.coefficient * (angle(la) - angle(lb)).sin();
+            let sine = c.coefficient * (angle(la) - angle(lb) + c.phase).sin();
             out[a] -= sine * speed[lb.index()].powi(2);
             out[b] += sine * speed[la.index()].powi(2);
         }

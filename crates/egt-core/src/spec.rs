@@ -75,6 +75,12 @@ pub struct LinkSpec {
     /// Default 1.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub copies: Option<u32>,
+    /// Angular positions of the copies [degrees] about the axis of the carrier
+    /// they ride on, measured from its offset arm, one per copy. Default:
+    /// evenly spaced. Only the kinetic energy of links on nested carriers
+    /// depends on them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub phases: Option<Vec<f64>>,
     /// Number of gear wheels rigidly joined on this link. When it is 1, every
     /// mesh of the link uses the same wheel, so its tooth counts and pitch radii
     /// must agree. Default: one wheel per gear pair.

@@ -74,6 +74,9 @@ pub struct Link {
     pub mass: Option<f64>,
     /// Number of identical satellites (n_s). 1 for a single body.
     pub copies: u32,
+    /// Angular positions of the copies [rad] about their carrier's axis, from
+    /// its arm, when not evenly spaced.
+    pub phases: Option<Vec<f64>>,
     /// Gear wheels rigidly joined on it, when given.
     pub wheels: Option<u32>,
     /// False for a planet whose tooth count was not given: its own speed is unknown.
@@ -622,12 +625,31 @@ fn build(spec: &Spec, draft: &Draft) -> Result<Train> {
                 },
             ));
         }
+        let phases = match &d.phases {
+            None => None,
+            Some(p) if p.len() != copies as usize => {
+                return Err(Error::invalid(
+                    format!("{path}.phases"),
+                    format!(
+                        "{} phases given for {copies} copies: give one angle per copy",
+                        p.len()
+                    ),
+                ));
+            }
+            Some(p) => Some(
+                p.iter()
+                    .enumerate()
+                    .map(|(k, &v)| finite(format!("{path}.phases[{k}]"), v).map(f64::to_radians))
+                    .collect::<Result<Vec<f64>>>()?,
+            ),
+        };
         debug_assert!(n > 0 || name == &spec.frame);
         links.push(Link {
             name: name.clone(),
             inertia,
             mass,
             copies,
+            phases,
             wheels: d.wheels,
             sized: dl.sized,
         });
