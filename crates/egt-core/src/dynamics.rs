@@ -60,11 +60,12 @@ pub struct InverseDynamicsPlan {
 pub(crate) fn dof_with(train: &Train, extras: &[Extra]) -> Result<(usize, usize)> {
     let n = train.coordinates().len();
     let c = train.circuits().len() + extras.len();
-    let f = n.checked_sub(c).ok_or_else(|| {
-        AnalysisError::Other(format!(
-            "{c} constraints on {n} coordinates: over-constrained"
-        ))
-    })?;
+    let f = n
+        .checked_sub(c)
+        .ok_or(AnalysisError::OverConstrained {
+            constraints: c,
+            coordinates: n,
+        })?;
     Ok((n, f))
 }
 
@@ -94,10 +95,10 @@ pub(crate) fn link_columns(
                 link: train.link_name(l).to_string(),
             })?;
         if out.contains(&k) {
-            return Err(AnalysisError::Other(format!(
-                "link `{}` is listed twice among the {what}",
-                train.link_name(l)
-            ))
+            return Err(AnalysisError::RepeatedLink {
+                link: train.link_name(l).to_string(),
+                role: what.to_string(),
+            }
             .into());
         }
         out.push(k);
@@ -438,7 +439,11 @@ impl Train {
         }
         let alpha: Vec<f64> = req.accelerations.iter().map(|a| a.1).collect();
         if alpha.iter().any(|a| !a.is_finite()) {
-            return Err(AnalysisError::Other("non-finite prescribed acceleration".into()).into());
+            return Err(AnalysisError::NonFinite {
+                what: "a prescribed acceleration".into(),
+                detail: format!("{alpha:?}"),
+            }
+            .into());
         }
         let mvec: Vec<f64> = match mass {
             Some(mm) => mm.matrix.transpose().iter().copied().collect(),

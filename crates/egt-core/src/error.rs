@@ -344,6 +344,48 @@ pub enum AnalysisError {
         /// Where to give it.
         hint: String,
     },
+    /// A link is given twice where each may appear once.
+    #[error("link `{link}` is listed twice among the {role}")]
+    RepeatedLink {
+        /// The link.
+        link: String,
+        /// Where (e.g. `input links`).
+        role: String,
+    },
+    /// More constraint rows than coordinates.
+    #[error("{constraints} constraints on {coordinates} coordinates: over-constrained")]
+    OverConstrained {
+        /// Constraint rows (Willis and element rows).
+        constraints: usize,
+        /// Coordinates.
+        coordinates: usize,
+    },
+    /// A quantity is not finite, or would overflow in the computation.
+    #[error("{what} is not finite: {detail}")]
+    NonFinite {
+        /// The quantity.
+        what: String,
+        /// Why, in words.
+        detail: String,
+    },
+    /// The reduced mass matrix has a negative direction.
+    #[error(
+        "the reduced mass matrix is indefinite (eigenvalue {low:.3e} against {top:.3e}); inertias and masses must be non-negative"
+    )]
+    IndefiniteMass {
+        /// Its most negative eigenvalue.
+        low: f64,
+        /// Its largest eigenvalue.
+        top: f64,
+    },
+    /// An iteration of a time integrator did not converge.
+    #[error("{what} did not converge at t = {t:e}")]
+    NotConverged {
+        /// The iteration.
+        what: String,
+        /// The time.
+        t: f64,
+    },
     /// No consistent direction of power flow exists through the lossy meshes.
     #[error(
         "no consistent direction of power flow exists through the lossy meshes: the train self-locks under these loads (or the driving torque cannot overcome friction)"

@@ -114,10 +114,10 @@ impl KinematicsPlan {
                 .into());
             }
             if slots[l.index()] != Slot::Frame {
-                return Err(AnalysisError::Other(format!(
-                    "link `{}` is given as an input twice",
-                    train.link_name(l)
-                ))
+                return Err(AnalysisError::RepeatedLink {
+                    link: train.link_name(l).to_string(),
+                    role: "input links".into(),
+                }
                 .into());
             }
             if !train.link(l).sized {

@@ -476,9 +476,10 @@ impl<'a> ReducedDynamics<'a> {
             *x -= &q0 * dz;
             self.newton += 1;
         }
-        Err(AnalysisError::Other(format!(
-            "the torque balance along the massless directions did not converge at t = {t}"
-        ))
+        Err(AnalysisError::NotConverged {
+            what: "the torque balance along the massless directions".into(),
+            t,
+        }
         .into())
     }
 
@@ -828,9 +829,10 @@ impl<'a> ReducedDynamics<'a> {
                 }
             }
             if !converged {
-                return Err(AnalysisError::Other(format!(
-                    "the implicit step did not converge at t = {t:e} (h = {h:e})"
-                ))
+                return Err(AnalysisError::NotConverged {
+                    what: format!("the implicit step (h = {h:e})"),
+                    t,
+                }
                 .into());
             }
             let (g, p) = self.g(ti, &xs);

@@ -310,9 +310,11 @@ impl InertiaSplit {
     pub(crate) fn new(m: &DMatrix<f64>) -> Result<Self> {
         let f = m.nrows();
         if m.iter().any(|v| !v.is_finite()) {
-            return Err(
-                AnalysisError::Other("the reduced mass matrix is not finite".into()).into(),
-            );
+            return Err(AnalysisError::NonFinite {
+                what: "the reduced mass matrix".into(),
+                detail: "an inertia or mass overflows".into(),
+            }
+            .into());
         }
         let eig = SymmetricEigen::new(m.clone());
         let mut order: Vec<usize> = (0..f).collect();
@@ -328,10 +330,7 @@ impl InertiaSplit {
         }
         let low = eig.eigenvalues[order[f - 1]];
         if low < -MASSLESS_REL * top {
-            return Err(AnalysisError::Other(format!(
-                "the reduced mass matrix is indefinite (eigenvalue {low:.3e} against {top:.3e}); inertias and masses must be non-negative"
-            ))
-            .into());
+            return Err(AnalysisError::IndefiniteMass { low, top }.into());
         }
         let mut q = DMatrix::zeros(f, f);
         let mut mu = Vec::new();
@@ -512,9 +511,10 @@ impl Train {
         let (jg, n) = psi.shape();
         let f = self.dof();
         if n != jg + f {
-            return Err(AnalysisError::Other(format!(
-                "{jg} Willis equations on {n} speeds do not leave {f} degrees of freedom"
-            ))
+            return Err(AnalysisError::Singular {
+                what: "the Willis equations".into(),
+                detail: format!("{jg} equations on {n} speeds do not leave {f} degrees of freedom"),
+            }
             .into());
         }
         let mut a = DMatrix::zeros(n, n);
@@ -938,10 +938,10 @@ impl ReducedModel {
             .iter()
             .any(|v| !v.is_finite() || v.abs() > OVERFLOW_GUARD)
         {
-            return Err(AnalysisError::Other(
-                "the reduced slope matrix overflows: the torque slopes are too large to represent"
-                    .into(),
-            )
+            return Err(AnalysisError::NonFinite {
+                what: "the reduced slope matrix".into(),
+                detail: "the torque slopes are too large to represent".into(),
+            }
             .into());
         }
         let split = InertiaSplit::new(&self.basis_mass)?;
@@ -995,10 +995,10 @@ impl ReducedModel {
         let d = DVector::from_iterator(r, split.mu.iter().map(|m| 1.0 / m.sqrt()));
         let a = sym(&DMatrix::from_fn(r, r, |i, j| d[i] * ks[(i, j)] * d[j]));
         if a.iter().any(|v| !v.is_finite()) {
-            return Err(AnalysisError::Other(
-                "the scaled eigenproblem overflows: the torque slopes are too large for the inertias to represent"
-                    .into(),
-            )
+            return Err(AnalysisError::NonFinite {
+                what: "the scaled eigenproblem".into(),
+                detail: "the torque slopes are too large for the inertias to represent".into(),
+            }
             .into());
         }
         let (lambda, evec) = sorted_eigen(a.clone());

@@ -438,10 +438,10 @@ impl<'a> GearSolver<'a> {
                     .and_then(|x| x.exact.clone())
                     .or_else(|| exact::from_f64(r))
                     .ok_or_else(|| {
-                        Error::from(AnalysisError::Other(format!(
-                            "gear pair `{}` has a non-finite ratio",
-                            g.name
-                        )))
+                        Error::from(AnalysisError::NonFinite {
+                            what: format!("the ratio of gear pair `{}`", g.name),
+                            detail: format!("{r}"),
+                        })
                     })
             })
             .collect::<Result<_>>()?;
@@ -568,9 +568,10 @@ impl<'a> GearSolver<'a> {
         }
         let mut v = exact::nullspace(&a, n).pop().unwrap_or_default();
         if v.len() != n {
-            return Err(AnalysisError::Other(format!(
-                "gear state `{name}`: no motion found for one degree of freedom"
-            ))
+            return Err(AnalysisError::Singular {
+                what: format!("gear state `{name}`"),
+                detail: "no motion found for one degree of freedom".into(),
+            }
             .into());
         }
         if v[input].is_zero() {
