@@ -45,9 +45,11 @@ test-python: python-dev ## Python tests (pytest, warnings as errors; stubtest an
 fmt: ## Format the Rust code
 	cargo fmt --all
 
-lint: ## Clippy and format check
+lint: ## Clippy, format check, the core's docs (no broken links, no missing docs) and the minimum Rust version
 	cargo fmt --all -- --check
 	cargo clippy --workspace --all-targets -- -D warnings
+	RUSTDOCFLAGS="-D warnings" cargo doc -p egt-core --no-deps
+	python3 scripts/msrv.py
 
 bench: ## Benchmarks by phase and train size, 3 to 30 links (divan, short settings; see docs/benchmarks.md)
 	cargo bench -p egt-core --bench scenarios -- --sample-count 20 --min-time 0.05

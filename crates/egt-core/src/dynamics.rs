@@ -1,10 +1,10 @@
 //! Inverse dynamics (paper section 4, eq. 6-11) for any number of DOF.
 //!
-//! Equations of motion, eq. (6): [M]{w'} + [psi~_w]^T {lambda} = {Q}, with the
-//! kinematic constraints [psi_w]{w'} = 0 (eq. 2 differentiated). The F
-//! prescribed accelerations complete [psi_w] to the square [Psi_w] of eq. (8);
+//! Equations of motion, eq. (6): \[M\]{w'} + [psi~_w]^T {lambda} = {Q}, with the
+//! kinematic constraints \[psi_w\]{w'} = 0 (eq. 2 differentiated). The F
+//! prescribed accelerations complete \[psi_w\] to the square \[Psi_w\] of eq. (8);
 //! the F unknown driving torques join the multipliers in the transposed system
-//! of eq. (10). [psi~_w] equals [psi_w] for ideal meshes; with mesh losses its
+//! of eq. (10). [psi~_w] equals \[psi_w\] for ideal meshes; with mesh losses its
 //! rows carry the efficiency (see `power.rs`).
 //!
 //! Constraint rows beyond the Willis equations (brakes holding a link, clutches
@@ -60,12 +60,10 @@ pub struct InverseDynamicsPlan {
 pub(crate) fn dof_with(train: &Train, extras: &[Extra]) -> Result<(usize, usize)> {
     let n = train.coordinates().len();
     let c = train.circuits().len() + extras.len();
-    let f = n
-        .checked_sub(c)
-        .ok_or(AnalysisError::OverConstrained {
-            constraints: c,
-            coordinates: n,
-        })?;
+    let f = n.checked_sub(c).ok_or(AnalysisError::OverConstrained {
+        constraints: c,
+        coordinates: n,
+    })?;
     Ok((n, f))
 }
 
@@ -190,13 +188,13 @@ impl InverseDynamicsPlan {
 
     /// Solve one scenario. `ratios`: Willis ratios (kinematics); `force_ratios`:
     /// the ratios of the force rows (equal to `ratios` for ideal meshes);
-    /// `mass`: [M] column-major or row-major (symmetric), n x n; `q`: known
+    /// `mass`: \[M\] column-major or row-major (symmetric), n x n; `q`: known
     /// applied torques per coordinate; `alpha`: prescribed accelerations.
     /// Results are read with [`Self::accelerations`], [`Self::multipliers`],
     /// [`Self::driving_torques`]. Allocates nothing.
     ///
     /// # Errors
-    /// Singular or ill-conditioned [Psi_w] (the prescribed accelerations do not
+    /// Singular or ill-conditioned \[Psi_w\] (the prescribed accelerations do not
     /// determine the motion) or force system (the driving links cannot balance the loads).
     pub fn solve(
         &mut self,
@@ -271,7 +269,7 @@ impl InverseDynamicsPlan {
     pub fn driving_torques(&self) -> &[f64] {
         &self.x[self.constraints()..]
     }
-    /// Condition estimates of [Psi_w] and of the force system from the last solve.
+    /// Condition estimates of \[Psi_w\] and of the force system from the last solve.
     pub fn conditions(&self) -> [f64; 2] {
         self.cond
     }
@@ -359,7 +357,7 @@ pub struct InverseDynamics {
     pub element_torques: Vec<f64>,
     /// Per gear pair: multiplier, torques, tangential forces.
     pub meshes: Vec<MeshLoad>,
-    /// Condition estimates of [Psi_w] (eq. 8) and of the force system (eq. 10).
+    /// Condition estimates of \[Psi_w\] (eq. 8) and of the force system (eq. 10).
     pub conditions: [f64; 2],
     /// The velocity-squared torques of a mass matrix that varies with the
     /// configuration ([`Train::velocity_torques`]), by link; zero otherwise.
@@ -622,7 +620,7 @@ impl Train {
             / scale
     }
 
-    /// [V] of eq. (23): the speeds of every coordinate per unit speed of each
+    /// \[V\] of eq. (23): the speeds of every coordinate per unit speed of each
     /// input (columns), from the Willis equations and any extra constraints.
     ///
     /// # Errors

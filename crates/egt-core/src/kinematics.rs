@@ -240,7 +240,7 @@ pub fn willis_residual(train: &Train, ratios: &[f64], speeds: &[f64]) -> f64 {
 }
 
 impl Train {
-    /// The Willis Jacobian [psi_w] (j_G x (l - 1)): rows are circuits, columns the
+    /// The Willis Jacobian \[psi_w\] (j_G x (l - 1)): rows are circuits, columns the
     /// coordinates (every link but the frame, in link order).
     ///
     /// # Errors

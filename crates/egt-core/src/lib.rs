@@ -32,6 +32,8 @@
 //! assert_eq!(egt_core::exact::display(&speeds.exact.unwrap()[carrier.index()]), "30");
 //! ```
 
+#![deny(missing_docs)]
+
 pub mod accuracy;
 pub mod batch;
 pub mod circuits;

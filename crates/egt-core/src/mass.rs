@@ -15,7 +15,7 @@
 //! are evenly spaced about the axis of the last carrier: for two or more the
 //! cross terms with the last arm cancel exactly (sum_c cos(x + 2 pi c / n) = 0).
 //! The remaining cross terms (one satellite, or three or more nested arms)
-//! make [M] depend on the configuration: they are [`ConfigurationTerm`]s,
+//! make \[M\] depend on the configuration: they are [`ConfigurationTerm`]s,
 //! evaluated at the carrier angles the analysis gives, and they add the
 //! velocity-squared torques of [`Train::velocity_torques`] to eq. (6).
 
@@ -43,7 +43,7 @@ pub struct Offset {
     pub source: String,
 }
 
-/// A term of [M] that varies with the configuration: M_ab = M_ba =
+/// A term of \[M\] that varies with the configuration: M_ab = M_ba =
 /// coefficient cos(theta_a - theta_b + phase), with theta the direction of a
 /// carrier's offset arm.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -75,12 +75,12 @@ pub(crate) struct FloatingTerms {
 /// The mass matrix over the coordinates (every link but the frame).
 #[derive(Debug, Clone, PartialEq)]
 pub struct MassMatrix {
-    /// [M], symmetric, `coordinates().len()` square, at `angles` when it
+    /// \[M\], symmetric, `coordinates().len()` square, at `angles` when it
     /// depends on the configuration.
     pub matrix: DMatrix<f64>,
     /// The terms that vary with the carrier angles (empty for most trains).
     pub configuration: Vec<ConfigurationTerm>,
-    /// The carrier angles [M] was evaluated at (empty when it does not depend on them).
+    /// The carrier angles \[M\] was evaluated at (empty when it does not depend on them).
     pub angles: Vec<(LinkId, f64)>,
     /// The offsets used.
     pub offsets: Vec<Offset>,
@@ -153,7 +153,7 @@ impl Train {
         terms
     }
 
-    /// The mass matrix [M] of eq. (6) from the links' inertia, mass and copies.
+    /// The mass matrix \[M\] of eq. (6) from the links' inertia, mass and copies.
     /// Links without data contribute nothing; a floating link with mass needs
     /// the offsets along its path.
     ///
@@ -269,7 +269,7 @@ impl Train {
         Ok(FloatingTerms { arms, varying })
     }
 
-    /// The floating links with a mass whose arms do not balance: [M] varies
+    /// The floating links with a mass whose arms do not balance: \[M\] varies
     /// with the carrier angles because of them (empty for most trains).
     pub fn configuration_links(&self) -> Vec<LinkId> {
         let (offsets, _) = self.axis_offsets();
@@ -344,11 +344,11 @@ impl Train {
             .collect())
     }
 
-    /// The velocity-squared torques of a configuration-dependent [M], one per
+    /// The velocity-squared torques of a configuration-dependent \[M\], one per
     /// coordinate: -(d/dt(M) w - dK/dq) from the Lagrangian (eq. 5), so that
     /// eq. (6) reads M w' + psi^T lambda = Q + these. For a term c cos(theta_a -
     /// theta_b) they are -c sin(theta_a - theta_b) w_b^2 on a and
-    /// +c sin(theta_a - theta_b) w_a^2 on b. Zero when [M] is constant.
+    /// +c sin(theta_a - theta_b) w_a^2 on b. Zero when \[M\] is constant.
     pub fn velocity_torques(&self, mass: &MassMatrix, speed: &[f64]) -> Vec<f64> {
         let mut out = vec![0.0; self.coordinates().len()];
         let angle = |l: LinkId| mass.angles.iter().find(|a| a.0 == l).map_or(0.0, |a| a.1);

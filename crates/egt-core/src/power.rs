@@ -138,7 +138,7 @@ impl Train {
     /// Power flow at an operating point, ideal or with mesh losses.
     ///
     /// # Errors
-    /// As kinematics and inverse dynamics; [`AnalysisError::SelfLocking`] when no
+    /// As kinematics and inverse dynamics; \[`AnalysisError::SelfLocking`\] when no
     /// consistent direction of power flow exists.
     pub fn power_flow(&self, req: &PowerRequest, mass: Option<&MassMatrix>) -> Result<PowerFlow> {
         let speeds = if req.dynamics.extras.is_empty() {

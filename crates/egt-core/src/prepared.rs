@@ -587,7 +587,7 @@ impl PreparedTrain {
     ///
     /// # Errors
     /// [`AnalysisError::Singular`] or [`AnalysisError::IllConditioned`] (past
-    /// [`COND_REFUSE`]) for eq. (8) or eq. (10); with losses, no consistent
+    /// \[`COND_REFUSE`\]) for eq. (8) or eq. (10); with losses, no consistent
     /// direction of power flow (self-locking).
     pub fn solve(&self, ws: &mut Workspace, s: &Scenario<'_>, what: Compute) -> Result<()> {
         // The matrices depend on the ratios only: the factorisations (and

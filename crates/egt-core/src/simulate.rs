@@ -2,7 +2,7 @@
 //!
 //! With F driving speeds x, every link speed is w = V x and the equations of
 //! motion are V^T M V x' = V^T T(t, V x) (eq. 12, 25). The state used here is
-//! the same motion in an orthonormal basis N of the null space of [psi_w]
+//! the same motion in an orthonormal basis N of the null space of \[psi_w\]
 //! (V = N N_S^-1, see `stability.rs`): w = N u,
 //!
 //!   N^T M N u' = N^T T(t, N u),
@@ -231,9 +231,9 @@ impl std::fmt::Display for Method {
 /// Step control of a simulation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SimulationOptions {
-    /// End time [s].
+    /// End time \[s\].
     pub t_end: f64,
-    /// Fixed step [s] (the last step is shortened to end at `t_end`).
+    /// Fixed step \[s\] (the last step is shortened to end at `t_end`).
     pub dt: f64,
     /// Integrator.
     pub method: Method,
@@ -244,7 +244,7 @@ pub struct SimulationOptions {
 /// One stored instant.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Sample {
-    /// Time [s].
+    /// Time \[s\].
     pub t: f64,
     /// Every link's speed (by link index).
     pub speed: Vec<f64>,

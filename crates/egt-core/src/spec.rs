@@ -68,14 +68,14 @@ pub struct LinkSpec {
     /// Moment of inertia of one copy about its own axis [kg m^2].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub inertia: Option<f64>,
-    /// Mass of one copy [kg] (enters the kinetic energy of floating links, eq. 4).
+    /// Mass of one copy \[kg\] (enters the kinetic energy of floating links, eq. 4).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mass: Option<f64>,
     /// Number of identical satellites this link stands for (the paper's n_s).
     /// Default 1.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub copies: Option<u32>,
-    /// Angular positions of the copies [degrees] about the axis of the carrier
+    /// Angular positions of the copies \[degrees\] about the axis of the carrier
     /// they ride on, measured from its offset arm, one per copy. Default:
     /// evenly spaced. Only the kinetic energy of links on nested carriers
     /// depends on them.
@@ -140,10 +140,10 @@ pub struct GearSpec {
     /// The Willis ratio, instead of teeth.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ratio: Option<RatioSpec>,
-    /// Module [m]: pitch radius = module * z / 2 (needs `teeth`).
+    /// Module \[m\]: pitch radius = module * z / 2 (needs `teeth`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub module: Option<f64>,
-    /// Pitch radii [r_i, r_j] [m].
+    /// Pitch radii [r_i, r_j] \[m\].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub radii: Option<[f64; 2]>,
     /// Basic mesh efficiency (power ratio in the carrier frame), in (0, 1]. Default 1.
@@ -221,7 +221,7 @@ pub struct PlanetarySpec {
     pub planet2: Option<String>,
     /// Tooth counts.
     pub teeth: PlanetaryTeeth,
-    /// Module [m] for every wheel of the set (gives pitch radii and axis offsets).
+    /// Module \[m\] for every wheel of the set (gives pitch radii and axis offsets).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub module: Option<f64>,
     /// Basic efficiency of every mesh of the set. Default 1.
@@ -238,7 +238,7 @@ pub struct PlanetarySpec {
 pub struct OffsetSpec {
     /// The two levels.
     pub levels: [String; 2],
-    /// Distance between the axes [m].
+    /// Distance between the axes \[m\].
     pub distance: f64,
 }
 
@@ -303,10 +303,10 @@ pub struct CurveSpec {
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SimulateSpec {
-    /// End time [s].
+    /// End time \[s\].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub t_end: Option<f64>,
-    /// Step [s].
+    /// Step \[s\].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dt: Option<f64>,
     /// Integrator name.

@@ -1,8 +1,8 @@
 //! Stability of a train with any number F of degrees of freedom (paper
 //! section 5, eq. 12-27, which stops at F = 2).
 //!
-//! The reduced model. Choose F independent driving links; [V] of eq. (23)
-//! gives every link speed from theirs, w = V w_d, and [psi_w][V] = 0 (eq. 24)
+//! The reduced model. Choose F independent driving links; \[V\] of eq. (23)
+//! gives every link speed from theirs, w = V w_d, and \[psi_w\]\[V\] = 0 (eq. 24)
 //! removes the Willis multipliers from eq. (6) when it is premultiplied by
 //! V^T:
 //!
@@ -11,19 +11,19 @@
 //! With the linearised torque-speed curves T_l = T0_l + K_l (w_l - w0_l) on
 //! any links (eq. 13-15, K_l = dT_l/dw_l of the *applied* torque),
 //!
-//!   [M] dw_d' = [K] dw_d,   [M] = V^T M V,   [K] = V^T diag(K_l) V.
+//!   \[M\] dw_d' = \[K\] dw_d,   \[M\] = V^T M V,   \[K\] = V^T diag(K_l) V.
 //!
-//! The paper's eq. (26), [K] = [V]^T {T}, is the reduced torque vector
-//! [K] dw_d (eq. 27 already holds the speed deviations), not the matrix; and
+//! The paper's eq. (26), \[K\] = \[V\]^T {T}, is the reduced torque vector
+//! \[K\] dw_d (eq. 27 already holds the speed deviations), not the matrix; and
 //! its eq. (16)-(18) carry the opposite sign: dw_d = X e^(lambda t) gives
-//! (lambda [M] - [K]) X = 0, so a motor whose torque falls as it speeds up
+//! (lambda \[M\] - \[K\]) X = 0, so a motor whose torque falls as it speeds up
 //! (K_l < 0) is stabilising. `docs/stability.md` and `docs/errata.md` give the
 //! argument, and `tests/stability.rs` proves it by simulation.
 //!
-//! [M] is symmetric positive semi-definite and [K] is symmetric (each curve
+//! \[M\] is symmetric positive semi-definite and \[K\] is symmetric (each curve
 //! acts on one link's own speed), so every eigenvalue is real: a rigid train
 //! under speed-dependent torques creeps or runs away, it never oscillates.
-//! The pencil is solved as a symmetric eigenproblem: [M] = Q diag(mu) Q^T;
+//! The pencil is solved as a symmetric eigenproblem: \[M\] = Q diag(mu) Q^T;
 //! directions with zero inertia are algebraic (their torques balance at every
 //! instant) and are eliminated by a Schur complement before scaling by
 //! mu^(-1/2).
@@ -121,18 +121,18 @@ pub enum CoordinateSource {
 /// The reduced model of eq. (23)-(27) for one choice of driving links.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ReducedModel {
-    /// The F driving links (columns of [V]).
+    /// The F driving links (columns of \[V\]).
     pub coordinates: Vec<LinkId>,
     /// Where they came from.
     pub source: CoordinateSource,
-    /// [V] (eq. 23) by link: row `LinkId::index()`, the frame's row zero.
+    /// \[V\] (eq. 23) by link: row `LinkId::index()`, the frame's row zero.
     #[serde(serialize_with = "rows")]
     pub velocity: DMatrix<f64>,
-    /// 1-norm condition estimate of [Gamma_w] (eq. 22-23).
+    /// 1-norm condition estimate of \[Gamma_w\] (eq. 22-23).
     pub gamma_condition: f64,
     /// max |psi_w V| / (max |psi_w| max |V|): eq. (24), zero in exact arithmetic.
     pub orthogonality: f64,
-    /// The full mass matrix [M] over `Train::coordinates()` (eq. 3-6).
+    /// The full mass matrix \[M\] over `Train::coordinates()` (eq. 3-6).
     #[serde(serialize_with = "rows")]
     pub full_mass: DMatrix<f64>,
     /// Reduced mass matrix V^T M V (eq. 25).
@@ -142,7 +142,7 @@ pub struct ReducedModel {
     #[serde(serialize_with = "rows")]
     pub slope: DMatrix<f64>,
     /// An orthonormal basis N of the motions the Willis equations allow, by
-    /// link (psi_w N = 0, N^T N = 1): [V] = N N_S^-1, with N_S the rows of the
+    /// link (psi_w N = 0, N^T N = 1): \[V\] = N N_S^-1, with N_S the rows of the
     /// driving links. The eigenproblem and the simulation use it, so their
     /// conditioning does not depend on which links drive.
     #[serde(skip)]
@@ -161,9 +161,9 @@ pub struct ReducedModel {
     pub has_curve: Vec<bool>,
     /// The signs of the eigenvalues of N^T diag(K) N, decided in exact
     /// rational arithmetic from the ratios and slopes as given (None past
-    /// [`EXACT_INERTIA_MAX_DOF`] degrees of freedom). With [M] positive
+    /// [`EXACT_INERTIA_MAX_DOF`] degrees of freedom). With \[M\] positive
     /// (semi)definite, Sylvester's law of inertia makes them the signs of the
-    /// eigenvalues of the pencil (lambda [M] - [K]): the verdict does not
+    /// eigenvalues of the pencil (lambda \[M\] - \[K\]): the verdict does not
     /// depend on the inertias, however badly scaled they are.
     pub slope_inertia: Option<exact::Inertia>,
     /// Link names (by link index), for messages.
@@ -199,9 +199,9 @@ pub struct OperatingPoint {
     pub residual: f64,
     /// True when `residual` <= [`STEADY_REL`].
     pub steady: bool,
-    /// The equilibrium of the linearised curves (link speeds), when [K] is regular.
+    /// The equilibrium of the linearised curves (link speeds), when \[K\] is regular.
     pub equilibrium: Option<Vec<f64>>,
-    /// Condition estimate of [K] for the equilibrium solve.
+    /// Condition estimate of \[K\] for the equilibrium solve.
     pub equilibrium_condition: Option<f64>,
 }
 
@@ -217,12 +217,12 @@ pub enum Verdict {
     Marginal,
 }
 
-/// One eigenvalue of (lambda [M] - [K]) X = 0 and its mode.
+/// One eigenvalue of (lambda \[M\] - \[K\]) X = 0 and its mode.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Mode {
     /// lambda [1/s]: the perturbation grows as e^(lambda t).
     pub eigenvalue: f64,
-    /// 1/|lambda| [s], when lambda is not zero.
+    /// 1/|lambda| \[s\], when lambda is not zero.
     pub time_constant: Option<f64>,
     /// X in the driving coordinates, scaled so that the largest link speed is 1.
     pub coordinates: Vec<f64>,
@@ -239,7 +239,7 @@ pub struct MasslessDirection {
     pub speeds: Vec<f64>,
     /// Links that move along it.
     pub links: Vec<LinkId>,
-    /// The torque slope along it (eigenvalue of the massless block of [K]):
+    /// The torque slope along it (eigenvalue of the massless block of \[K\]):
     /// negative, it is an attracting algebraic equilibrium; positive, any
     /// parasitic inertia makes it run away infinitely fast.
     pub slope: f64,
@@ -435,7 +435,7 @@ impl Train {
         Ok((self.automatic_coordinates()?, CoordinateSource::Automatic))
     }
 
-    /// F driving links picked greedily for a well-conditioned [Gamma_w] (the
+    /// F driving links picked greedily for a well-conditioned \[Gamma_w\] (the
     /// largest residual of their rows of the null-space basis), preferring
     /// the spec's `driving` links, then links carrying a curve.
     ///
@@ -499,8 +499,8 @@ impl Train {
     }
 
     /// An orthonormal basis N (`coordinates()` x F) of the null space of
-    /// [psi_w]: every motion the Willis equations allow is w = N u (eq. 24
-    /// holds with N for [V]). The last F columns of the Householder QR of
+    /// \[psi_w\]: every motion the Willis equations allow is w = N u (eq. 24
+    /// holds with N for \[V\]). The last F columns of the Householder QR of
     /// [psi_w^T | 0].
     ///
     /// # Errors
@@ -705,7 +705,7 @@ impl Train {
     /// V^T T there, and the equilibrium.
     ///
     /// # Errors
-    /// As [`Train::kinematics`]; without speeds, a singular [K] (no equilibrium).
+    /// As [`Train::kinematics`]; without speeds, a singular \[K\] (no equilibrium).
     pub fn operating_point(
         &self,
         model: &ReducedModel,
@@ -856,11 +856,11 @@ impl ReducedModel {
             .collect()
     }
 
-    /// The equilibrium of the linearised curves, [K] x = -V^T offset, as link
-    /// speeds, with the condition estimate of [K].
+    /// The equilibrium of the linearised curves, \[K\] x = -V^T offset, as link
+    /// speeds, with the condition estimate of \[K\].
     ///
     /// # Errors
-    /// [`AnalysisError::Singular`] / [`AnalysisError::IllConditioned`] when [K]
+    /// [`AnalysisError::Singular`] / [`AnalysisError::IllConditioned`] when \[K\]
     /// is (nearly) singular: no unique equilibrium.
     pub fn equilibrium(&self) -> Result<(Vec<f64>, f64)> {
         let f = self.dof();
@@ -922,14 +922,14 @@ impl ReducedModel {
         (speeds, coords)
     }
 
-    /// Eigenvalues, modes and verdict of (lambda [M] - [K]) X = 0.
+    /// Eigenvalues, modes and verdict of (lambda \[M\] - \[K\]) X = 0.
     ///
-    /// Solved in the orthonormal basis N (the same eigenvalues: [V] = N N_S^-1
+    /// Solved in the orthonormal basis N (the same eigenvalues: \[V\] = N N_S^-1
     /// is a congruence of the pencil), so the answer does not degrade when
-    /// the driving links make [Gamma_w] ill-conditioned.
+    /// the driving links make \[Gamma_w\] ill-conditioned.
     ///
     /// # Errors
-    /// No inertia at all; an indefinite [M]; a massless direction without a
+    /// No inertia at all; an indefinite \[M\]; a massless direction without a
     /// torque slope (its speed is undetermined).
     pub fn stability(&self) -> Result<Stability> {
         let f = self.dof();

@@ -74,7 +74,7 @@ pub struct Link {
     pub mass: Option<f64>,
     /// Number of identical satellites (n_s). 1 for a single body.
     pub copies: u32,
-    /// Angular positions of the copies [rad] about their carrier's axis, from
+    /// Angular positions of the copies \[rad\] about their carrier's axis, from
     /// its arm, when not evenly spaced.
     pub phases: Option<Vec<f64>>,
     /// Gear wheels rigidly joined on it, when given.
