@@ -168,9 +168,8 @@ proptest! {
             uniq.sort();
             uniq.dedup();
             if uniq.len() < f { continue; }
-            if let Ok(m) = t.reduced_model(&cand, &curves) {
-                if m.gamma_condition < 1e6 { other = Some(m.stability().unwrap()); break; }
-            }
+            if let Ok(m) = t.reduced_model(&cand, &curves)
+                && m.gamma_condition < 1e6 { other = Some(m.stability().unwrap()); break; }
         }
         prop_assume!(other.is_some());
         let other = other.unwrap();

@@ -241,10 +241,10 @@ fn expand_planetary(d: &mut Draft, set: &PlanetarySpec, frame: &str, path: &str)
             ));
         }
         d.declare(name);
-        if teeth.is_none() {
-            if let Some(l) = d.links.get_mut(name) {
-                l.sized = false;
-            }
+        if teeth.is_none()
+            && let Some(l) = d.links.get_mut(name)
+        {
+            l.sized = false;
         }
         d.revolutes.push(DraftRevolute {
             links: [set.carrier.clone(), name.to_string()],

@@ -634,17 +634,16 @@ impl<'a> ReducedDynamics<'a> {
             .last()
             .filter(|&&l| l < 0.0)
             .map(|l| RK4_REAL_LIMIT / -l);
-        if method == Method::Rk4 {
-            if let Some(limit) = rk4_step_limit {
-                if dt > limit {
-                    warnings.push(format!(
+        if method == Method::Rk4
+            && let Some(limit) = rk4_step_limit
+            && dt > limit
+        {
+            warnings.push(format!(
                         "dt = {} exceeds RK4's stability limit {} = 2.785 / |lambda| (lambda = {}): expect a numerical blow-up; use --method implicit or a smaller dt",
                         num(dt),
                         num(limit),
                         num(eigenvalues.last().copied().unwrap_or(0.0))
                     ));
-                }
-            }
         }
         let mass = self.train.constant_mass_matrix("the simulation")?;
         let mut samples = Vec::with_capacity(steps / every + 2);

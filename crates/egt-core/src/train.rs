@@ -517,16 +517,16 @@ fn gear_pair(g: &DraftGear, ids: &HashMap<&str, LinkId>) -> Result<GearPair> {
             None
         }
     };
-    if let Some(r) = &ratio {
-        if r.value == 0.0 {
-            return Err(Error::spec(
-                format!("{p}.ratio"),
-                SpecErrorKind::OutOfRange {
-                    value: 0.0,
-                    expected: "a Willis ratio is never 0".into(),
-                },
-            ));
-        }
+    if let Some(r) = &ratio
+        && r.value == 0.0
+    {
+        return Err(Error::spec(
+            format!("{p}.ratio"),
+            SpecErrorKind::OutOfRange {
+                value: 0.0,
+                expected: "a Willis ratio is never 0".into(),
+            },
+        ));
     }
     let mut radii = match s.radii {
         Some([ri, rj]) => Some([
@@ -546,13 +546,13 @@ fn gear_pair(g: &DraftGear, ids: &HashMap<&str, LinkId>) -> Result<GearPair> {
             )
         })?;
         let from_module = [m * f64::from(zi) / 2.0, m * f64::from(zj) / 2.0];
-        if let Some(r) = radii {
-            if (0..2).any(|k| (r[k] - from_module[k]).abs() > 1e-9 * from_module[k]) {
-                return Err(Error::invalid(
-                    p.clone(),
-                    format!("`radii` {r:?} disagree with `module` x `teeth` / 2 = {from_module:?}"),
-                ));
-            }
+        if let Some(r) = radii
+            && (0..2).any(|k| (r[k] - from_module[k]).abs() > 1e-9 * from_module[k])
+        {
+            return Err(Error::invalid(
+                p.clone(),
+                format!("`radii` {r:?} disagree with `module` x `teeth` / 2 = {from_module:?}"),
+            ));
         }
         radii = Some(from_module);
     }

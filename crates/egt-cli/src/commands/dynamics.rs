@@ -180,15 +180,15 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
     let r = train
         .inverse_dynamics(&req, mass.as_ref())
         .with_context(|| format!("{}: inverse dynamics", loaded.source))?;
-    if args.forces {
-        if let Some(g) = train.gears().iter().find(|g| g.radii.is_none()) {
-            let e = egt_core::AnalysisError::MissingData {
-                what: format!("the pitch radii of gear pair `{}`", g.name),
-                analysis: "meshing forces (eq. 11)".into(),
-                hint: format!("give `radii`, or `module` with `teeth`, at {}", g.path),
-            };
-            return Err(egt_core::Error::from(e).into());
-        }
+    if args.forces
+        && let Some(g) = train.gears().iter().find(|g| g.radii.is_none())
+    {
+        let e = egt_core::AnalysisError::MissingData {
+            what: format!("the pitch radii of gear pair `{}`", g.name),
+            analysis: "meshing forces (eq. 11)".into(),
+            hint: format!("give `radii`, or `module` with `teeth`, at {}", g.path),
+        };
+        return Err(egt_core::Error::from(e).into());
     }
     let reduce_to = match &args.reduce_to {
         Some(n) => Some(train.resolve(n, &format!("--reduce-to {n}"))?),
