@@ -33,3 +33,6 @@ mod stability;
 
 // Issue 11: round-off never decides the direction of power (random teeth, exact reference).
 mod efficiency;
+
+// Issue 10: every bundled example through every analysis, against committed JSON snapshots.
+mod golden;

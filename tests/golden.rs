@@ -1,0 +1,98 @@
+//! Every bundled example through every analysis, as JSON, against committed
+//! snapshots: a refactor that changes any number egt prints (to 10
+//! significant digits; round-off diagnostics such as residuals and condition
+//! estimates masked) fails here. Failed analyses are part of the record (exit
+//! code and message).
+
+use std::process::Command;
+
+use serde_json::Value;
+
+use crate::util::root;
+
+const ANALYSES: [&[&str]; 7] = [
+    &["check"],
+    &["circuits"],
+    &["kinematics"],
+    &["dynamics", "--forces"],
+    &["power"],
+    &["stability"],
+    &["shift"],
+];
+
+/// Keys whose values are round-off diagnostics, not results.
+fn masked(key: &str) -> bool {
+    [
+        "residual",
+        "condition",
+        "orthogonality",
+        "balance",
+        "drift",
+        "tolerance",
+        "iterations",
+    ]
+    .iter()
+    .any(|m| key.contains(m))
+}
+
+fn normalise(v: &mut Value) {
+    match v {
+        Value::Number(n) => {
+            if let Some(x) = n.as_f64().filter(|x| x.fract() != 0.0 || x.abs() > 1e15) {
+                *v = Value::String(format!("{x:.9e}"));
+            }
+        }
+        Value::Array(a) => a.iter_mut().for_each(normalise),
+        Value::Object(o) => {
+            for (k, x) in o.iter_mut() {
+                if masked(k) {
+                    *x = Value::String("[masked]".into());
+                } else {
+                    normalise(x);
+                }
+            }
+        }
+        _ => {}
+    }
+}
+
+fn record(example: &str) -> String {
+    let mut out = serde_json::Map::new();
+    for args in ANALYSES {
+        let r = Command::new(env!("CARGO_BIN_EXE_egt"))
+            .args(args.iter().copied().chain([example, "--format", "json"]))
+            .current_dir(root())
+            .output()
+            .expect("run egt");
+        let mut entry = serde_json::json!({ "exit": r.status.code() });
+        if r.status.success() {
+            let mut v: Value = serde_json::from_slice(&r.stdout).expect("JSON output");
+            normalise(&mut v);
+            entry["output"] = v;
+        } else {
+            entry["error"] = Value::String(String::from_utf8_lossy(&r.stderr).trim().to_string());
+        }
+        out.insert(args.join(" "), entry);
+    }
+    serde_json::to_string_pretty(&out).expect("serialise")
+}
+
+macro_rules! golden {
+    ($($name:ident => $file:literal),* $(,)?) => {$(
+        #[test]
+        fn $name() {
+            insta::assert_snapshot!(record(concat!("examples/", $file)));
+        }
+    )*};
+}
+
+golden! {
+    golden_fig3_example61 => "fig3_example61.toml",
+    golden_fig5_example62 => "fig5_example62.toml",
+    golden_fig5_stability => "fig5_stability.toml",
+    golden_simple_planetary => "simple_planetary.toml",
+    golden_ford_aod_ravigneaux => "ford_aod_ravigneaux.toml",
+    golden_ford_c4_simpson => "ford_c4_simpson.toml",
+    golden_zf_8hp70 => "zf_8hp70.toml",
+    golden_adjacency_enumerated => "adjacency_enumerated.json",
+}
