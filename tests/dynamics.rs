@@ -947,6 +947,7 @@ fn prescribed_accelerations_are_echoed_exactly() {
             inertia: &inertia,
             mass: &masses,
             efficiency: &vec![1.0; ratios.len()],
+            mass_matrix: None,
         };
         plan.solve(&mut ws, &scenario, egt_core::prepared::Compute::Dynamics)
             .unwrap();

@@ -221,6 +221,7 @@ impl Problem {
             inertia: take(ni),
             mass: take(nm),
             efficiency: &[],
+            mass_matrix: None,
         }
     }
 

@@ -425,6 +425,7 @@ impl Worker<'_> {
             inertia: &row[g.inertia..g.mass],
             mass: &row[g.mass..g.efficiency],
             efficiency: &row[g.efficiency..g.end],
+            mass_matrix: None,
         };
         let pt = &plan.prepared;
         pt.solve(&mut self.ws, &s, plan.compute)?;

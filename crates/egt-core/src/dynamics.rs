@@ -16,13 +16,14 @@
 //! its constraints (eq. 7); the torque the frame or a held element applies to
 //! the train is the corresponding sum over the frame's column.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DMatrix;
 use serde::Serialize;
 
 use crate::equations::willis_row;
 use crate::error::{AnalysisError, Error, Result};
 use crate::linalg::{COND_REFUSE, COND_WARN, Lu};
 use crate::mass::MassMatrix;
+use crate::prepared::{Compute, PreparedTrain, Scenario, Workspace};
 use crate::train::{GearId, LinkId, Train};
 
 /// A constraint row besides the Willis equations.
@@ -36,22 +37,6 @@ pub enum Extra {
 
 /// A column of the constraint Jacobian: a coordinate or the frame.
 pub(crate) type Col = Option<usize>;
-
-/// Inverse dynamics prepared for one choice of prescribed coordinates, driving
-/// links and extra constraints. Buffers are sized once; [`InverseDynamicsPlan::solve`]
-/// allocates nothing.
-#[derive(Debug, Clone)]
-pub struct InverseDynamicsPlan {
-    n: usize,
-    rows: Rows,
-    accel: Vec<usize>,
-    driving: Vec<usize>,
-    kin: Lu,
-    force: Lu,
-    wdot: Vec<f64>,
-    x: Vec<f64>,
-    cond: [f64; 2],
-}
 
 /// The number of coordinates n and the DOF F = n - (j_G + extras) left by `extras`.
 ///
@@ -132,147 +117,6 @@ impl Rows {
                 .collect(),
         }
     }
-
-    /// Add the constraint rows into `out` (row-major with `stride` columns),
-    /// using `taus` for the Willis rows (eq. 2).
-    fn fill(&self, taus: &[f64], out: &mut [f64], stride: usize) {
-        for (m, (ids, &t)) in self.circuits.iter().zip(taus).enumerate() {
-            for (k, v) in ids.iter().zip(willis_row(t)) {
-                if let Some(k) = k {
-                    out[m * stride + *k] += v;
-                }
-            }
-        }
-        let base = self.circuits.len();
-        for (e, row) in self.extras.iter().enumerate() {
-            for &(k, v) in row {
-                if let Some(k) = k {
-                    out[(base + e) * stride + k] += v;
-                }
-            }
-        }
-    }
-}
-
-impl InverseDynamicsPlan {
-    /// Prepare. `accelerated` and `driving` each hold F = n - (j_G + extras) links.
-    ///
-    /// # Errors
-    /// Wrong counts, the frame among them, or repeated links.
-    pub fn new(
-        train: &Train,
-        accelerated: &[LinkId],
-        driving: &[LinkId],
-        extras: &[Extra],
-    ) -> Result<Self> {
-        let (n, f) = dof_with(train, extras)?;
-        let accel = link_columns(train, accelerated, f, "prescribed accelerations")?;
-        let driving = link_columns(train, driving, f, "driving (unknown-torque) links")?;
-        Ok(InverseDynamicsPlan {
-            n,
-            rows: Rows::new(train, extras),
-            accel,
-            driving,
-            kin: Lu::new(n),
-            force: Lu::new(n),
-            wdot: vec![0.0; n],
-            x: vec![0.0; n],
-            cond: [1.0, 1.0],
-        })
-    }
-
-    /// Number of constraint rows (Willis + extra).
-    pub fn constraints(&self) -> usize {
-        self.rows.circuits.len() + self.rows.extras.len()
-    }
-
-    /// Solve one scenario. `ratios`: Willis ratios (kinematics); `force_ratios`:
-    /// the ratios of the force rows (equal to `ratios` for ideal meshes);
-    /// `mass`: \[M\] column-major or row-major (symmetric), n x n; `q`: known
-    /// applied torques per coordinate; `alpha`: prescribed accelerations.
-    /// Results are read with [`Self::accelerations`], [`Self::multipliers`],
-    /// [`Self::driving_torques`]. Allocates nothing.
-    ///
-    /// # Errors
-    /// Singular or ill-conditioned \[Psi_w\] (the prescribed accelerations do not
-    /// determine the motion) or force system (the driving links cannot balance the loads).
-    pub fn solve(
-        &mut self,
-        ratios: &[f64],
-        force_ratios: &[f64],
-        mass: &[f64],
-        q: &[f64],
-        alpha: &[f64],
-    ) -> Result<()> {
-        let n = self.n;
-        let c = self.constraints();
-        // eq. (8): [Psi_w] {w'} = {0, ..., alpha}.
-        let moving = alpha.iter().any(|&a| a != 0.0);
-        if moving {
-            let a = self.kin.matrix_mut();
-            a.iter_mut().for_each(|v| *v = 0.0);
-            self.rows.fill(ratios, self.kin.matrix_mut(), n);
-            let a = self.kin.matrix_mut();
-            for (r, &k) in self.accel.iter().enumerate() {
-                a[(c + r) * n + k] = 1.0;
-            }
-            self.kin.factor().map_err(|_| {
-                singular(
-                    "[Psi_w] (eq. 8)",
-                    "the prescribed accelerations do not determine the motion",
-                )
-            })?;
-            self.cond[0] = self.kin.condition();
-            refuse(self.cond[0], "[Psi_w] (eq. 8)")?;
-            self.wdot.iter_mut().for_each(|v| *v = 0.0);
-            for (r, &a) in alpha.iter().enumerate() {
-                self.wdot[c + r] = a;
-            }
-            self.kin.solve(&mut self.wdot);
-        } else {
-            self.wdot.iter_mut().for_each(|v| *v = 0.0);
-            self.cond[0] = 1.0;
-        }
-        // eq. (10): [psi~_w^T | -D^T] {lambda; T_d} = {Q} - [M]{w'}.
-        let f = self.force.matrix_mut();
-        f.iter_mut().for_each(|v| *v = 0.0);
-        self.rows.fill(force_ratios, self.force.matrix_mut(), n);
-        let f = self.force.matrix_mut();
-        for (r, &k) in self.driving.iter().enumerate() {
-            f[(c + r) * n + k] = -1.0;
-        }
-        self.force.factor().map_err(|_| {
-            singular(
-                "the force system (eq. 10)",
-                "the driving links cannot balance the loads",
-            )
-        })?;
-        self.cond[1] = self.force.condition();
-        refuse(self.cond[1], "the force system (eq. 10)")?;
-        for i in 0..n {
-            let mw: f64 = (0..n).map(|j| mass[i * n + j] * self.wdot[j]).sum();
-            self.x[i] = q[i] - mw;
-        }
-        self.force.solve_transpose(&mut self.x);
-        Ok(())
-    }
-
-    /// Accelerations of the coordinates from the last solve.
-    pub fn accelerations(&self) -> &[f64] {
-        &self.wdot
-    }
-    /// Lagrange multipliers (Willis rows, then extra rows) from the last solve.
-    pub fn multipliers(&self) -> &[f64] {
-        &self.x[..self.constraints()]
-    }
-    /// Driving torques, in the order of the driving links, from the last solve.
-    pub fn driving_torques(&self) -> &[f64] {
-        &self.x[self.constraints()..]
-    }
-    /// Condition estimates of \[Psi_w\] and of the force system from the last solve.
-    pub fn conditions(&self) -> [f64; 2] {
-        self.cond
-    }
 }
 
 /// A singular system, in words.
@@ -295,18 +139,6 @@ pub(crate) fn refuse(cond: f64, what: &str) -> Result<()> {
         .into());
     }
     Ok(())
-}
-
-/// A request checked once: its plan, applied torques, prescribed accelerations
-/// and row-major mass matrix.
-#[derive(Debug, Clone)]
-pub(crate) struct DynamicsSetup {
-    plan: InverseDynamicsPlan,
-    q: Vec<f64>,
-    /// Velocity-squared torques of a configuration-dependent [M], by coordinate (in `q` too).
-    velocity: Vec<f64>,
-    alpha: Vec<f64>,
-    mass: Vec<f64>,
 }
 
 /// What an inverse-dynamics (or static) analysis asks.
@@ -367,62 +199,50 @@ pub struct InverseDynamics {
 }
 
 impl Train {
-    /// The prepared plan and the dense inputs for a request: useful to reuse
-    /// the plan over many parameter sets.
-    ///
-    /// # Errors
-    /// As [`InverseDynamicsPlan::new`].
-    pub fn inverse_dynamics_plan(&self, req: &DynamicsRequest) -> Result<InverseDynamicsPlan> {
-        let accelerated: Vec<LinkId> = if req.accelerations.is_empty() {
+    /// The links whose accelerations a request prescribes: its
+    /// `accelerations`, or the driving links for the static analysis.
+    pub(crate) fn accelerated_links(req: &DynamicsRequest) -> Vec<LinkId> {
+        if req.accelerations.is_empty() {
             req.driving.clone()
         } else {
             req.accelerations.iter().map(|a| a.0).collect()
-        };
-        InverseDynamicsPlan::new(self, &accelerated, &req.driving, &req.extras)
+        }
     }
 
-    /// Solve inverse dynamics: accelerations, multipliers, driving torques,
-    /// meshing forces (where pitch radii are known), the housing and element
-    /// reactions. With no accelerations it is the static-force analysis.
+    /// The prescribed accelerations in the order of [`Self::accelerated_links`]
+    /// (zeros for the static analysis).
     ///
     /// # Errors
-    /// Missing ratios or data for the mass matrix, wrong counts, singular or
-    /// ill-conditioned systems.
-    pub fn inverse_dynamics(
-        &self,
-        req: &DynamicsRequest,
-        mass: Option<&MassMatrix>,
-    ) -> Result<InverseDynamics> {
-        let ratios = self.ratios()?;
-        self.inverse_dynamics_with(req, mass, &ratios, &ratios)
+    /// [`AnalysisError::NonFinite`] for a non-finite acceleration.
+    pub(crate) fn prescribed_accelerations(req: &DynamicsRequest) -> Result<Vec<f64>> {
+        if req.accelerations.is_empty() {
+            return Ok(vec![0.0; req.driving.len()]);
+        }
+        let alpha: Vec<f64> = req.accelerations.iter().map(|a| a.1).collect();
+        if alpha.iter().any(|a| !a.is_finite()) {
+            return Err(AnalysisError::NonFinite {
+                what: "a prescribed acceleration".into(),
+                detail: format!("{alpha:?}"),
+            }
+            .into());
+        }
+        Ok(alpha)
     }
 
-    /// As [`Train::inverse_dynamics`] with explicit force-row ratios (mesh losses).
-    pub(crate) fn inverse_dynamics_with(
-        &self,
-        req: &DynamicsRequest,
-        mass: Option<&MassMatrix>,
-        ratios: &[f64],
-        force_ratios: &[f64],
-    ) -> Result<InverseDynamics> {
-        let mut setup = self.dynamics_setup(req, mass, None)?;
-        self.inverse_dynamics_in(&mut setup, req, mass, ratios, force_ratios)
-    }
-
-    /// The plan and the dense data of a request, checked once, for solving it
-    /// repeatedly with different force rows (the mesh-loss directions of `power.rs`).
-    ///
-    /// When [M] varies with the configuration, its velocity-squared torques
-    /// join the applied ones: at `speeds` (by link), else at the spec's
+    /// The generalized forces of eq. (6) per coordinate: the applied torques
+    /// and, when [M] varies with the configuration, its velocity-squared
+    /// torques (returned apart too) at `speeds` (by link), else at the spec's
     /// `[analysis] speeds`.
-    pub(crate) fn dynamics_setup(
+    ///
+    /// # Errors
+    /// A non-finite torque; speeds needed but not given.
+    pub(crate) fn generalized_forces(
         &self,
         req: &DynamicsRequest,
         mass: Option<&MassMatrix>,
         speeds: Option<&[f64]>,
-    ) -> Result<DynamicsSetup> {
+    ) -> Result<(Vec<f64>, Vec<f64>)> {
         let n = self.coordinates().len();
-        let plan = self.inverse_dynamics_plan(req)?;
         let mut q = vec![0.0; n];
         for &(l, t) in &req.torques {
             if !t.is_finite() {
@@ -435,18 +255,6 @@ impl Train {
                 q[k] += t;
             }
         }
-        let alpha: Vec<f64> = req.accelerations.iter().map(|a| a.1).collect();
-        if alpha.iter().any(|a| !a.is_finite()) {
-            return Err(AnalysisError::NonFinite {
-                what: "a prescribed acceleration".into(),
-                detail: format!("{alpha:?}"),
-            }
-            .into());
-        }
-        let mvec: Vec<f64> = match mass {
-            Some(mm) => mm.matrix.transpose().iter().copied().collect(),
-            None => vec![0.0; n * n],
-        };
         let velocity = match mass {
             Some(mm) if !mm.configuration.is_empty() => {
                 let w = match speeds {
@@ -460,49 +268,78 @@ impl Train {
         for (qk, v) in q.iter_mut().zip(&velocity) {
             *qk += v;
         }
-        Ok(DynamicsSetup {
-            plan,
-            q,
-            velocity,
-            alpha,
-            mass: mvec,
-        })
+        Ok((q, velocity))
     }
 
-    /// Solve a prepared request with the given Willis and force-row ratios.
-    pub(crate) fn inverse_dynamics_in(
+    /// Solve inverse dynamics: accelerations, multipliers, driving torques,
+    /// meshing forces (where pitch radii are known), the housing and element
+    /// reactions. With no accelerations it is the static-force analysis. A
+    /// front over the one prepared solver ([`PreparedTrain`]), which it
+    /// prepares and solves once.
+    ///
+    /// # Errors
+    /// Missing ratios or data for the mass matrix, wrong counts, singular or
+    /// ill-conditioned systems.
+    pub fn inverse_dynamics(
         &self,
-        setup: &mut DynamicsSetup,
         req: &DynamicsRequest,
         mass: Option<&MassMatrix>,
-        ratios: &[f64],
-        force_ratios: &[f64],
     ) -> Result<InverseDynamics> {
-        let DynamicsSetup {
-            plan,
-            q,
-            velocity,
-            alpha,
-            mass: mvec,
-        } = setup;
-        plan.solve(ratios, force_ratios, mvec, q, alpha)?;
+        let ratios = self.ratios()?;
+        let accelerated = Self::accelerated_links(req);
+        let plan = PreparedTrain::for_analysis(
+            self,
+            &accelerated,
+            &accelerated,
+            &req.driving,
+            &req.extras,
+        )?;
+        let alpha = Self::prescribed_accelerations(req)?;
+        let (q, velocity) = self.generalized_forces(req, mass, None)?;
+        let m = mass.map(row_major);
+        let mut ws = plan.workspace();
+        let scenario = Scenario {
+            ratios: &ratios,
+            speeds: &vec![0.0; accelerated.len()],
+            accelerations: &alpha,
+            torques: &q,
+            inertia: &[],
+            mass: &[],
+            efficiency: &vec![1.0; ratios.len()],
+            mass_matrix: m.as_deref(),
+        };
+        plan.solve(&mut ws, &scenario, Compute::Forces)?;
+        Ok(self.dynamics_result(req, mass, &plan, &ws, &velocity))
+    }
 
-        let mut acceleration = vec![0.0; self.links().len()];
+    /// The [`InverseDynamics`] of a solved workspace: per-link accelerations
+    /// and torques, the housing torque, per-mesh loads and forces (eq. 11).
+    pub(crate) fn dynamics_result(
+        &self,
+        req: &DynamicsRequest,
+        mass: Option<&MassMatrix>,
+        plan: &PreparedTrain,
+        ws: &Workspace,
+        velocity: &[f64],
+    ) -> InverseDynamics {
+        let nl = self.links().len();
+        let mut acceleration = vec![0.0; nl];
+        let mut velocity_torque = vec![0.0; nl];
         for (k, l) in self.coordinates().iter().enumerate() {
-            acceleration[l.index()] = plan.accelerations()[k];
+            acceleration[l.index()] = ws.accelerations()[k];
+            velocity_torque[l.index()] = velocity[k];
         }
-        // The prescribed accelerations are data: echo them, not their round-off.
-        for &(l, a) in &req.accelerations {
-            acceleration[l.index()] = a;
-        }
-        let lambda = plan.multipliers().to_vec();
-        let td = plan.driving_torques();
-        let mut torque = vec![0.0; self.links().len()];
+        let lambda = ws.multipliers(plan).to_vec();
+        let mut torque = vec![0.0; nl];
         for &(l, t) in &req.torques {
             torque[l.index()] += t;
         }
-        let driving_torques: Vec<(LinkId, f64)> =
-            req.driving.iter().zip(td).map(|(&l, &t)| (l, t)).collect();
+        let driving_torques: Vec<(LinkId, f64)> = req
+            .driving
+            .iter()
+            .zip(ws.driving_torques(plan))
+            .map(|(&l, &t)| (l, t))
+            .collect();
         for &(l, t) in &driving_torques {
             torque[l.index()] += t;
         }
@@ -510,9 +347,8 @@ impl Train {
         let jg = self.circuits().len();
         let mut meshes = Vec::with_capacity(jg);
         for (m, (c, g)) in self.circuits().iter().zip(self.gears()).enumerate() {
-            let t = force_ratios[m];
             let lam = lambda[m];
-            let [ti, tj, tk] = willis_row(t).map(|v| v * lam);
+            let [ti, tj, tk] = willis_row(ws.force_ratios()[m]).map(|v| v * lam);
             for (l, v) in [(c.gear_i, ti), (c.gear_j, tj), (c.carrier, tk)] {
                 if l == self.frame() {
                     torque[l.index()] += v;
@@ -529,7 +365,8 @@ impl Train {
             });
         }
         let element_torques = lambda[jg..].to_vec();
-        let conditions = plan.conditions();
+        let [_, psi, force] = ws.conditions();
+        let conditions = [psi, force];
         let mut warnings = Vec::new();
         for (c, what) in conditions.iter().zip(["[Psi_w]", "the force system"]) {
             if *c > COND_WARN {
@@ -539,26 +376,7 @@ impl Train {
         if let Some(mm) = mass {
             warnings.extend(mm.notes.iter().cloned());
         }
-        let mut velocity_torque = vec![0.0; self.links().len()];
-        for (k, l) in self.coordinates().iter().enumerate() {
-            velocity_torque[l.index()] = velocity[k];
-        }
-        debug_assert!({
-            let effective: Vec<f64> = torque
-                .iter()
-                .zip(&velocity_torque)
-                .map(|(a, b)| a + b)
-                .collect();
-            self.residual_of_motion(
-                mass,
-                &acceleration,
-                &effective,
-                &lambda,
-                force_ratios,
-                &req.extras,
-            ) < 1e-8
-        });
-        Ok(InverseDynamics {
+        InverseDynamics {
             acceleration,
             torque,
             driving_torques,
@@ -568,56 +386,7 @@ impl Train {
             conditions,
             velocity_torque,
             warnings,
-        })
-    }
-
-    /// max |M w' + psi~^T lambda - Q| over the coordinates, relative (a debug check of eq. 6).
-    fn residual_of_motion(
-        &self,
-        mass: Option<&MassMatrix>,
-        acc: &[f64],
-        torque: &[f64],
-        lambda: &[f64],
-        taus: &[f64],
-        extras: &[Extra],
-    ) -> f64 {
-        let n = self.coordinates().len();
-        let w = DVector::from_iterator(n, self.coordinates().iter().map(|l| acc[l.index()]));
-        let mut r = match mass {
-            Some(m) => &m.matrix * &w,
-            None => DVector::zeros(n),
-        };
-        for (m, c) in self.circuits().iter().enumerate() {
-            let t = taus[m];
-            for (l, v) in [c.gear_i, c.gear_j, c.carrier]
-                .into_iter()
-                .zip(willis_row(t))
-            {
-                if let Some(k) = self.coordinate(l) {
-                    r[k] += v * lambda[m];
-                }
-            }
         }
-        for (e, x) in extras.iter().enumerate() {
-            let lam = lambda[self.circuits().len() + e];
-            let (a, b) = match *x {
-                Extra::Hold(l) => (Some(l), None),
-                Extra::Join(a, b) => (Some(a), Some(b)),
-            };
-            if let Some(k) = a.and_then(|l| self.coordinate(l)) {
-                r[k] += lam;
-            }
-            if let Some(k) = b.and_then(|l| self.coordinate(l)) {
-                r[k] -= lam;
-            }
-        }
-        let scale = torque.iter().fold(1e-300_f64, |m, v| m.max(v.abs()));
-        self.coordinates()
-            .iter()
-            .enumerate()
-            .map(|(k, l)| (r[k] - torque[l.index()]).abs())
-            .fold(0.0, f64::max)
-            / scale
     }
 
     /// \[V\] of eq. (23): the speeds of every coordinate per unit speed of each
@@ -637,16 +406,10 @@ impl Train {
     ) -> Result<(DMatrix<f64>, f64)> {
         let n = self.coordinates().len();
         let ratios = self.ratios()?;
-        let plan = InverseDynamicsPlan::new(self, inputs, inputs, extras)?;
+        let plan = PreparedTrain::for_analysis(self, inputs, inputs, inputs, extras)?;
         let c = plan.constraints();
         let mut lu = Lu::new(n);
-        {
-            let a = lu.matrix_mut();
-            plan.rows.fill(&ratios, a, n);
-            for (r, &k) in plan.accel.iter().enumerate() {
-                a[(c + r) * n + k] = 1.0;
-            }
-        }
+        plan.kinematic_matrix(&ratios, lu.matrix_mut());
         lu.factor().map_err(|_| {
             singular(
                 "[Gamma_w] (eq. 23)",
@@ -726,4 +489,9 @@ impl Train {
             self.constrained_speeds(&inputs, extras)?.speed
         })
     }
+}
+
+/// A mass matrix row-major (it is symmetric, so this is also column-major).
+pub(crate) fn row_major(mm: &MassMatrix) -> Vec<f64> {
+    mm.matrix.transpose().iter().copied().collect()
 }

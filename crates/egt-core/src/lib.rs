@@ -59,7 +59,7 @@ pub mod train;
 pub mod transmission;
 
 pub use circuits::FundamentalCircuit;
-pub use dynamics::{DynamicsRequest, Extra, InverseDynamics, InverseDynamicsPlan, MeshLoad};
+pub use dynamics::{DynamicsRequest, Extra, InverseDynamics, MeshLoad};
 pub use error::{AnalysisError, Error, Result, SpecErrorKind, SyntaxError, TopologyError};
 pub use kinematics::{KinematicsPlan, RelativeSpeed, SpeedInput, Speeds};
 pub use mass::{MassMatrix, Offset};

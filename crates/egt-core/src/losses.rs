@@ -34,22 +34,25 @@ pub(crate) fn mesh_torque(lambda: f64, tau: f64) -> f64 {
     lambda.abs() * 1f64.max(tau.abs()).max((tau - 1.0).abs())
 }
 
+/// A solution of eq. (10) as the direction rule reads it.
+pub(crate) trait ForceSolution {
+    /// Multiplier of mesh `m`.
+    fn multiplier(&self, m: usize) -> f64;
+    /// The train's torque scale: the largest applied, driving or mesh torque.
+    fn torque_scale(&self) -> f64;
+    /// Condition estimate of the force system solved.
+    fn condition(&self) -> f64;
+}
+
 /// A force solver whose lossy meshes need directions: eq. (10) re-solved for
-/// given force ratios, and read back.
-pub(crate) trait LossySolver {
+/// given force ratios.
+pub(crate) trait LossySolver: ForceSolution {
     /// Re-solve eq. (10) with the force ratios of `directions` (tau eta when
     /// gear i drives, tau / eta when gear j does, tau when idle).
     ///
     /// # Errors
     /// A singular or refused force system for these ratios.
     fn solve_directions(&mut self, directions: &[Driver]) -> Result<()>;
-    /// Multiplier of mesh `m` in the last solution.
-    fn multiplier(&self, m: usize) -> f64;
-    /// The train's torque scale in the last solution: the largest applied,
-    /// driving or mesh torque.
-    fn torque_scale(&self) -> f64;
-    /// Condition estimate of the last force system solved.
-    fn condition(&self) -> f64;
 }
 
 /// The meshes' data for the search: Willis ratios, basic efficiencies and
@@ -80,7 +83,7 @@ impl Meshes<'_> {
     /// The driver the solution in `sys` implies for mesh `m`: gear i drives
     /// when lambda tau (w_j - w_k) > 0; none when the mesh does not roll or
     /// is idle (its torque is round-off against the train's torque scale).
-    pub(crate) fn implied(&self, sys: &impl LossySolver, m: usize) -> Driver {
+    pub(crate) fn implied(&self, sys: &impl ForceSolution, m: usize) -> Driver {
         let lam = sys.multiplier(m);
         let tol = IDLE_ROUNDING * sys.condition().max(1.0) * sys.torque_scale();
         if !self.rolls(m) || mesh_torque(lam, self.ratios[m]) <= tol {

@@ -14,11 +14,11 @@
 
 use serde::Serialize;
 
-use crate::dynamics::{DynamicsRequest, DynamicsSetup, InverseDynamics};
+use crate::dynamics::{DynamicsRequest, InverseDynamics, row_major};
 use crate::error::Result;
 use crate::kinematics::{SpeedInput, Speeds};
-use crate::losses::{Directions, LossySolver, Meshes, mesh_torque};
 use crate::mass::MassMatrix;
+use crate::prepared::{Compute, PreparedTrain, Scenario};
 use crate::train::{GearId, LinkId, Train};
 
 /// Which gear drives a mesh in the carrier's frame.
@@ -153,41 +153,44 @@ impl Train {
             .iter()
             .map(|g| if req.losses { g.efficiency } else { 1.0 })
             .collect();
-        let wscale = w.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
         let rolling: Vec<f64> = self
             .circuits()
             .iter()
             .map(|c| w[c.gear_j.index()] - w[c.carrier.index()])
             .collect();
-        let mesh_data = Meshes {
+        // One prepared solve: speeds (eq. 2), accelerations (eq. 8), forces
+        // (eq. 10) and, with losses, the direction search.
+        let dyn_req = &req.dynamics;
+        let inputs: Vec<LinkId> = req.speeds.iter().map(|i| i.link).collect();
+        let accelerated = Self::accelerated_links(dyn_req);
+        let plan = PreparedTrain::for_analysis(
+            self,
+            &inputs,
+            &accelerated,
+            &dyn_req.driving,
+            &dyn_req.extras,
+        )?;
+        let alpha = Self::prescribed_accelerations(dyn_req)?;
+        let (q, velocity) = self.generalized_forces(dyn_req, mass, Some(w))?;
+        let m = mass.map(row_major);
+        let input_speeds: Vec<f64> = req.speeds.iter().map(|i| i.speed).collect();
+        let scenario = Scenario {
             ratios: &taus,
+            speeds: &input_speeds,
+            accelerations: &alpha,
+            torques: &q,
+            inertia: &[],
+            mass: &[],
             efficiency: &etas,
-            rolling: &rolling,
-            speed_scale: wscale,
+            mass_matrix: m.as_deref(),
         };
-        // The plan is checked and sized once; each direction assignment only re-solves.
-        let setup = self.dynamics_setup(&req.dynamics, mass, Some(w))?;
-        let mut sys = LossyFlow {
-            train: self,
-            setup,
-            req: &req.dynamics,
-            mass,
-            meshes: mesh_data,
-            dynamics: None,
-        };
-        sys.solve_directions(&vec![Driver::None; taus.len()])?;
-        let mut directions = Directions::new(taus.len());
-        let iterations = directions.settle(&mut sys, &mesh_data)?;
-        let dirs = directions.dirs;
-        let tp: Vec<f64> = (0..taus.len())
-            .map(|m| mesh_data.force_ratio(m, dirs[m]))
-            .collect();
-        let implied: Vec<Driver> = (0..taus.len())
-            .map(|m| mesh_data.implied(&sys, m))
-            .collect();
-        let Some(dynamics) = sys.dynamics else {
-            unreachable!("solved above")
-        };
+        let mut ws = plan.workspace();
+        plan.solve(&mut ws, &scenario, Compute::Power)?;
+        let dynamics = self.dynamics_result(dyn_req, mass, &plan, &ws, &velocity);
+        let dirs = ws.directions().to_vec();
+        let tp = ws.force_ratios().to_vec();
+        let implied = plan.drivers(&ws, &scenario);
+        let iterations = ws.power().iterations;
         let notes: Vec<String> = Vec::new();
 
         let mut meshes = Vec::with_capacity(taus.len());
@@ -328,47 +331,6 @@ impl Train {
 /// digits instead of the difference of two nearly equal powers.
 pub fn efficiency(input: f64, loss: f64, kinetic_rate: f64) -> f64 {
     1.0 - (loss + kinetic_rate) / input
-}
-
-/// The single-scenario force system as the direction search sees it.
-struct LossyFlow<'a> {
-    train: &'a Train,
-    setup: DynamicsSetup,
-    req: &'a DynamicsRequest,
-    mass: Option<&'a MassMatrix>,
-    meshes: Meshes<'a>,
-    dynamics: Option<InverseDynamics>,
-}
-
-impl LossySolver for LossyFlow<'_> {
-    fn solve_directions(&mut self, directions: &[Driver]) -> Result<()> {
-        let force: Vec<f64> = (0..directions.len())
-            .map(|m| self.meshes.force_ratio(m, directions[m]))
-            .collect();
-        self.dynamics = Some(self.train.inverse_dynamics_in(
-            &mut self.setup,
-            self.req,
-            self.mass,
-            self.meshes.ratios,
-            &force,
-        )?);
-        Ok(())
-    }
-    fn multiplier(&self, m: usize) -> f64 {
-        self.dynamics.as_ref().map_or(0.0, |d| d.multipliers[m])
-    }
-    fn torque_scale(&self) -> f64 {
-        let Some(d) = &self.dynamics else { return 0.0 };
-        let external = d.torque.iter().map(|t| t.abs());
-        let meshes = d
-            .meshes
-            .iter()
-            .map(|l| mesh_torque(l.multiplier, self.meshes.ratios[l.gear.index()]));
-        external.chain(meshes).fold(0.0, f64::max)
-    }
-    fn condition(&self) -> f64 {
-        self.dynamics.as_ref().map_or(1.0, |d| d.conditions[1])
-    }
 }
 
 impl Train {

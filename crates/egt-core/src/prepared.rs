@@ -25,7 +25,7 @@ use crate::equations::willis_row;
 use crate::error::{AnalysisError, Result};
 use crate::exact::{self, Q, QMatrix};
 use crate::linalg::Lu;
-use crate::losses::{Directions, LossySolver, Meshes, mesh_torque};
+use crate::losses::{Directions, ForceSolution, LossySolver, Meshes, mesh_torque};
 use crate::power::Driver;
 use crate::train::{LinkId, Train};
 
@@ -133,6 +133,19 @@ impl MassModel {
         })
     }
 
+    /// A model with no inertia or mass slots, for analyses that are given
+    /// their \[M\] whole ([`Scenario::mass_matrix`]) or need none.
+    pub fn empty(n: usize) -> Self {
+        MassModel {
+            n,
+            entries: Vec::new(),
+            terms: Vec::new(),
+            inertia_links: Vec::new(),
+            mass_links: Vec::new(),
+            notes: Vec::new(),
+        }
+    }
+
     /// Order of \[M\] (the number of coordinates).
     pub fn n(&self) -> usize {
         self.n
@@ -224,6 +237,9 @@ pub(crate) fn exact_of(v: f64) -> Q {
 pub enum Compute {
     /// Speeds only (eq. 2).
     Kinematics,
+    /// Accelerations, multipliers and driving torques without the speeds
+    /// (eq. 8, 10): inverse dynamics and the static-force analysis.
+    Forces,
     /// Speeds, accelerations, multipliers, driving torques and meshing forces (eq. 2, 8, 10, 11).
     #[default]
     Dynamics,
@@ -248,6 +264,9 @@ pub struct Scenario<'a> {
     pub mass: &'a [f64],
     /// Basic mesh efficiencies, one per gear pair (read by `Power` only).
     pub efficiency: &'a [f64],
+    /// A whole mass matrix (row-major, n x n) to use instead of filling one
+    /// from `inertia` and `mass`: a single analysis with a given \[M\].
+    pub mass_matrix: Option<&'a [f64]>,
 }
 
 /// A power balance (for [`Compute::Power`]).
@@ -298,12 +317,22 @@ pub struct Workspace {
     rolling: Vec<f64>,
     directions: Directions,
     cond: [f64; 3],
+    /// The LU that holds \[Psi_w\] (eq. 8) for the current ratios, if any, and its condition.
+    psi: Option<Psi>,
+    psi_cond: f64,
     power: PowerSummary,
     /// The ratios the factorisations below were made with, and which of them
     /// are valid for those ratios: a batch that varies loads, speeds,
     /// accelerations or inertias under fixed ratios factors once.
     key: Vec<f64>,
     cache: Cache,
+}
+
+/// Which LU of a [`Workspace`] holds \[Psi_w\].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Psi {
+    Kin,
+    Acc,
 }
 
 /// Which factorisations in a [`Workspace`] hold for its `key` ratios.
@@ -330,6 +359,24 @@ impl PreparedTrain {
         driving: &[LinkId],
         extras: &[Extra],
     ) -> Result<Self> {
+        let mut plan = Self::for_analysis(train, inputs, accelerated, driving, extras)?;
+        plan.mass = MassModel::new(train)?;
+        Ok(plan)
+    }
+
+    /// As [`PreparedTrain::new`] for one analysis that supplies its \[M\]
+    /// whole in each scenario (or none): no mass model is built, so no mass
+    /// data is asked for.
+    ///
+    /// # Errors
+    /// Wrong counts, the frame or a repeated link among the links.
+    pub fn for_analysis(
+        train: &Train,
+        inputs: &[LinkId],
+        accelerated: &[LinkId],
+        driving: &[LinkId],
+        extras: &[Extra],
+    ) -> Result<Self> {
         let (n, f) = dof_with(train, extras)?;
         let inputs = link_columns(train, inputs, f, "input links")?;
         let accelerated = link_columns(train, accelerated, f, "prescribed accelerations")?;
@@ -344,7 +391,7 @@ impl PreparedTrain {
             inputs,
             accelerated,
             driving,
-            mass: MassModel::new(train)?,
+            mass: MassModel::empty(n),
             radii: train
                 .gears()
                 .iter()
@@ -398,6 +445,8 @@ impl PreparedTrain {
             rolling: vec![0.0; g],
             directions: Directions::new(g),
             cond: [1.0; 3],
+            psi: None,
+            psi_cond: 1.0,
             power: PowerSummary::default(),
             key: vec![f64::NAN; g],
             cache: Cache::default(),
@@ -593,34 +642,52 @@ impl PreparedTrain {
         // The matrices depend on the ratios only: the factorisations (and
         // their condition estimates) of the previous scenario are reused when
         // its ratios were the same.
-        if !(ws.cache.kin && ws.key[..] == s.ratios[..]) {
+        if ws.key[..] != s.ratios[..] {
             ws.cache = Cache::default();
-            // Speeds: the Willis equations (eq. 2) completed by the input rows.
-            self.kinematic_matrix(s.ratios, ws.kin.matrix_mut());
-            ws.kin.factor().map_err(|_| {
-                singular(
-                    "the speed system (eq. 2)",
-                    "the inputs do not determine the motion",
-                )
-            })?;
-            ws.cond[0] = ws.kin.condition();
-            refuse(ws.cond[0], "the speed system (eq. 2)")?;
             ws.key.copy_from_slice(s.ratios);
-            ws.cache.kin = true;
         }
-        self.input_rhs(s.speeds, &mut ws.speed);
-        if what == Compute::Kinematics {
-            ws.kin.solve(&mut ws.speed);
-            return Ok(());
-        }
-        // Accelerations: eq. (8), the same factorisation when the links are the same.
-        self.input_rhs(s.accelerations, &mut ws.accel);
-        if self.accel_shared {
-            ws.cond[1] = ws.cond[0];
-            ws.kin.solve2(&mut ws.speed, &mut ws.accel);
+        let speeds = what != Compute::Forces;
+        if speeds {
+            if !ws.cache.kin {
+                // Speeds: the Willis equations (eq. 2) completed by the input rows.
+                self.kinematic_matrix(s.ratios, ws.kin.matrix_mut());
+                ws.kin.factor().map_err(|_| {
+                    singular(
+                        "the speed system (eq. 2)",
+                        "the inputs do not determine the motion",
+                    )
+                })?;
+                ws.cond[0] = ws.kin.condition();
+                refuse(ws.cond[0], "the speed system (eq. 2)")?;
+                ws.cache.kin = true;
+            }
+            self.input_rhs(s.speeds, &mut ws.speed);
+            if what == Compute::Kinematics {
+                ws.kin.solve(&mut ws.speed);
+                return Ok(());
+            }
         } else {
-            ws.kin.solve(&mut ws.speed);
-            if !ws.cache.acc {
+            ws.speed.iter_mut().for_each(|v| *v = 0.0);
+        }
+        // Accelerations: eq. (8), the speeds' factorisation when the links are
+        // the same; none at all when no acceleration is prescribed.
+        let moving = s.accelerations.iter().any(|&a| a != 0.0);
+        self.input_rhs(s.accelerations, &mut ws.accel);
+        ws.psi = None;
+        if self.accel_shared && speeds {
+            ws.psi = Some(Psi::Kin);
+            ws.psi_cond = ws.cond[0];
+            ws.cond[1] = ws.cond[0];
+            if moving {
+                ws.kin.solve2(&mut ws.speed, &mut ws.accel);
+            } else {
+                ws.kin.solve(&mut ws.speed);
+            }
+        } else {
+            if speeds {
+                ws.kin.solve(&mut ws.speed);
+            }
+            if moving && !ws.cache.acc {
                 self.acceleration_matrix(s.ratios, ws.acc.matrix_mut());
                 ws.acc.factor().map_err(|_| {
                     singular(
@@ -628,17 +695,28 @@ impl PreparedTrain {
                         "the prescribed accelerations do not determine the motion",
                     )
                 })?;
-                ws.cond[1] = ws.acc.condition();
-                refuse(ws.cond[1], "[Psi_w] (eq. 8)")?;
+                ws.psi_cond = ws.acc.condition();
+                refuse(ws.psi_cond, "[Psi_w] (eq. 8)")?;
                 ws.cache.acc = true;
             }
-            ws.acc.solve(&mut ws.accel);
+            if ws.cache.acc {
+                ws.psi = Some(Psi::Acc);
+            }
+            if moving {
+                ws.cond[1] = ws.psi_cond;
+                ws.acc.solve(&mut ws.accel);
+            } else {
+                ws.cond[1] = 1.0;
+            }
         }
         // The prescribed accelerations are data: keep them, not their round-off.
         for (&k, &a) in self.accelerated.iter().zip(s.accelerations) {
             ws.accel[k] = a;
         }
-        self.mass.fill(s.inertia, s.mass, &mut ws.m);
+        match s.mass_matrix {
+            Some(m) => ws.m.copy_from_slice(m),
+            None => self.mass.fill(s.inertia, s.mass, &mut ws.m),
+        }
         self.force_rhs(&ws.m, s.torques, &ws.accel, &mut ws.rhs);
         ws.tau.copy_from_slice(s.ratios);
         self.solve_forces(ws, true)?;
@@ -654,12 +732,15 @@ impl PreparedTrain {
     fn solve_forces(&self, ws: &mut Workspace, ideal: bool) -> Result<()> {
         let c = self.constraints();
         ws.x.copy_from_slice(&ws.rhs);
-        if ideal && self.force_shared {
+        if ideal
+            && self.force_shared
+            && let Some(psi) = ws.psi
+        {
             // F = D [Psi_w] with D = diag(1, .., 1, -1, .., -1): x = D [Psi_w]^-T r.
-            let lu = if self.accel_shared { &ws.kin } else { &ws.acc };
+            let lu = if psi == Psi::Kin { &ws.kin } else { &ws.acc };
             lu.solve_transpose(&mut ws.x);
             ws.x[c..].iter_mut().for_each(|v| *v = -*v);
-            ws.cond[2] = ws.cond[1];
+            ws.cond[2] = ws.psi_cond;
             return Ok(());
         }
         // The ideal force matrix is cached with the others; a lossy one (its
@@ -795,18 +876,64 @@ impl LossySolver for LossyScenario<'_, '_> {
         }
         self.plan.solve_forces(self.ws, false)
     }
+}
+
+impl ForceSolution for LossyScenario<'_, '_> {
     fn multiplier(&self, m: usize) -> f64 {
         self.ws.x[m]
     }
     fn torque_scale(&self) -> f64 {
-        let c = self.plan.constraints();
-        let applied = self.ws.rhs.iter().chain(&self.ws.x[c..]);
-        let meshes =
-            (0..self.plan.circuits.len()).map(|m| mesh_torque(self.ws.x[m], self.ws.tau[m]));
-        applied.map(|v| v.abs()).chain(meshes).fold(0.0, f64::max)
+        self.plan.torque_scale(self.ws)
     }
     fn condition(&self) -> f64 {
         self.ws.cond[2]
+    }
+}
+
+/// A solved scenario, read by the direction rule.
+struct Solved<'a> {
+    plan: &'a PreparedTrain,
+    ws: &'a Workspace,
+}
+
+impl ForceSolution for Solved<'_> {
+    fn multiplier(&self, m: usize) -> f64 {
+        self.ws.x[m]
+    }
+    fn torque_scale(&self) -> f64 {
+        self.plan.torque_scale(self.ws)
+    }
+    fn condition(&self) -> f64 {
+        self.ws.cond[2]
+    }
+}
+
+impl PreparedTrain {
+    /// The train's torque scale in a solution: the largest right-hand side of
+    /// eq. (10), driving torque or mesh torque.
+    fn torque_scale(&self, ws: &Workspace) -> f64 {
+        let c = self.constraints();
+        let applied = ws.rhs.iter().chain(&ws.x[c..]);
+        let meshes = (0..self.circuits.len()).map(|m| mesh_torque(ws.x[m], ws.tau[m]));
+        applied.map(|v| v.abs()).chain(meshes).fold(0.0, f64::max)
+    }
+
+    /// Which gear drives each mesh in the carrier's frame in the last solution
+    /// of `ws` for `s` (none where a mesh does not roll or is idle), by the
+    /// rule of the direction search. Needs the rolling speeds of a
+    /// [`Compute::Power`] solve.
+    pub fn drivers(&self, ws: &Workspace, s: &Scenario<'_>) -> Vec<Driver> {
+        let wscale = ws.speed.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let meshes = Meshes {
+            ratios: s.ratios,
+            efficiency: s.efficiency,
+            rolling: &ws.rolling,
+            speed_scale: wscale,
+        };
+        let solved = Solved { plan: self, ws };
+        (0..self.circuits.len())
+            .map(|m| meshes.implied(&solved, m))
+            .collect()
     }
 }
 
@@ -843,6 +970,15 @@ impl Workspace {
     /// The power balance of the last [`Compute::Power`] scenario.
     pub fn power(&self) -> PowerSummary {
         self.power
+    }
+    /// The direction of rolling power in each mesh after the last
+    /// [`Compute::Power`] scenario (none for ideal and idle meshes).
+    pub fn directions(&self) -> &[Driver] {
+        &self.directions.dirs
+    }
+    /// Rolling speeds w_j - w_k of the meshes after the last [`Compute::Power`] scenario.
+    pub fn rolling(&self) -> &[f64] {
+        &self.rolling
     }
 }
 

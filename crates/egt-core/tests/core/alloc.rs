@@ -1,7 +1,8 @@
 //! A counting global allocator, and proofs that the per-scenario paths
 //! allocate nothing: `Worker::eval` for kinematics, dynamics and lossy power
-//! flow on every test train, `PreparedTrain::solve`, `MassModel::fill`,
-//! `KinematicsPlan::solve` and `InverseDynamicsPlan::solve`.
+//! flow on every test train, `PreparedTrain::solve` (also with a whole mass
+//! matrix and in the forces-only mode of the single analyses),
+//! `MassModel::fill` and `KinematicsPlan::solve`.
 //!
 //! The count is per thread (the test harness runs tests on several threads),
 //! kept in a `const`-initialised thread-local `Cell`, which itself never allocates.
@@ -14,7 +15,7 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
 use egt_core::KinematicsPlan;
-use egt_core::prepared::{Compute, MassModel};
+use egt_core::prepared::{Compute, MassModel, PreparedTrain, Scenario};
 
 use crate::util::{self, one_dof_trains, plan};
 
@@ -112,9 +113,10 @@ fn prepared_solves_and_mass_fill_allocate_nothing() {
         assert!(r.is_ok());
         assert_eq!(n, 0, "{name}: KinematicsPlan::solve");
 
+        // The single analyses' mode: a whole [M], forces only (eq. 8, 10).
         let req = util::request(&t);
-        let mut id = t
-            .inverse_dynamics_plan(&req)
+        let links: Vec<_> = req.accelerations.iter().map(|a| a.0).collect();
+        let pt = PreparedTrain::for_analysis(&t, &links, &links, &req.driving, &req.extras)
             .unwrap_or_else(|e| panic!("{e}"));
         let nc = t.coordinates().len();
         let mut q = vec![0.0; nc];
@@ -122,10 +124,23 @@ fn prepared_solves_and_mass_fill_allocate_nothing() {
             q[t.coordinate(l).unwrap_or(0)] += v;
         }
         let alpha: Vec<f64> = req.accelerations.iter().map(|a| a.1).collect();
-        id.solve(&ratios, &ratios, &m, &q, &alpha)
+        let zeros = vec![0.0; alpha.len()];
+        let ones = vec![1.0; ratios.len()];
+        let s = Scenario {
+            ratios: &ratios,
+            speeds: &zeros,
+            accelerations: &alpha,
+            torques: &q,
+            inertia: &[],
+            mass: &[],
+            efficiency: &ones,
+            mass_matrix: Some(&m),
+        };
+        let mut ws = pt.workspace();
+        pt.solve(&mut ws, &s, Compute::Forces)
             .unwrap_or_else(|e| panic!("{e}"));
-        let (n, r) = allocations(|| id.solve(&ratios, &ratios, &m, &q, &alpha));
+        let (n, r) = allocations(|| pt.solve(&mut ws, &s, Compute::Forces));
         assert!(r.is_ok());
-        assert_eq!(n, 0, "{name}: InverseDynamicsPlan::solve");
+        assert_eq!(n, 0, "{name}: PreparedTrain::solve (forces, whole [M])");
     }
 }
