@@ -34,19 +34,80 @@ pub fn from_f64(x: f64) -> Option<Q> {
     Q::from_float(x)
 }
 
-/// Parse `"p/q"`, `"-3"` or a decimal like `"2.5"` / `"1e-3"` exactly.
-pub fn parse_rational(s: &str) -> Option<Q> {
+/// Most significant digits accepted in an exact number written as text.
+pub const MAX_DIGITS: usize = 1000;
+/// Largest decimal exponent (in absolute value) accepted in an exact number
+/// written as text: far past double precision, and small enough that the
+/// exact value is built in microseconds (1e1000000 would take seconds and
+/// megabytes).
+pub const MAX_EXPONENT: i64 = 1000;
+
+/// Why text is not an exact number.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum RationalError {
+    /// Not an integer, a decimal or a fraction of two of them.
+    #[error("not a number: write an integer, a decimal (2.5, 1e-3) or a fraction p/q")]
+    Invalid,
+    /// `p/0`.
+    #[error("a fraction with a zero denominator")]
+    ZeroDenominator,
+    /// Too many digits or too large an exponent.
+    #[error("more than {MAX_DIGITS} digits or an exponent beyond +-{MAX_EXPONENT}")]
+    TooLarge,
+    /// Exact, but beyond the range of double precision.
+    #[error("beyond the range of double precision (about 1.8e308)")]
+    OutOfRange,
+}
+
+/// Parse `"p/q"`, `"-3"` or a decimal like `"2.5"` / `"1e-3"` exactly; p and
+/// q of a fraction are integers or decimals themselves (`1/3/4` is refused).
+///
+/// # Errors
+/// [`RationalError`]: not a number, a zero denominator, or past
+/// [`MAX_DIGITS`] / [`MAX_EXPONENT`].
+pub fn parse_rational(s: &str) -> Result<Q, RationalError> {
     let s = s.trim();
     if let Some((n, d)) = s.split_once('/') {
-        let n = parse_rational(n)?;
-        let d = parse_rational(d)?;
+        let n = parse_decimal(n.trim())?;
+        let d = parse_decimal(d.trim())?;
         if d.is_zero() {
-            return None;
+            return Err(RationalError::ZeroDenominator);
         }
-        return Some(n / d);
+        return Ok(n / d);
     }
+    parse_decimal(s)
+}
+
+/// [`parse_rational`] for a value that must also be a finite double: the
+/// exact value and its nearest double.
+///
+/// # Errors
+/// As [`parse_rational`]; [`RationalError::OutOfRange`] past about 1.8e308.
+pub fn parse_finite(s: &str) -> Result<(Q, f64), RationalError> {
+    let q = parse_rational(s)?;
+    let v = to_f64(&q);
+    if v.is_finite() {
+        Ok((q, v))
+    } else {
+        Err(RationalError::OutOfRange)
+    }
+}
+
+/// An integer or a decimal with an optional exponent, exactly.
+fn parse_decimal(s: &str) -> Result<Q, RationalError> {
     let (mantissa, exp) = match s.find(['e', 'E']) {
-        Some(i) => (&s[..i], s[i + 1..].parse::<i32>().ok()?),
+        Some(i) => {
+            let e = &s[i + 1..];
+            let digits = e.trim_start_matches(['+', '-']);
+            if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
+                return Err(RationalError::Invalid);
+            }
+            let v = e.parse::<i64>().map_err(|_| RationalError::TooLarge)?;
+            if v.abs() > MAX_EXPONENT {
+                return Err(RationalError::TooLarge);
+            }
+            (&s[..i], v)
+        }
         None => (s, 0),
     };
     let (neg, digits) = match mantissa.strip_prefix('-') {
@@ -55,21 +116,27 @@ pub fn parse_rational(s: &str) -> Option<Q> {
     };
     let (int, fracp) = digits.split_once('.').unwrap_or((digits, ""));
     if int.is_empty() && fracp.is_empty() {
-        return None;
+        return Err(RationalError::Invalid);
     }
     if !int.chars().chain(fracp.chars()).all(|c| c.is_ascii_digit()) {
-        return None;
+        return Err(RationalError::Invalid);
     }
-    let all: BigInt = format!("{int}{fracp}").parse().ok()?;
-    let scale = exp - i32::try_from(fracp.len()).ok()?;
+    let significant = format!("{int}{fracp}");
+    if significant.trim_start_matches('0').len() > MAX_DIGITS || fracp.len() > MAX_DIGITS {
+        return Err(RationalError::TooLarge);
+    }
+    let all: BigInt = significant.parse().map_err(|_| RationalError::Invalid)?;
+    // |scale| <= MAX_EXPONENT + MAX_DIGITS by the checks above.
+    let scale = exp - i64::try_from(fracp.len()).map_err(|_| RationalError::TooLarge)?;
     let ten = BigInt::from(10);
+    let power = Q::from_integer(num_traits::pow(ten, scale.unsigned_abs() as usize));
     let mut v = Q::from_integer(all);
     if scale >= 0 {
-        v *= Q::from_integer(num_traits::pow(ten, scale as usize));
+        v *= power;
     } else {
-        v /= Q::from_integer(num_traits::pow(ten, (-scale) as usize));
+        v /= power;
     }
-    Some(if neg { -v } else { v })
+    Ok(if neg { -v } else { v })
 }
 
 /// Display as `p/q` (or `p` when the denominator is 1).
@@ -289,12 +356,39 @@ mod tests {
 
     #[test]
     fn parses_fractions_and_decimals_exactly() {
-        assert_eq!(parse_rational("-162/77"), Some(frac(-162, 77)));
-        assert_eq!(parse_rational("2.5"), Some(frac(5, 2)));
-        assert_eq!(parse_rational("1e-3"), Some(frac(1, 1000)));
-        assert_eq!(parse_rational("0.1"), Some(frac(1, 10)));
-        assert_eq!(parse_rational("abc"), None);
-        assert_eq!(parse_rational("1/0"), None);
+        assert_eq!(parse_rational("-162/77"), Ok(frac(-162, 77)));
+        assert_eq!(parse_rational("2.5"), Ok(frac(5, 2)));
+        assert_eq!(parse_rational("1e-3"), Ok(frac(1, 1000)));
+        assert_eq!(parse_rational("0.1"), Ok(frac(1, 10)));
+        assert_eq!(parse_rational("1.5/0.5"), Ok(q(3)));
+        assert_eq!(parse_rational("abc"), Err(RationalError::Invalid));
+        assert_eq!(parse_rational("1/0"), Err(RationalError::ZeroDenominator));
+        // One fraction bar only: 1/3/4 is not (1/3)/4 nor 1/(3/4).
+        assert_eq!(parse_rational("1/3/4"), Err(RationalError::Invalid));
+        assert_eq!(parse_rational("1e"), Err(RationalError::Invalid));
+    }
+
+    #[test]
+    fn huge_exponents_and_digit_strings_are_refused_at_once() {
+        for text in [
+            "1e1000000",
+            "1e-1000000",
+            "1e999999",
+            "5e99999999999999999999",
+        ] {
+            assert_eq!(parse_rational(text), Err(RationalError::TooLarge), "{text}");
+        }
+        let digits = "7".repeat(MAX_DIGITS + 1);
+        assert_eq!(parse_rational(&digits), Err(RationalError::TooLarge));
+        // The limits themselves are accepted, and leading zeros do not count.
+        assert!(parse_rational("1e1000").is_ok() && parse_rational("1e-1000").is_ok());
+        assert!(parse_rational(&format!("000{}", "7".repeat(MAX_DIGITS))).is_ok());
+        // Exact but not a double.
+        assert_eq!(
+            parse_finite("1e400").map(|x| x.1),
+            Err(RationalError::OutOfRange)
+        );
+        assert_eq!(parse_finite("1e-400").map(|x| x.1), Ok(0.0));
     }
 
     #[test]

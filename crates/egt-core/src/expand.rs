@@ -167,6 +167,29 @@ pub(crate) fn expand(spec: &Spec) -> Result<Draft> {
             g.name = format!("G{}", m + 1);
         }
     }
+    // The frame must be a link of the graph: named by some pair.
+    let used = |name: &str| {
+        d.revolutes
+            .iter()
+            .any(|r| r.links.iter().any(|l| l == name))
+            || d.gears
+                .iter()
+                .any(|g| g.spec.links.iter().any(|l| l == name))
+    };
+    if !used(&spec.frame) && (!d.revolutes.is_empty() || !d.gears.is_empty()) {
+        let others = d
+            .links
+            .keys()
+            .map(String::as_str)
+            .filter(|l| *l != spec.frame);
+        return Err(Error::spec(
+            "frame",
+            SpecErrorKind::UnknownLink {
+                name: spec.frame.clone(),
+                suggestion: suggest(&spec.frame, others),
+            },
+        ));
+    }
     Ok(d)
 }
 

@@ -23,9 +23,10 @@ impl Format {
         }
     }
 
-    /// Guess from content: JSON documents start with `{`.
+    /// Guess from content: JSON documents start with `{` (after a UTF-8
+    /// byte-order mark, if any).
     pub fn sniff(text: &str) -> Format {
-        if text.trim_start().starts_with('{') {
+        if strip_bom(text).trim_start().starts_with('{') {
             Format::Json
         } else {
             Format::Toml
@@ -33,11 +34,19 @@ impl Format {
     }
 }
 
+/// The text without a leading UTF-8 byte-order mark.
+fn strip_bom(text: &str) -> &str {
+    text.strip_prefix('\u{feff}').unwrap_or(text)
+}
+
 /// Parse a spec from text. `source_name` is used in error messages.
 ///
 /// # Errors
 /// [`Error::Syntax`] with line, column and (when known) the field path.
 pub fn parse_spec(text: &str, format: Format, source_name: &str) -> Result<Spec> {
+    // A byte-order mark is no part of the document, in either format (the
+    // positions of errors are then counted from the first character after it).
+    let text = strip_bom(text);
     match format {
         Format::Json => {
             let mut de = serde_json::Deserializer::from_str(text);

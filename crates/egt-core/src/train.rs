@@ -494,14 +494,10 @@ fn gear_pair(g: &DraftGear, ids: &HashMap<&str, LinkId>) -> Result<GearPair> {
             })
         }
         (None, Some(RatioSpec::Text(t))) => {
-            let q = exact::parse_rational(t).ok_or_else(|| {
-                Error::invalid(
-                    format!("{p}.ratio"),
-                    format!("`{t}` is not a number or a fraction p/q"),
-                )
-            })?;
+            let (q, value) = exact::parse_finite(t)
+                .map_err(|e| Error::invalid(format!("{p}.ratio"), format!("`{t}`: {e}")))?;
             Some(Ratio {
-                value: exact::to_f64(&q),
+                value,
                 exact: Some(q),
             })
         }
@@ -1044,9 +1040,9 @@ fn resolve_extras(spec: &Spec, train: &mut Train) -> Result<()> {
             let (value, exact) = match v {
                 RatioSpec::Number(x) => (finite(path, *x)?, exact::from_f64(*x)),
                 RatioSpec::Text(t) => {
-                    let q = exact::parse_rational(t)
-                        .ok_or_else(|| Error::invalid(&path, format!("`{t}` is not a number")))?;
-                    (exact::to_f64(&q), Some(q))
+                    let (q, value) = exact::parse_finite(t)
+                        .map_err(|e| Error::invalid(&path, format!("`{t}`: {e}")))?;
+                    (value, Some(q))
                 }
             };
             out.speeds.push((l, value, exact));

@@ -72,12 +72,9 @@ pub fn engaged(train: &Train, names: &[String]) -> Result<Vec<Extra>> {
 
 /// Parse an exact value written as text (`"p/q"`, `"-3"`, `"2.5"`).
 pub fn rational(text: &str, where_: &str) -> Result<Q> {
-    exact::parse_rational(text).ok_or_else(|| {
-        Error::Core(egt_core::Error::invalid(
-            where_,
-            format!("`{text}` is not an exact number p/q"),
-        ))
-    })
+    exact::parse_finite(text)
+        .map(|(q, _)| q)
+        .map_err(|e| Error::Core(egt_core::Error::invalid(where_, format!("`{text}`: {e}"))))
 }
 
 /// `p/q` text of an exact value.

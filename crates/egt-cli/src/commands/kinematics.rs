@@ -46,8 +46,7 @@ pub(crate) fn parse_input(s: &str) -> Result<InputArg, String> {
     if link.is_empty() {
         return Err(format!("no link name in `{s}`"));
     }
-    let speed = exact::parse_rational(speed)
-        .ok_or_else(|| format!("`{}` is not a number or a fraction p/q", speed.trim()))?;
+    let (speed, _) = exact::parse_finite(speed).map_err(|e| format!("`{}`: {e}", speed.trim()))?;
     Ok(InputArg {
         link: link.to_string(),
         speed,
@@ -165,7 +164,9 @@ pub(crate) fn inputs(train: &Train, args: &[InputArg]) -> anyhow::Result<Vec<Spe
 fn readable_exact(speed: f64, given: &Option<Q>) -> Option<Q> {
     match given {
         Some(q) if exact::from_f64(speed).as_ref() == Some(q) => {
-            exact::parse_rational(&speed.to_string()).or_else(|| Some(q.clone()))
+            exact::parse_rational(&speed.to_string())
+                .ok()
+                .or_else(|| Some(q.clone()))
         }
         other => other.clone(),
     }
@@ -247,6 +248,7 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
             // Show the decimal the user wrote, and the fraction only when the decimal is not exact.
             let shown = report::float(i.speed);
             if exact::parse_rational(&shown)
+                .ok()
                 .map(|q| report::exact(&q))
                 .as_deref()
                 == Some(i.exact.as_str())
