@@ -309,7 +309,16 @@ impl Train {
             mass_matrix: m.as_deref(),
         };
         plan.solve(&mut ws, &scenario, Compute::Forces)?;
-        Ok(self.dynamics_result(req, mass, &plan, &ws, &velocity))
+        let result = self.dynamics_result(req, mass, &plan, &ws, &velocity);
+        crate::error::finite_results(
+            "the inverse dynamics",
+            result
+                .torque
+                .iter()
+                .chain(&result.multipliers)
+                .chain(&result.acceleration),
+        )?;
+        Ok(result)
     }
 
     /// The [`InverseDynamics`] of a solved workspace: per-link accelerations

@@ -135,8 +135,8 @@ pub enum SpecErrorKind {
         /// The link.
         link: String,
     },
-    /// A tooth count that is zero or negative.
-    #[error("tooth count must be a positive integer, got {value}")]
+    /// A tooth count that is zero, negative or past [`MAX_TEETH`].
+    #[error("tooth count must be an integer from 1 to {MAX_TEETH}, got {value}")]
     InvalidTeeth {
         /// The value written.
         value: i64,
@@ -415,6 +415,27 @@ pub enum AnalysisError {
     /// Anything else, in words.
     #[error("{0}")]
     Other(String),
+}
+
+/// The largest tooth count accepted: far past any wheel, small enough that
+/// products of many counts stay exact and fast.
+pub const MAX_TEETH: i64 = 1_000_000;
+
+/// Refuse results that overflowed: finite inputs whose results are not
+/// finite (a speed or an inertia near the largest double) get a typed error
+/// naming what overflowed, never an inf or NaN printed as a result.
+///
+/// # Errors
+/// [`AnalysisError::NonFinite`] naming `what`.
+pub fn finite_results<'a>(what: &str, values: impl IntoIterator<Item = &'a f64>) -> Result<()> {
+    match values.into_iter().find(|v| !v.is_finite()) {
+        None => Ok(()),
+        Some(v) => Err(AnalysisError::NonFinite {
+            what: what.to_string(),
+            detail: format!("a value came out as {v}: the inputs overflow double precision"),
+        }
+        .into()),
+    }
 }
 
 /// A number as a person reads it: plain, or in exponent form when tiny or huge.

@@ -346,6 +346,7 @@ impl Train {
         let known: Vec<bool> = self.links().iter().map(|l| l.sized).collect();
         let relative = self.relative_speeds(&speed, exact.as_deref(), &known);
         let residual = willis_residual(self, &ratios, &speed);
+        crate::error::finite_results("the speeds", &speed)?;
         Ok(Speeds {
             speed,
             known,

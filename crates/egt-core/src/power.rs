@@ -307,6 +307,12 @@ impl Train {
             }
         }
         let circulating = (!hot_meshes.is_empty()).then_some((hot_meshes, hot_links));
+        crate::error::finite_results(
+            "the power flow",
+            [input_power, output_power, loss, kinetic_rate]
+                .iter()
+                .chain(&dynamics.multipliers),
+        )?;
         Ok(PowerFlow {
             speeds,
             dynamics,

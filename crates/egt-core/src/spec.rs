@@ -93,6 +93,7 @@ pub struct LinkSpec {
 #[serde(deny_unknown_fields)]
 pub struct RevoluteSpec {
     /// The two links.
+    #[serde(deserialize_with = "exactly_two")]
     pub links: [String; 2],
     /// The axis level label (`a`, `b`, `c`, ... or any name).
     pub level: String,
@@ -130,9 +131,11 @@ pub struct GearSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
     /// Gear i and gear j.
+    #[serde(deserialize_with = "exactly_two")]
     pub links: [String; 2],
     /// Tooth counts [z_i, z_j]; needs `mesh`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(deserialize_with = "optional_two")]
     pub teeth: Option<[i64; 2]>,
     /// Mesh kind, with `teeth`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -145,6 +148,7 @@ pub struct GearSpec {
     pub module: Option<f64>,
     /// Pitch radii [r_i, r_j] \[m\].
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(deserialize_with = "optional_two")]
     pub radii: Option<[f64; 2]>,
     /// Basic mesh efficiency (power ratio in the carrier frame), in (0, 1]. Default 1.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -237,6 +241,7 @@ pub struct PlanetarySpec {
 #[serde(deny_unknown_fields)]
 pub struct OffsetSpec {
     /// The two levels.
+    #[serde(deserialize_with = "exactly_two")]
     pub levels: [String; 2],
     /// Distance between the axes \[m\].
     pub distance: f64,
@@ -348,4 +353,26 @@ pub struct AnalysisSpec {
     /// Time-simulation settings.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub simulate: Option<SimulateSpec>,
+}
+
+/// A pair written as an array of exactly two elements. (TOML's reader would
+/// otherwise take the first two of a longer array and drop the rest.)
+fn exactly_two<'de, D, T>(d: D) -> std::result::Result<[T; 2], D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: Deserialize<'de>,
+{
+    let v: Vec<T> = Vec::deserialize(d)?;
+    let n = v.len();
+    <[T; 2]>::try_from(v)
+        .map_err(|_| serde::de::Error::invalid_length(n, &"an array of exactly two elements"))
+}
+
+/// [`exactly_two`] for an optional pair.
+fn optional_two<'de, D, T>(d: D) -> std::result::Result<Option<[T; 2]>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: Deserialize<'de>,
+{
+    exactly_two(d).map(Some)
 }

@@ -1076,6 +1076,7 @@ impl ReducedModel {
             nonzero.iter().fold(0.0_f64, |m, &v| m.max(v))
                 / nonzero.iter().fold(f64::INFINITY, |m, &v| m.min(v))
         });
+        crate::error::finite_results("the eigenvalues", &lambda)?;
         Ok(Stability {
             eigenvalues: lambda,
             modes,

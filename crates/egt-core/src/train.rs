@@ -436,7 +436,7 @@ fn non_negative(path: String, v: f64) -> Result<f64> {
 fn teeth_value(path: String, z: i64) -> Result<u32> {
     u32::try_from(z)
         .ok()
-        .filter(|&z| z > 0)
+        .filter(|&z| z > 0 && i64::from(z) <= crate::error::MAX_TEETH)
         .ok_or_else(|| Error::spec(path, SpecErrorKind::InvalidTeeth { value: z }))
 }
 
