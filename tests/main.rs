@@ -36,3 +36,6 @@ mod efficiency;
 
 // Issue 10: every bundled example through every analysis, against committed JSON snapshots.
 mod golden;
+
+// Issue 12: one row per class of bad input through the binary (exit code, words in the message).
+mod bad_inputs;

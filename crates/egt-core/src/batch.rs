@@ -50,6 +50,24 @@ use crate::error::{AnalysisError, Error, Result};
 use crate::prepared::{Compute, PreparedTrain, Scenario, Workspace};
 use crate::train::{LinkId, Train};
 
+/// The worker threads for a batch: the request, capped at the machine's
+/// parallelism (more threads than cores only add switching, and a huge
+/// request would exhaust the machine), with a note when the cap applied.
+/// `None` or 0 asks for all cores.
+pub fn worker_threads(requested: Option<usize>) -> (usize, Option<String>) {
+    let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
+    match requested {
+        None | Some(0) => (cores, None),
+        Some(n) if n > cores => (
+            cores,
+            Some(format!(
+                "{n} threads asked for; using {cores}, the machine's parallelism"
+            )),
+        ),
+        Some(n) => (n, None),
+    }
+}
+
 /// Rows solved by one worker before rayon may hand the rest to another thread.
 const ROWS_PER_TASK: usize = 256;
 

@@ -428,14 +428,14 @@ pub const MAX_TEETH: i64 = 1_000_000;
 /// # Errors
 /// [`AnalysisError::NonFinite`] naming `what`.
 pub fn finite_results<'a>(what: &str, values: impl IntoIterator<Item = &'a f64>) -> Result<()> {
-    match values.into_iter().find(|v| !v.is_finite()) {
-        None => Ok(()),
-        Some(v) => Err(AnalysisError::NonFinite {
-            what: what.to_string(),
-            detail: format!("a value came out as {v}: the inputs overflow double precision"),
-        }
-        .into()),
+    if values.into_iter().all(|v| v.is_finite()) {
+        return Ok(());
     }
+    Err(AnalysisError::NonFinite {
+        what: what.to_string(),
+        detail: "a result overflowed: the inputs exceed the range of double precision".into(),
+    }
+    .into())
 }
 
 /// A number as a person reads it: plain, or in exponent form when tiny or huge.
@@ -447,9 +447,21 @@ fn readable(v: f64) -> String {
     }
 }
 
+/// Names listed in one message at most; the rest are counted.
+const LISTED_NAMES: usize = 12;
+
 fn list(items: &[String]) -> String {
-    let quoted: Vec<String> = items.iter().map(|s| format!("`{s}`")).collect();
-    quoted.join(", ")
+    let quoted: Vec<String> = items
+        .iter()
+        .take(LISTED_NAMES)
+        .map(|s| format!("`{s}`"))
+        .collect();
+    let more = items.len().saturating_sub(LISTED_NAMES);
+    if more > 0 {
+        format!("{} and {more} more", quoted.join(", "))
+    } else {
+        quoted.join(", ")
+    }
 }
 
 /// The declared name closest to `name`, if it is close enough to be a typo.

@@ -135,7 +135,7 @@ impl BatchPlanCore {
             let errors = py.detach(|| -> Result<_> {
                 let errors = match threads {
                     Some(n) => rayon::ThreadPoolBuilder::new()
-                        .num_threads(n.max(1))
+                        .num_threads(egt_core::batch::worker_threads(Some(n)).0)
                         .build()
                         .map_err(|e| value_error(e.to_string()))?
                         .install(|| self.plan.run(input, &mut out)),

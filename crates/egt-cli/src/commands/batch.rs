@@ -83,7 +83,7 @@ pub struct Args {
     /// Output format.
     #[arg(long, value_enum, default_value_t = BatchOutput::Jsonl)]
     pub output: BatchOutput,
-    /// Worker threads (default: all cores).
+    /// Worker threads (default, 0 and anything above the core count: all cores).
     #[arg(short = 'j', long, value_name = "N")]
     pub threads: Option<usize>,
     /// Write only these output columns (comma-separated names; see `--list`). Default: all.
@@ -153,10 +153,14 @@ fn parse_values(s: &str) -> Result<(String, Vec<f64>), String> {
 /// Reading the spec or files; unknown parameter names or states (exit 2);
 /// I/O; and, after every row is written, a summary error when rows failed (exit 1).
 pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
-    if let Some(n) = args.threads {
+    if args.threads.is_some() {
+        let (n, note) = egt_core::batch::worker_threads(args.threads);
+        if let Some(note) = note {
+            eprintln!("note: {note}");
+        }
         // The global pool is built once per process; a second build only fails.
         let _ = rayon::ThreadPoolBuilder::new()
-            .num_threads(n.max(1))
+            .num_threads(n)
             .build_global();
     }
     let compute = match args.compute {

@@ -1,0 +1,180 @@
+//! Issue 12: one row per class of bad input, run through the `egt` binary as a
+//! user would: the exit code and the words the message must contain. No row
+//! may exit 0, print a non-finite number or take more than an instant.
+
+use std::io::Write;
+use std::process::{Command, Stdio};
+
+use crate::util::root;
+
+/// A bad input: a spec (or none), the arguments, the exit code and the words.
+struct Row {
+    name: &'static str,
+    spec: Option<&'static str>,
+    args: &'static [&'static str],
+    exit: i32,
+    words: &'static [&'static str],
+}
+
+const SIMPLE: &str = "examples/simple_planetary.toml";
+
+const ROWS: &[Row] = &[
+    Row {
+        name: "three-element pair in TOML",
+        spec: Some(
+            "frame = \"f\"\nlinks = [{ name = \"a\" }, { name = \"b\" }]\nrevolutes = [{ links = [\"f\", \"a\", \"b\"], level = \"a\" }]\n",
+        ),
+        args: &["check"],
+        exit: 2,
+        words: &["revolutes[0].links", "exactly two"],
+    },
+    Row {
+        name: "three tooth counts",
+        spec: Some(
+            "frame = \"1\"\nadjacency = \"1-2:a 2-3:b 1-4:a\"\n[[gears]]\nlinks = [\"1\", \"3\"]\nteeth = [20, 30, 40]\nmesh = \"external\"\n",
+        ),
+        args: &["check"],
+        exit: 2,
+        words: &["gears[0].teeth", "exactly two"],
+    },
+    Row {
+        name: "two fraction bars",
+        spec: None,
+        args: &["kinematics", SIMPLE, "--input", "sun=1/3/4"],
+        exit: 2,
+        words: &["1/3/4", "not a number"],
+    },
+    Row {
+        name: "huge positive exponent",
+        spec: None,
+        args: &["kinematics", SIMPLE, "--input", "sun=1e1000000"],
+        exit: 2,
+        words: &["exponent", "1000"],
+    },
+    Row {
+        name: "huge negative exponent",
+        spec: None,
+        args: &["kinematics", SIMPLE, "--input", "sun=1e-1000000"],
+        exit: 2,
+        words: &["exponent", "1000"],
+    },
+    Row {
+        name: "huge exponent in a spec speed",
+        spec: Some(
+            "frame = \"ring\"\n[[planetary]]\nname = \"P\"\nsun = \"sun\"\nring = \"ring\"\ncarrier = \"c\"\nteeth = { sun = 30, ring = 72 }\n[analysis]\nspeeds = { sun = \"1e999999\" }\n",
+        ),
+        args: &["kinematics"],
+        exit: 2,
+        words: &["analysis.speeds.sun", "exponent"],
+    },
+    Row {
+        name: "huge exponent in an adjacency ratio",
+        spec: Some("frame = \"1\"\nadjacency = \"1-2:a 2-3:b 1-4:a 1-3:G=1e999999 3-4:G=-3/2\"\n"),
+        args: &["check"],
+        exit: 2,
+        words: &["1-3:G=1e999999", "exponent"],
+    },
+    Row {
+        name: "ratio beyond double range",
+        spec: Some("frame = \"1\"\nadjacency = \"1-2:a 2-3:b 1-4:a 1-3:G=1e400 3-4:G=-3/2\"\n"),
+        args: &["check"],
+        exit: 2,
+        words: &["1e400", "double precision"],
+    },
+    Row {
+        name: "undeclared frame",
+        spec: Some("frame = \"99\"\nadjacency = \"1-2:a 2-3:b 1-4:a 1-3:G=-2 3-4:G=-3/2\"\n"),
+        args: &["check"],
+        exit: 2,
+        words: &["frame", "`99`"],
+    },
+    Row {
+        name: "tooth count past the limit",
+        spec: Some(
+            "frame = \"ring\"\n[[planetary]]\nname = \"P\"\nsun = \"sun\"\nring = \"ring\"\ncarrier = \"c\"\nteeth = { sun = 4294967296, ring = 72, planet = 21 }\n",
+        ),
+        args: &["check"],
+        exit: 2,
+        words: &["teeth", "1 to 1000000", "4294967296"],
+    },
+    Row {
+        name: "overflowing inertia",
+        spec: Some(
+            "frame = \"1\"\nadjacency = \"1-2:a 2-3:b 1-4:a 1-3:G=-2 3-4:G=-3/2\"\nlinks = [{ name = \"2\", inertia = 1e308 }, { name = \"4\", inertia = 1e308 }]\n[analysis]\ntorques = { \"4\" = -1e308 }\naccelerations = { \"4\" = 1e308 }\ndriving = [\"2\"]\n",
+        ),
+        args: &["dynamics"],
+        exit: 1,
+        words: &["not finite", "overflow"],
+    },
+    Row {
+        name: "missing file",
+        spec: None,
+        args: &["check", "examples/no_such_file.toml"],
+        exit: 1,
+        words: &["no_such_file.toml"],
+    },
+    Row {
+        name: "JSON with a byte-order mark is read",
+        spec: None,
+        args: &["check", "--spec-format", "json"],
+        exit: 0,
+        words: &["valid geared kinematic chain"],
+    },
+];
+
+fn run(row: &Row) -> (i32, String) {
+    let mut args: Vec<String> = row.args.iter().map(|s| s.to_string()).collect();
+    let mut stdin = None;
+    if let Some(text) = row.spec {
+        args.push("-".into());
+        stdin = Some(text.to_string());
+    }
+    if row.name.contains("byte-order") {
+        args.push("-".into());
+        stdin = Some(
+            "\u{feff}{\"frame\": \"f\", \"adjacency\": \"f-2:a 2-3:b f-4:a f-3:G=-2 3-4:G=-3/2\"}"
+                .into(),
+        );
+    }
+    let mut child = Command::new(env!("CARGO_BIN_EXE_egt"))
+        .args(&args)
+        .current_dir(root())
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn egt");
+    let mut pipe = child.stdin.take().expect("stdin");
+    pipe.write_all(stdin.unwrap_or_default().as_bytes())
+        .expect("write stdin");
+    drop(pipe);
+    let out = child.wait_with_output().expect("wait");
+    let text =
+        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
+    (out.status.code().expect("exit code"), text)
+}
+
+#[test]
+fn every_bad_input_class_is_refused_by_name() {
+    for row in ROWS {
+        let start = std::time::Instant::now();
+        let (code, text) = run(row);
+        assert_eq!(code, row.exit, "{}: exit {code}\n{text}", row.name);
+        for w in row.words {
+            assert!(text.contains(w), "{}: no `{w}` in\n{text}", row.name);
+        }
+        let words = text.split(|c: char| !c.is_alphanumeric());
+        assert!(
+            !words.into_iter().any(|w| w == "inf" || w == "NaN"),
+            "{}: {text}",
+            row.name
+        );
+        // Bounded work, not a timing target: the slow paths took seconds to minutes.
+        assert!(
+            start.elapsed().as_secs() < 20,
+            "{}: {:?}",
+            row.name,
+            start.elapsed()
+        );
+    }
+}
