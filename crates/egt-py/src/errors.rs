@@ -14,7 +14,9 @@
 //! │   ├── InconsistentError   conflicting
 //! │   ├── SingularError       what, detail
 //! │   ├── IllConditionedError what, condition, threshold
-//! │   └── MissingDataError    what, analysis, hint
+//! │   ├── MissingDataError    what, analysis, hint
+//! │   ├── SelfLockingError    (no consistent direction of power: the train self-locks)
+//! │   └── NonFiniteError      what, detail (an overflow, never an inf or NaN result)
 //! └── InternalError           (a Rust panic, caught before it reaches Python)
 //! ```
 //!
@@ -102,6 +104,18 @@ pyo3::create_exception!(
     MissingDataError,
     AnalysisError,
     "A datum the analysis needs is absent (`what`, `analysis`, `hint`)."
+);
+pyo3::create_exception!(
+    egt,
+    SelfLockingError,
+    AnalysisError,
+    "No consistent direction of power flow exists through the lossy meshes: the train self-locks under these loads."
+);
+pyo3::create_exception!(
+    egt,
+    NonFiniteError,
+    AnalysisError,
+    "A quantity or result is not finite: the inputs overflow double precision (`what`, `detail`)."
 );
 pyo3::create_exception!(
     egt,
@@ -510,8 +524,30 @@ fn analysis_to_py(py: Python<'_>, a: &CoreAnalysis, msg: String, k: &str) -> PyE
                 ("hint", obj(py, hint.as_str())),
             ],
         ),
-        // `Other` carries only words; repeated or conflicting inputs land here.
-        _ => build::<InputError>(py, msg, k, &[], &[]),
+        CoreAnalysis::SelfLocking => build::<SelfLockingError>(py, msg, k, &[], &[]),
+        CoreAnalysis::NonFinite { what, detail } => build::<NonFiniteError>(
+            py,
+            msg,
+            k,
+            std::slice::from_ref(what),
+            &[
+                ("what", obj(py, what.as_str())),
+                ("detail", obj(py, detail.as_str())),
+            ],
+        ),
+        CoreAnalysis::RepeatedLink { link, .. } => build::<InputError>(
+            py,
+            msg,
+            k,
+            std::slice::from_ref(link),
+            &[("link", obj(py, link.as_str()))],
+        ),
+        CoreAnalysis::OverConstrained { .. } => build::<InputError>(py, msg, k, &[], &[]),
+        CoreAnalysis::ConfigurationDependent { links, .. } => {
+            build::<AnalysisError>(py, msg, k, links, &[])
+        }
+        // The rest (iterations that did not converge, an indefinite [M], directions undecided, words).
+        _ => build::<AnalysisError>(py, msg, k, &[], &[]),
     }
 }
 
@@ -524,7 +560,7 @@ pub fn value_error(msg: impl Into<String>) -> Error {
 /// defaults for every attribute so that each attribute exists on each class.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
-    let classes: [(&str, Bound<'_, PyType>, &[&str]); 13] = [
+    let classes: [(&str, Bound<'_, PyType>, &[&str]); 15] = [
         (
             "EgtError",
             py.get_type::<EgtError>(),
@@ -588,6 +624,12 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
             "MissingDataError",
             py.get_type::<MissingDataError>(),
             &["what", "analysis", "hint"],
+        ),
+        ("SelfLockingError", py.get_type::<SelfLockingError>(), &[]),
+        (
+            "NonFiniteError",
+            py.get_type::<NonFiniteError>(),
+            &["what", "detail"],
         ),
         ("InternalError", py.get_type::<InternalError>(), &[]),
     ];

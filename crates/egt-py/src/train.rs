@@ -39,15 +39,15 @@ impl TrainCore {
             .iter()
             .map(|(name, v, exact)| {
                 let link = convert::link(&self.train, name, &format!("inputs.{name}"))?;
-                let exact = match exact {
-                    Some(t) => Some(convert::rational(t, &format!("inputs.{name}"))?),
-                    None => egt_core::exact::from_f64(*v),
+                // Exact text wins: its value is the speed (the float is a placeholder then).
+                let (speed, exact) = match exact {
+                    Some(t) => {
+                        let q = convert::rational(t, &format!("inputs.{name}"))?;
+                        (egt_core::exact::to_f64(&q), Some(q))
+                    }
+                    None => (*v, egt_core::exact::from_f64(*v)),
                 };
-                Ok(SpeedInput {
-                    link,
-                    speed: *v,
-                    exact,
-                })
+                Ok(SpeedInput { link, speed, exact })
             })
             .collect()
     }

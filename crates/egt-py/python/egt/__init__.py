@@ -19,6 +19,7 @@ Pythonic surface. Every error is an :class:`EgtError`.
 
 from __future__ import annotations
 
+from ._args import ArgumentError, ArgumentKeyError, ArgumentTypeError
 from ._batch import BatchDynamics, BatchKinematics, BatchPlan, BatchResult, RowError
 from ._egt import (
     AnalysisError,
@@ -28,6 +29,8 @@ from ._egt import (
     InputError,
     InternalError,
     MissingDataError,
+    NonFiniteError,
+    SelfLockingError,
     SingularError,
     SpecError,
     SpecSyntaxError,
@@ -115,5 +118,10 @@ __all__ = [
     "SingularError",
     "IllConditionedError",
     "MissingDataError",
+    "SelfLockingError",
+    "NonFiniteError",
+    "ArgumentError",
+    "ArgumentTypeError",
+    "ArgumentKeyError",
     "InternalError",
 ]

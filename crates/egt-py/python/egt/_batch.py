@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any, Dict, Iterable, List, Mapping, Optional, 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ._args import ArgumentError, ArgumentKeyError, count
 from ._egt import BatchPlanCore
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -179,7 +180,7 @@ class BatchResult:
         try:
             return self.values[:, self.outputs.index(name)]
         except ValueError:
-            raise KeyError(f"no output column {name!r} (outputs: {', '.join(self.outputs)})") from None
+            raise ArgumentKeyError(f"no output column {name!r} (outputs: {', '.join(self.outputs)})") from None
 
     def driving_torque(self, link: str) -> np.ndarray:
         """The solved torque on a driving link over all rows (column
@@ -187,7 +188,7 @@ class BatchResult:
         for name in (f"driving_torque.{link}", f"torque.{link}"):
             if name in self.outputs:
                 return self[name]
-        raise KeyError(f"{link!r} is not a driving link of this batch")
+        raise ArgumentKeyError(f"{link!r} is not a driving link of this batch")
 
     @property
     def driving(self) -> Tuple[str, ...]:
@@ -247,7 +248,7 @@ class BatchPlan:
         try:
             return self.parameters.index(name)
         except ValueError:
-            raise KeyError(
+            raise ArgumentKeyError(
                 f"no parameter column {name!r} (parameters: {', '.join(self.parameters)})"
             ) from None
 
@@ -306,8 +307,11 @@ class BatchPlan:
             raise ValueError(
                 f"params must have shape (rows, {len(self.parameters)}), got {a.shape}"
             )
-        if threads is not None and (isinstance(threads, bool) or int(threads) < 1):
-            raise ValueError(f"threads must be a positive integer, got {threads!r}")
+        if threads is not None:
+            # More threads than cores are capped by the native side.
+            threads = count(threads, "threads", 2**32)
+            if threads < 1:
+                raise ArgumentError(f"threads must be a positive integer, got {threads}")
         values, raw = self._core.run(
             np.ascontiguousarray(a, dtype=np.float64), None if threads is None else int(threads)
         )

@@ -28,6 +28,8 @@ __all__ = [
     "SingularError",
     "IllConditionedError",
     "MissingDataError",
+    "SelfLockingError",
+    "NonFiniteError",
     "InternalError",
 ]
 
@@ -192,5 +194,11 @@ class MissingDataError(AnalysisError):
     what: Optional[str]
     analysis: Optional[str]
     hint: Optional[str]
+
+class SelfLockingError(AnalysisError): ...
+
+class NonFiniteError(AnalysisError):
+    what: Optional[str]
+    detail: Optional[str]
 
 class InternalError(EgtError): ...

@@ -31,6 +31,7 @@ from numpy.typing import ArrayLike
 
 from . import _batch
 from ._batch import BatchDynamics, BatchKinematics, BatchPlan
+from ._args import ArgumentKeyError, ArgumentTypeError, count, mapping, number
 from ._egt import TrainCore, batch_plan
 from ._egt import gear as _gear
 from ._egt import shift_table as _shift_table
@@ -68,27 +69,23 @@ def _speed_arg(name: str, v: Speed) -> Tuple[str, float, Optional[str]]:
     Floats are taken as the decimal they print as (0.1 means 1/10), as a user
     writes them; Fractions, ints and ``"p/q"`` text are exact.
     """
+    what = f"speed of {name!r}"
     if isinstance(v, bool):
-        raise TypeError(f"speed of {name!r} must be a number, not bool")
+        raise ArgumentTypeError(f"{what} must be a number, not bool")
     if isinstance(v, str):
-        q = Fraction(v.strip())
-        return (name, float(q), f"{q.numerator}/{q.denominator}")
+        # Exact text goes to the native parser, which bounds its size.
+        return (name, 0.0, v.strip())
     if isinstance(v, Rational):
         q = Fraction(int(v.numerator), int(v.denominator))
-        return (name, float(q), f"{q.numerator}/{q.denominator}")
+        return (name, number(q, what), f"{q.numerator}/{q.denominator}")
     if isinstance(v, Real):
-        x = float(v)
+        x = number(v, what)
         return (name, x, repr(x) if math.isfinite(x) else None)
-    raise TypeError(f"speed of {name!r} must be a number, got {type(v).__name__}")
+    raise ArgumentTypeError(f"{what} must be a number, got {type(v).__name__}")
 
 
 def _pairs(values: Mapping[str, float], what: str) -> List[Tuple[str, float]]:
-    out: List[Tuple[str, float]] = []
-    for name, v in values.items():
-        if isinstance(v, bool) or not isinstance(v, Real):
-            raise TypeError(f"{what}[{name!r}] must be a number, got {type(v).__name__}")
-        out.append((str(name), float(v)))
-    return out
+    return [(str(name), number(v, f"{what}[{name!r}]")) for name, v in mapping(values, what).items()]
 
 
 CurveLike = Union[Curve, Tuple[str, float, float, float], Mapping[str, Any]]
@@ -98,22 +95,33 @@ speed), or a dict with those keys (slope and speed default to 0)."""
 
 def _curves(curves: Sequence[CurveLike]) -> List[Tuple[str, float, float, float]]:
     out: List[Tuple[str, float, float, float]] = []
-    for c in curves:
+    for k, c in enumerate(curves):
+        what = f"curves[{k}]"
         if isinstance(c, Curve):
-            out.append((c.link, float(c.torque), float(c.slope), float(c.speed)))
+            link, torque, slope, speed = c.link, c.torque, c.slope, c.speed
         elif isinstance(c, Mapping):
-            out.append(
-                (str(c["link"]), float(c["torque"]), float(c.get("slope", 0.0)), float(c.get("speed", 0.0)))
-            )
-        else:
+            for key in ("link", "torque"):
+                if key not in c:
+                    raise ArgumentKeyError(f"{what} has no `{key}` (a curve needs link and torque)")
+            link, torque, slope, speed = c["link"], c["torque"], c.get("slope", 0.0), c.get("speed", 0.0)
+        elif isinstance(c, (tuple, list)) and len(c) == 4:
             link, torque, slope, speed = c
-            out.append((str(link), float(torque), float(slope), float(speed)))
+        else:
+            raise ArgumentTypeError(f"{what} must be a Curve, a (link, torque, slope, speed) tuple or a dict")
+        out.append(
+            (
+                str(link),
+                number(torque, f"{what}.torque"),
+                number(slope, f"{what}.slope"),
+                number(speed, f"{what}.speed"),
+            )
+        )
     return out
 
 
 def _names(values: Sequence[str], what: str) -> List[str]:
     if isinstance(values, str):
-        raise TypeError(f"`{what}` must be a sequence of link names, not a single string")
+        raise ArgumentTypeError(f"`{what}` must be a sequence of link names, not a single string")
     return [str(v) for v in values]
 
 
@@ -256,7 +264,7 @@ class Train:
     def _speeds(self, inputs: Optional[Mapping[str, Speed]]) -> List[Tuple[str, float, Optional[str]]]:
         if inputs is None:
             return self._spec_speeds()
-        return [_speed_arg(str(n), v) for n, v in inputs.items()]
+        return [_speed_arg(str(n), v) for n, v in mapping(inputs, "inputs").items()]
 
     def _loads(
         self,
@@ -563,8 +571,7 @@ class Train:
         array of per-link torques. ``every``: store every n-th step (0: about
         2000 samples).
         """
-        if isinstance(every, bool) or int(every) < 0:
-            raise ValueError(f"every must be a non-negative integer, got {every!r}")
+        every = count(every, "every", 2**32)
         raw = _simulate(
             self._core,
             None if t_end is None else float(t_end),
@@ -573,7 +580,7 @@ class Train:
             None if initial is None else _pairs(initial, "initial"),
             None if curves is None else _curves(curves),
             torque,
-            int(every),
+            every,
         )
         return Simulation._from_raw(self._links, raw)
 
