@@ -83,9 +83,9 @@ impl Meshes<'_> {
     /// The driver the solution in `sys` implies for mesh `m`: gear i drives
     /// when lambda tau (w_j - w_k) > 0; none when the mesh does not roll or
     /// is idle (its torque is round-off against the train's torque scale).
-    pub(crate) fn implied(&self, sys: &impl ForceSolution, m: usize) -> Driver {
+    /// (`tol` is the [`idle_tolerance`] of the solution, computed once per solution.)
+    pub(crate) fn implied_at(&self, sys: &impl ForceSolution, m: usize, tol: f64) -> Driver {
         let lam = sys.multiplier(m);
-        let tol = IDLE_ROUNDING * sys.condition().max(1.0) * sys.torque_scale();
         if !self.rolls(m) || mesh_torque(lam, self.ratios[m]) <= tol {
             Driver::None
         } else if lam * self.ratios[m] * self.rolling[m] > 0.0 {
@@ -94,6 +94,11 @@ impl Meshes<'_> {
             Driver::GearJ
         }
     }
+}
+
+/// The torque below which a mesh of the solution in `sys` is idle.
+pub(crate) fn idle_tolerance(sys: &impl ForceSolution) -> f64 {
+    IDLE_ROUNDING * sys.condition().max(1.0) * sys.torque_scale()
 }
 
 /// Buffers of the search, sized once per train (one per workspace).
@@ -132,9 +137,10 @@ impl Directions {
     ) -> Result<usize> {
         let g = meshes.ratios.len();
         self.lossy.clear();
+        let tol = idle_tolerance(sys);
         for m in 0..g {
             self.dirs[m] = Driver::None;
-            if meshes.efficiency[m] < 1.0 && meshes.implied(sys, m) != Driver::None {
+            if meshes.efficiency[m] < 1.0 && meshes.implied_at(sys, m, tol) != Driver::None {
                 self.lossy.push(m);
             }
         }
@@ -146,9 +152,10 @@ impl Directions {
         // when the directions it implies are those it was solved with.
         for _ in 0..(2 * self.lossy.len() + 4) {
             iterations += 1;
+            let tol = idle_tolerance(sys);
             for m in 0..g {
                 self.next[m] = if meshes.efficiency[m] < 1.0 {
-                    meshes.implied(sys, m)
+                    meshes.implied_at(sys, m, tol)
                 } else {
                     Driver::None
                 };
@@ -186,8 +193,9 @@ impl Directions {
             if sys.solve_directions(&self.dirs).is_err() {
                 continue;
             }
+            let tol = idle_tolerance(sys);
             let consistent = self.lossy.iter().all(|&m| {
-                let d = meshes.implied(sys, m);
+                let d = meshes.implied_at(sys, m, tol);
                 d == self.dirs[m] || d == Driver::None
             });
             if consistent {

@@ -25,7 +25,7 @@ use crate::equations::willis_row;
 use crate::error::{AnalysisError, Result};
 use crate::exact::{self, Q, QMatrix};
 use crate::linalg::Lu;
-use crate::losses::{Directions, ForceSolution, LossySolver, Meshes, mesh_torque};
+use crate::losses::{Directions, ForceSolution, LossySolver, Meshes, idle_tolerance, mesh_torque};
 use crate::power::Driver;
 use crate::train::{LinkId, Train};
 
@@ -931,8 +931,9 @@ impl PreparedTrain {
             speed_scale: wscale,
         };
         let solved = Solved { plan: self, ws };
+        let tol = idle_tolerance(&solved);
         (0..self.circuits.len())
-            .map(|m| meshes.implied(&solved, m))
+            .map(|m| meshes.implied_at(&solved, m, tol))
             .collect()
     }
 }
