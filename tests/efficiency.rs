@@ -2,7 +2,7 @@
 //!
 //! Thousands of gear states of production-style layouts (the ZF 8HP70's four
 //! simple sets, the Ford C4 Simpson set, the Ford AOD Ravigneaux set) with
-//! random tooth counts and lossy meshes. The reference is independent of
+//! random tooth counts and lossy meshes (and the ZF 6HP26 Lepelletier). The reference is independent of
 //! egt's float direction search: the statics are solved in exact rational
 //! arithmetic, a mesh is idle when its exact multiplier is zero, the
 //! direction of every loaded mesh is read from the exact ideal solution, the
@@ -240,4 +240,9 @@ fn ford_c4_simpson_efficiency_with_random_teeth() {
 #[test]
 fn ford_aod_ravigneaux_efficiency_with_random_teeth() {
     check_layout("ford_aod_ravigneaux.toml", 150, 0xa0d0_a0d0);
+}
+
+#[test]
+fn zf_6hp26_lepelletier_efficiency_with_random_teeth() {
+    check_layout("zf_6hp26_lepelletier.toml", 120, 0x6426_6426);
 }

@@ -94,5 +94,6 @@ golden! {
     golden_ford_aod_ravigneaux => "ford_aod_ravigneaux.toml",
     golden_ford_c4_simpson => "ford_c4_simpson.toml",
     golden_zf_8hp70 => "zf_8hp70.toml",
+    golden_zf_6hp26_lepelletier => "zf_6hp26_lepelletier.toml",
     golden_adjacency_enumerated => "adjacency_enumerated.json",
 }

@@ -247,3 +247,32 @@ def test_stability_verdicts_agree_with_scipy_integration(checked: Counter[str]) 
         checked[f"stability: {rep.verdict} verdicts"] += 1
     assert done >= 10
     assert checked["stability: stable verdicts"] and checked["stability: unstable verdicts"]
+
+
+def test_adjacency_nests_equal_the_willis_definition(checked: Counter[str]) -> None:
+    """The compact adjacency form of enumeration programs: link k turns on
+    link k-1 (its own level), and gear pair (k-2, k) meshes across carrier
+    k-1 with ratio tau, so that (w_{k-2} - w_{k-1}) = tau (w_k - w_{k-1}) by
+    the definition of the ratio; the carriers are known here from the
+    construction, not from egt's transfer-vertex search."""
+    rng = random.Random(SEED + 4)
+    for _ in range(60):
+        n = rng.randint(3, 9)
+        taus = {k: Fraction(rng.choice([-1, 1]) * rng.randint(2, 40), rng.randint(2, 40)) for k in range(2, n + 1)}
+        taus = {k: (t if t != 1 else Fraction(3, 2)) for k, t in taus.items()}
+        items = [f"{k - 1}-{k}:L{k}" for k in range(1, n + 1)]
+        items += [f"{k - 2}-{k}:G={t.numerator}/{t.denominator}" for k, t in taus.items()]
+        spec = f'frame = "0"\nadjacency = "{" ".join(items)}"\n'
+        train = egt.loads(spec)
+        assert train.dof == 1, spec
+        w1 = Fraction(rng.randint(1, 500), rng.randint(1, 9))
+        k = train.kinematics({"1": str(w1)})
+        # Reference: w_0 = 0, w_1 given; each gear pair gives w_k from w_{k-2}, w_{k-1}.
+        w = {0: Fraction(0), 1: w1}
+        for j in range(2, n + 1):
+            w[j] = w[j - 1] + (w[j - 2] - w[j - 1]) / taus[j]
+        assert k.exact is not None
+        for j in range(1, n + 1):
+            assert k.exact[str(j)] == w[j], (j, spec)
+        checked["kinematics: adjacency nests"] += 1
+        checked["kinematics: link speeds (exact)"] += n
