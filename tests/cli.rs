@@ -454,3 +454,52 @@ fn snapshot_errors() {
     }
     insta::assert_snapshot!(all);
 }
+
+/// Issue 17: completions for the common shells name every subcommand (the
+/// bash script also passes `bash -n`), and the man page is valid roff with
+/// the commands in it; all exit 0 and carry the version.
+#[test]
+fn completions_and_man_page() {
+    for shell in ["bash", "zsh", "fish"] {
+        let script = ok(&["completions", shell]);
+        for sub in ["check", "kinematics", "dynamics", "batch", "completions"] {
+            assert!(script.contains(sub), "{shell}: no `{sub}`");
+        }
+        if shell == "bash" {
+            let dir = std::env::temp_dir().join(format!("egt-completion-{}", std::process::id()));
+            std::fs::write(&dir, &script).expect("write script");
+            let status = Command::new("bash")
+                .arg("-n")
+                .arg(&dir)
+                .status()
+                .expect("bash");
+            let _ = std::fs::remove_file(&dir);
+            assert!(status.success(), "bash -n rejects the completion script");
+        }
+    }
+    let man = ok(&["man"]);
+    assert!(
+        man.contains(".TH egt 1") && man.contains("kinematics"),
+        "{man}"
+    );
+    assert!(man.contains(env!("CARGO_PKG_VERSION")));
+    let r = egt(&["completions", "tcsh"], None);
+    assert_eq!(r.code, 2, "{}", r.stderr);
+}
+
+/// Issue 17: every JSON report says which egt wrote it.
+#[test]
+fn json_reports_carry_the_version() {
+    for args in [
+        &["check", "examples/fig3_example61.toml", "--format", "json"][..],
+        &[
+            "kinematics",
+            "examples/fig3_example61.toml",
+            "--format",
+            "json",
+        ][..],
+        &["shift", "examples/zf_8hp70.toml", "--format", "json"][..],
+    ] {
+        assert_eq!(json(args)["version"], env!("CARGO_PKG_VERSION"), "{args:?}");
+    }
+}

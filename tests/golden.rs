@@ -30,6 +30,7 @@ fn masked(key: &str) -> bool {
         "drift",
         "tolerance",
         "iterations",
+        "version",
     ]
     .iter()
     .any(|m| key.contains(m))

@@ -42,6 +42,10 @@ pub enum Command {
     Batch(commands::batch::Args),
     /// Print the JSON Schema of the spec format.
     Schema(commands::schema::Args),
+    /// Print a shell completion script (bash, zsh, fish, elvish, powershell).
+    Completions(commands::completions::Args),
+    /// Print the man page (roff).
+    Man(commands::completions::ManArgs),
 }
 
 /// How results are printed.

@@ -121,6 +121,19 @@ pub fn exact(q: &Q) -> String {
 /// # Errors
 /// I/O errors (a closed pipe among them).
 pub fn json(out: &mut dyn Write, value: &impl Serialize) -> anyhow::Result<()> {
+    // Every report says which egt wrote it, so that stored results can be traced.
+    let mut value = serde_json::to_value(value)?;
+    if let serde_json::Value::Object(map) = &mut value {
+        map.insert("version".into(), env!("CARGO_PKG_VERSION").into());
+    }
+    json_document(out, &value)
+}
+
+/// Pretty JSON of a document as it is (the JSON Schema, which carries no version field).
+///
+/// # Errors
+/// I/O errors (a closed pipe included, recognised in `main`).
+pub fn json_document(out: &mut dyn Write, value: &impl Serialize) -> anyhow::Result<()> {
     // An I/O failure inside serde_json becomes the io::Error again, so that a
     // closed pipe is recognised in `main`.
     serde_json::to_writer_pretty(&mut *out, value).map_err(|e| {

@@ -8,6 +8,7 @@ use crate::cli::Command;
 pub mod batch;
 pub mod check;
 pub mod circuits;
+pub mod completions;
 pub mod dynamics;
 pub mod graph;
 pub mod kinematics;
@@ -34,5 +35,7 @@ pub fn run(command: &Command, out: &mut dyn Write) -> anyhow::Result<()> {
         Command::Simulate(args) => simulate::run(args, out),
         Command::Batch(args) => batch::run(args, out),
         Command::Schema(args) => schema::run(args, out),
+        Command::Completions(args) => completions::run(args, out),
+        Command::Man(args) => completions::man(args, out),
     }
 }

@@ -11,5 +11,5 @@ pub struct Args {}
 /// # Errors
 /// I/O errors.
 pub fn run(_args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
-    crate::report::json(out, &egt_core::spec_schema())
+    crate::report::json_document(out, &egt_core::spec_schema())
 }
