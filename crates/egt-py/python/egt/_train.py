@@ -133,20 +133,30 @@ class Train:
     (every link but the frame) follow :attr:`coordinates`.
     """
 
-    __slots__ = ("_core", "_links")
+    __slots__ = ("_core", "_links", "_spec")
 
-    def __init__(self, core: TrainCore) -> None:
+    def __init__(self, core: TrainCore, spec: Optional[Tuple[str, str, str]] = None) -> None:
         if not isinstance(core, TrainCore):
             raise TypeError("use egt.load, egt.loads or Train.from_dict to build a Train")
         self._core = core
         self._links: Tuple[str, ...] = tuple(core.link_names)
+        # The spec as written (text, format, source): a Train pickles through it.
+        self._spec = spec
+
+    def __reduce__(self) -> Tuple[Any, Tuple[str, str, str]]:
+        """Pickle through the spec text, so that trains cross process
+        boundaries (multiprocessing, joblib, Dask); validation is repeated on
+        load, which is what makes the copy trustworthy."""
+        if self._spec is None:
+            raise TypeError("this Train was not built from a spec text and cannot be pickled")
+        return (Train.from_str, self._spec)
 
     # -- construction ------------------------------------------------------
 
     @classmethod
     def from_str(cls, text: str, format: str = "toml", source: str = "<string>") -> "Train":
         """Parse and validate a spec written in TOML or JSON."""
-        return cls(TrainCore.from_text(text, format, source))
+        return cls(TrainCore.from_text(text, format, source), (text, format, source))
 
     @classmethod
     def from_file(cls, path: PathLike) -> "Train":
@@ -155,7 +165,7 @@ class Train:
         with open(p, encoding="utf-8") as f:
             text = f.read()
         fmt = "json" if p.lower().endswith(".json") else "toml"
-        return cls(TrainCore.from_text(text, fmt, p))
+        return cls(TrainCore.from_text(text, fmt, p), (text, fmt, p))
 
     @classmethod
     def from_dict(cls, spec: Mapping[str, Any]) -> "Train":
@@ -164,7 +174,7 @@ class Train:
             text = json.dumps(spec, indent=1, allow_nan=True)
         except TypeError as e:
             raise TypeError(f"the spec dict is not JSON-serialisable: {e}") from e
-        return cls(TrainCore.from_text(text, "json", "<dict>"))
+        return cls(TrainCore.from_text(text, "json", "<dict>"), (text, "json", "<dict>"))
 
     # -- structure ---------------------------------------------------------
 
