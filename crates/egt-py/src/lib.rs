@@ -16,6 +16,14 @@ mod transmission;
 use pyo3::prelude::*;
 
 /// The native part of the `egt` package.
+/// Run the `egt` command line with `args` (without the program name) and
+/// return its exit code; output goes to the process's stdout and stderr.
+/// The GIL is released while it runs.
+#[pyfunction]
+fn cli(py: Python<'_>, args: Vec<String>) -> u8 {
+    py.detach(|| egt_cli::run(std::iter::once("egt".to_string()).chain(args)))
+}
+
 #[pymodule]
 fn _egt(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
@@ -27,6 +35,7 @@ fn _egt(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(motion::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(transmission::gear, m)?)?;
     m.add_function(wrap_pyfunction!(transmission::shift_table, m)?)?;
+    m.add_function(wrap_pyfunction!(cli, m)?)?;
     errors::register(m)?;
     Ok(())
 }

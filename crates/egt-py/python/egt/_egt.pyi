@@ -16,6 +16,7 @@ __all__ = [
     "simulate",
     "gear",
     "shift_table",
+    "cli",
     "EgtError",
     "SpecError",
     "SpecSyntaxError",
@@ -131,6 +132,7 @@ def simulate(
 ) -> Dict[str, Any]: ...
 def gear(core: TrainCore, state: str) -> Dict[str, Any]: ...
 def shift_table(core: TrainCore) -> Dict[str, Any]: ...
+def cli(args: List[str]) -> int: ...
 
 class EgtError(Exception):
     kind: Optional[str]

@@ -1,0 +1,70 @@
+//! The `egt` command line as a library: [`run`] parses arguments, runs one
+//! subcommand and returns the exit code. The `egt` binary is a one-line
+//! `main` over it, and the Python package exposes the same entry point
+//! (`python -m egt`, the `egt` console script), so both give one CLI.
+//!
+//! Exit codes: 0 on success (and when stdout is a closed pipe); 2 for usage,
+//! syntax, spec, topology and gear-state errors; 1 for analysis and I/O
+//! errors. Errors print to stderr as `error: ...`.
+
+pub mod cli;
+pub mod commands;
+mod input;
+mod report;
+
+use std::ffi::OsString;
+use std::io::{self, Write};
+
+use clap::Parser;
+
+/// Run the command line `args` (the first is the program name) and return
+/// the exit code. Output goes to the process's stdout and stderr.
+pub fn run<I, T>(args: I) -> u8
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    let cli = match cli::Cli::try_parse_from(args) {
+        Ok(cli) => cli,
+        Err(e) => {
+            // Help and version print to stdout with 0; usage errors to stderr with 2.
+            let _ = e.print();
+            return u8::try_from(e.exit_code()).unwrap_or(2);
+        }
+    };
+    let mut out = io::BufWriter::new(io::stdout().lock());
+    let result = commands::run(&cli.command, &mut out).and_then(|()| Ok(out.flush()?));
+    match result {
+        Ok(()) => 0,
+        Err(e) if is_broken_pipe(&e) => 0,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            exit_code(&e)
+        }
+    }
+}
+
+/// 2 when the user's input is wrong (spec or topology), 1 when a valid train
+/// cannot be analysed as asked, or the spec could not be read.
+fn exit_code(e: &anyhow::Error) -> u8 {
+    for cause in e.chain() {
+        if let Some(core) = cause.downcast_ref::<egt_core::Error>() {
+            return match core {
+                egt_core::Error::Syntax(_)
+                | egt_core::Error::Spec { .. }
+                | egt_core::Error::Topology(_)
+                // A gear state that does not leave one DOF is a wrong spec too.
+                | egt_core::Error::Transmission(_) => 2,
+                _ => 1,
+            };
+        }
+    }
+    1
+}
+
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<io::Error>()
+            .is_some_and(|io| io.kind() == io::ErrorKind::BrokenPipe)
+    })
+}
