@@ -503,3 +503,27 @@ fn json_reports_carry_the_version() {
         assert_eq!(json(args)["version"], env!("CARGO_PKG_VERSION"), "{args:?}");
     }
 }
+
+/// Issue 11: the table's force per copy keeps the sign of F_i (the JSON's),
+/// and equals F_i over the copies.
+#[test]
+fn force_per_copy_keeps_its_sign() {
+    let table = ok(&["dynamics", "examples/fig3_example61.toml", "--forces"]);
+    let header = table
+        .lines()
+        .find(|l| l.contains("F per copy"))
+        .expect("forces table");
+    let cols: Vec<&str> = header.split_whitespace().collect();
+    let at = |name: &str| cols.iter().position(|c| *c == name).expect(name);
+    let (fi, copies) = (at("F_i"), at("copies"));
+    let mut negative = false;
+    for row in table.lines().filter(|l| l.trim_start().starts_with('G')) {
+        let v: Vec<&str> = row.split_whitespace().collect();
+        let f: f64 = v[fi].parse().expect("F_i");
+        let n: f64 = v[copies].parse().expect("copies");
+        let per: f64 = v.last().expect("per copy").parse().expect("F per copy");
+        assert!((per - f / n).abs() <= 1e-6 * f.abs(), "{row}");
+        negative |= per < 0.0;
+    }
+    assert!(negative, "the example has a negative force\n{table}");
+}
