@@ -21,7 +21,7 @@ use serde::Serialize;
 
 use crate::equations::willis_row;
 use crate::error::{AnalysisError, Error, Result};
-use crate::linalg::{COND_REFUSE, COND_WARN, Lu};
+use crate::linalg::{COND_WARN, Lu};
 use crate::mass::MassMatrix;
 use crate::prepared::{Compute, PreparedTrain, Scenario, Workspace};
 use crate::train::{GearId, LinkId, Train};
@@ -117,28 +117,6 @@ impl Rows {
                 .collect(),
         }
     }
-}
-
-/// A singular system, in words.
-pub(crate) fn singular(what: &str, detail: &str) -> Error {
-    AnalysisError::Singular {
-        what: what.into(),
-        detail: detail.into(),
-    }
-    .into()
-}
-
-/// Refuse a result whose condition estimate is past [`COND_REFUSE`].
-pub(crate) fn refuse(cond: f64, what: &str) -> Result<()> {
-    if cond > COND_REFUSE {
-        return Err(AnalysisError::IllConditioned {
-            what: what.into(),
-            condition: cond,
-            threshold: COND_REFUSE,
-        }
-        .into());
-    }
-    Ok(())
 }
 
 /// What an inverse-dynamics (or static) analysis asks.
@@ -419,14 +397,10 @@ impl Train {
         let c = plan.constraints();
         let mut lu = Lu::new(n);
         plan.kinematic_matrix(&ratios, lu.matrix_mut());
-        lu.factor().map_err(|_| {
-            singular(
-                "[Gamma_w] (eq. 23)",
-                "the chosen inputs do not determine the train",
-            )
-        })?;
-        let cond = lu.condition();
-        refuse(cond, "[Gamma_w] (eq. 23)")?;
+        let cond = lu.factor_checked(
+            "[Gamma_w] (eq. 23)",
+            "the chosen inputs do not determine the train",
+        )?;
         let mut v = DMatrix::zeros(n, inputs.len());
         let mut b = vec![0.0; n];
         for col in 0..inputs.len() {

@@ -11,6 +11,8 @@ pub const COND_WARN: f64 = 1e8;
 /// double precision fewer than ~4 significant digits would be trustworthy.
 pub const COND_REFUSE: f64 = 1e12;
 
+use crate::error::{AnalysisError, Error, Result};
+
 /// LU factorisation P A = L U of a square matrix, in place, row-major.
 #[derive(Debug, Clone)]
 pub struct Lu {
@@ -35,6 +37,28 @@ pub struct Lu {
 /// A zero pivot: the matrix is singular at this column.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ZeroPivot(pub usize);
+
+/// A singular system, in words.
+pub(crate) fn singular(what: &str, detail: &str) -> Error {
+    AnalysisError::Singular {
+        what: what.into(),
+        detail: detail.into(),
+    }
+    .into()
+}
+
+/// Refuse a result whose condition estimate is past [`COND_REFUSE`].
+pub(crate) fn refuse(cond: f64, what: &str) -> Result<()> {
+    if cond > COND_REFUSE {
+        return Err(AnalysisError::IllConditioned {
+            what: what.into(),
+            condition: cond,
+            threshold: COND_REFUSE,
+        }
+        .into());
+    }
+    Ok(())
+}
 
 impl Lu {
     /// Buffers for an `n x n` system.
@@ -75,6 +99,20 @@ impl Lu {
         };
         self.anorm = dispatch!(self.n, d => factor(d, a, piv, dinv, env))?;
         Ok(())
+    }
+
+    /// Factor and estimate the condition: the one checked factorisation of
+    /// egt. `what` names the system and `detail` says what a zero pivot
+    /// means for it.
+    ///
+    /// # Errors
+    /// [`AnalysisError::Singular`] on a zero pivot; [`AnalysisError::IllConditioned`]
+    /// past [`COND_REFUSE`].
+    pub(crate) fn factor_checked(&mut self, what: &str, detail: &str) -> Result<f64> {
+        self.factor().map_err(|_| singular(what, detail))?;
+        let cond = self.condition();
+        refuse(cond, what)?;
+        Ok(cond)
     }
 
     /// Solve A x = b in place (after [`Lu::factor`]).

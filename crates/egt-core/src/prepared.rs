@@ -18,7 +18,7 @@
 
 use std::ops::Range;
 
-use crate::dynamics::{Extra, Rows, dof_with, link_columns, refuse, singular};
+use crate::dynamics::{Extra, Rows, dof_with, link_columns};
 use num_traits::Zero;
 
 use crate::equations::willis_row;
@@ -651,14 +651,10 @@ impl PreparedTrain {
             if !ws.cache.kin {
                 // Speeds: the Willis equations (eq. 2) completed by the input rows.
                 self.kinematic_matrix(s.ratios, ws.kin.matrix_mut());
-                ws.kin.factor().map_err(|_| {
-                    singular(
-                        "the speed system (eq. 2)",
-                        "the inputs do not determine the motion",
-                    )
-                })?;
-                ws.cond[0] = ws.kin.condition();
-                refuse(ws.cond[0], "the speed system (eq. 2)")?;
+                ws.cond[0] = ws.kin.factor_checked(
+                    "the speed system (eq. 2)",
+                    "the inputs do not determine the motion",
+                )?;
                 ws.cache.kin = true;
             }
             self.input_rhs(s.speeds, &mut ws.speed);
@@ -689,14 +685,10 @@ impl PreparedTrain {
             }
             if moving && !ws.cache.acc {
                 self.acceleration_matrix(s.ratios, ws.acc.matrix_mut());
-                ws.acc.factor().map_err(|_| {
-                    singular(
-                        "[Psi_w] (eq. 8)",
-                        "the prescribed accelerations do not determine the motion",
-                    )
-                })?;
-                ws.psi_cond = ws.acc.condition();
-                refuse(ws.psi_cond, "[Psi_w] (eq. 8)")?;
+                ws.psi_cond = ws.acc.factor_checked(
+                    "[Psi_w] (eq. 8)",
+                    "the prescribed accelerations do not determine the motion",
+                )?;
                 ws.cache.acc = true;
             }
             if ws.cache.acc {
@@ -748,14 +740,10 @@ impl PreparedTrain {
         if !(ideal && ws.cache.force) {
             ws.cache.force = false;
             self.force_matrix(&ws.tau, ws.force.matrix_mut());
-            ws.force.factor().map_err(|_| {
-                singular(
-                    "the force system (eq. 10)",
-                    "the driving links cannot balance the loads",
-                )
-            })?;
-            ws.cond[2] = ws.force.condition();
-            refuse(ws.cond[2], "the force system (eq. 10)")?;
+            ws.cond[2] = ws.force.factor_checked(
+                "the force system (eq. 10)",
+                "the driving links cannot balance the loads",
+            )?;
             ws.cache.force = ideal;
         }
         ws.force.solve_transpose(&mut ws.x);
