@@ -16,8 +16,21 @@
 //! driving or mesh torque) and to the condition of the force system, never
 //! to the mesh's own multiplier. An idle mesh has no loss and no direction.
 
+use serde::Serialize;
+
 use crate::error::{AnalysisError, Result};
-use crate::power::Driver;
+
+/// Which gear drives a mesh in the carrier's frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Driver {
+    /// Gear i gives the rolling power.
+    GearI,
+    /// Gear j gives the rolling power.
+    GearJ,
+    /// No rolling power (no relative motion or no load).
+    None,
+}
 
 /// Relative size under which a rolling speed counts as zero (against the
 /// largest link speed).

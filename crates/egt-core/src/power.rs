@@ -14,24 +14,14 @@
 
 use serde::Serialize;
 
+pub use crate::losses::Driver;
+
 use crate::dynamics::{DynamicsRequest, InverseDynamics, row_major};
 use crate::error::Result;
 use crate::kinematics::{SpeedInput, Speeds};
 use crate::mass::MassMatrix;
 use crate::prepared::{Compute, PreparedTrain, Scenario};
 use crate::train::{GearId, LinkId, Train};
-
-/// Which gear drives a mesh in the carrier's frame.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Driver {
-    /// Gear i gives the rolling power.
-    GearI,
-    /// Gear j gives the rolling power.
-    GearJ,
-    /// No rolling power (no relative motion or no load).
-    None,
-}
 
 /// Power in one mesh.
 #[derive(Debug, Clone, PartialEq, Serialize)]

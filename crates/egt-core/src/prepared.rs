@@ -25,8 +25,9 @@ use crate::equations::willis_row;
 use crate::error::{AnalysisError, Result};
 use crate::exact::{self, Q, QMatrix};
 use crate::linalg::Lu;
-use crate::losses::{Directions, ForceSolution, LossySolver, Meshes, idle_tolerance, mesh_torque};
-use crate::power::Driver;
+use crate::losses::{
+    Directions, Driver, ForceSolution, LossySolver, Meshes, idle_tolerance, mesh_torque,
+};
 use crate::train::{LinkId, Train};
 
 /// One link's share of the mass matrix.
