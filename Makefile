@@ -7,7 +7,7 @@ VENV   ?= .venv
 VPY    := $(VENV)/bin/python
 EXAMPLE ?= examples/fig3_example61.toml
 
-.PHONY: help demo test test-rust test-python venv python-dev fmt lint bench chart clean
+.PHONY: help demo test test-rust test-python venv python-dev wheel test-wheel fmt lint bench chart clean
 
 help: ## List the targets
 	@grep -E '^[a-zA-Z_-]+:.*?## ' $(MAKEFILE_LIST) | awk -F':.*?## ' '{printf "  %-12s %s\n", $$1, $$2}'
@@ -36,6 +36,12 @@ python-dev: venv ## Build and install the egt Python module into the virtualenv
 		VIRTUAL_ENV=$(abspath $(VENV)) PATH=$(abspath $(VENV))/bin:$$PATH \
 		$(VENV)/bin/maturin develop --release --quiet -m crates/egt-py/Cargo.toml; \
 	fi
+
+wheel: venv ## Build the abi3 manylinux2014 wheel (stripped, with the licences and the egt command) into target/wheels; zig (from PyPI) links it
+	PATH=$(abspath $(VENV))/bin:$$PATH $(VENV)/bin/maturin build --release --zig --compatibility manylinux2014 --strip -m crates/egt-py/Cargo.toml -o target/wheels
+
+test-wheel: wheel ## Install the wheel into a fresh virtualenv with no Rust on PATH; run the egt command and the README's Python block
+	bash scripts/test_wheel.sh
 
 test-python: python-dev ## Python tests (pytest, warnings as errors; stubtest and mypy included)
 	@if [ -d crates/egt-py/tests ]; then \
