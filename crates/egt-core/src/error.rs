@@ -228,8 +228,14 @@ pub enum TopologyError {
         candidates: Vec<String>,
     },
     /// The graph is not planar.
-    #[error("the graph is not planar (a geared kinematic chain's graph must be)")]
-    NonPlanar,
+    #[error(
+        "the graph is not planar (a geared kinematic chain's graph must be): links {} form a subdivision of K5 or K3,3",
+        list(links)
+    )]
+    NonPlanar {
+        /// The links of a Kuratowski subgraph (empty past the size where it is searched).
+        links: Vec<String>,
+    },
     /// Gruebler-Kutzbach gives no mobility.
     #[error("Gruebler-Kutzbach degree of freedom is {dof}: the chain cannot move")]
     NoMobility {

@@ -181,17 +181,20 @@ pub(crate) fn analyse(
         circuits.len()
     ));
 
-    // 5. Planarity.
-    if !is_planar(graph) {
-        return Err(TopologyError::NonPlanar);
-    }
-    checks.push("the graph is planar".to_string());
-
-    // 6. Gruebler-Kutzbach: F = 3(l - 1) - 2 j_R - j_G.
+    // 5. Gruebler-Kutzbach: F = 3(l - 1) - 2 j_R - j_G (before planarity, so
+    // that a chain without mobility is called that, not non-planar).
     let dof = 3 * (n as i64 - 1) - 2 * revolutes.len() as i64 - gears.len() as i64;
     if dof < 1 {
         return Err(TopologyError::NoMobility { dof });
     }
+
+    // 6. Planarity.
+    if !is_planar(graph) {
+        return Err(TopologyError::NonPlanar {
+            links: names(links, kuratowski_links(graph)),
+        });
+    }
+    checks.push("the graph is planar".to_string());
     checks.push(format!(
         "Gruebler-Kutzbach F = 3({n} - 1) - 2*{} - {} = {dof}",
         revolutes.len(),
@@ -264,6 +267,50 @@ type Parent = Option<Option<(NodeIndex, Edge)>>;
 
 /// Breadth-first search from `root` over edges passing `keep`; `parent[v]` is
 /// `Some(None)` for the root, `Some(Some((p, edge)))` for reached links, `None` otherwise.
+/// Most edges for which a Kuratowski subgraph is searched (E planarity tests).
+const KURATOWSKI_MAX_EDGES: usize = 2000;
+
+/// The links of a minimal non-planar subgraph of a non-planar `graph` (a
+/// subdivision of K5 or K3,3, by Kuratowski): every edge whose deletion
+/// leaves the graph non-planar is deleted, one at a time.
+fn kuratowski_links(graph: &UnGraph<LinkId, Edge>) -> Vec<LinkId> {
+    use petgraph::visit::EdgeRef;
+    let edges: Vec<(usize, usize)> = graph
+        .edge_references()
+        .map(|e| (e.source().index(), e.target().index()))
+        .collect();
+    if edges.len() > KURATOWSKI_MAX_EDGES {
+        return Vec::new();
+    }
+    let n = graph.node_count();
+    let build = |keep: &[bool]| {
+        let mut h = UnGraph::<(), ()>::with_capacity(n, edges.len());
+        for _ in 0..n {
+            h.add_node(());
+        }
+        for (&(a, b), _) in edges.iter().zip(keep).filter(|(_, k)| **k) {
+            h.add_edge(NodeIndex::new(a), NodeIndex::new(b), ());
+        }
+        h
+    };
+    let mut keep = vec![true; edges.len()];
+    for e in 0..edges.len() {
+        keep[e] = false;
+        if is_planar(&build(&keep)) {
+            keep[e] = true;
+        }
+    }
+    let mut used = vec![false; n];
+    for (&(a, b), _) in edges.iter().zip(&keep).filter(|(_, k)| **k) {
+        used[a] = true;
+        used[b] = true;
+    }
+    (0..n)
+        .filter(|&v| used[v])
+        .map(|v| graph[NodeIndex::new(v)])
+        .collect()
+}
+
 fn bfs(graph: &UnGraph<LinkId, Edge>, root: LinkId, keep: impl Fn(&Edge) -> bool) -> Vec<Parent> {
     let mut parent: Vec<Parent> = vec![None; graph.node_count()];
     let r = NodeIndex::new(root.index());

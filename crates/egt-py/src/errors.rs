@@ -208,7 +208,7 @@ pub fn kind(e: &egt_core::Error) -> &'static str {
             CoreTopo::CircuitCount { .. } => "circuit_count",
             CoreTopo::NoTransferVertex { .. } => "no_transfer_vertex",
             CoreTopo::AmbiguousTransferVertex { .. } => "ambiguous_transfer_vertex",
-            CoreTopo::NonPlanar => "non_planar",
+            CoreTopo::NonPlanar { .. } => "non_planar",
             CoreTopo::NoMobility { .. } => "no_mobility",
             CoreTopo::Locked { .. } => "locked",
             CoreTopo::Redundant { .. } => "redundant",
@@ -342,6 +342,7 @@ fn map(py: Python<'_>, e: &egt_core::Error, msg: String) -> PyErr {
                     | CoreTopo::NoTurningPath { links }
                     | CoreTopo::RevoluteCycle { links }
                     | CoreTopo::Locked { links }
+                    | CoreTopo::NonPlanar { links }
                     | CoreTopo::FreeLinks { links } => (links, &none, &none, None),
                     CoreTopo::AmbiguousTransferVertex { pair, candidates } => {
                         (candidates, std::slice::from_ref(pair), &none, None)
