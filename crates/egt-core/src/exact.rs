@@ -139,6 +139,41 @@ fn parse_decimal(s: &str) -> Result<Q, RationalError> {
     Ok(if neg { -v } else { v })
 }
 
+/// The simplest fraction (smallest denominator, by continued fractions)
+/// within `rel` of `x` relatively, or the exact value of `x` when none with a
+/// denominator up to 1e9 is that close.
+pub fn simplest_near(x: f64, rel: f64) -> Q {
+    let exact = from_f64(x).unwrap_or_else(Q::zero);
+    if !x.is_finite() || x == 0.0 {
+        return exact;
+    }
+    let (mut h0, mut h1, mut k0, mut k1) = (0i128, 1i128, 1i128, 0i128);
+    let mut r = x.abs();
+    for _ in 0..40 {
+        let a = r.floor();
+        if a > 1e12 {
+            break;
+        }
+        let a = a as i128;
+        (h0, h1) = (h1, a * h1 + h0);
+        (k0, k1) = (k1, a * k1 + k0);
+        if k1 > 1_000_000_000 {
+            break;
+        }
+        let approx = h1 as f64 / k1 as f64;
+        if (approx - x.abs()).abs() <= rel * x.abs() {
+            let q = Q::new(BigInt::from(h1), BigInt::from(k1));
+            return if x < 0.0 { -q } else { q };
+        }
+        let frac = r - r.floor();
+        if frac == 0.0 {
+            break;
+        }
+        r = 1.0 / frac;
+    }
+    exact
+}
+
 /// Display as `p/q` (or `p` when the denominator is 1).
 pub fn display(x: &Q) -> String {
     if x.denom().is_one() {
@@ -446,5 +481,17 @@ mod tests {
         assert_eq!(symmetric_inertia(&m(&[&[-2, 1], &[1, -2]])), count(0, 0, 2));
         // Negative semidefinite, singular (eigenvalues 0, -2).
         assert_eq!(symmetric_inertia(&m(&[&[-1, 1], &[1, -1]])), count(0, 1, 1));
+    }
+
+    #[test]
+    fn simplest_fractions_near_floats() {
+        assert_eq!(simplest_near(1.0 / 3.0, 1e-12), frac(1, 3));
+        assert_eq!(simplest_near(10.0 / 3.0, 1e-12), frac(10, 3));
+        assert_eq!(simplest_near(0.1, 1e-12), frac(1, 10));
+        assert_eq!(simplest_near(-2.5, 1e-12), frac(-5, 2));
+        // No simple fraction that close: the exact value of the double.
+        let x = std::f64::consts::PI;
+        let q = simplest_near(x, 1e-12);
+        assert!((to_f64(&q) - x).abs() <= 1e-12 * x);
     }
 }

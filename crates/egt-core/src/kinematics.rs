@@ -321,6 +321,20 @@ impl Train {
                     .map(|&v| exact::from_f64(v).unwrap_or_else(Q::zero))
                     .collect();
                 self.solve_exact(&plan, &taus, &ins)?;
+                // Exactly regular but singular in floating point: name what is
+                // nearly dependent by diagnosing the simplest fractions within
+                // 1e-12 of the ratios (0.3333333333333333 is 1/3 meant).
+                let simple: Vec<Q> = ratios
+                    .iter()
+                    .map(|&r| exact::simplest_near(r, 1e-12))
+                    .collect();
+                if let Err(near) = self.solve_exact(&plan, &simple, &ins) {
+                    return Err(AnalysisError::Singular {
+                        what: "the Willis system".into(),
+                        detail: format!("it is singular to round-off (with the ratios as the simplest fractions within 1e-12: {near})"),
+                    }
+                    .into());
+                }
                 return Err(e);
             }
         };
