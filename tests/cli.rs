@@ -527,3 +527,49 @@ fn force_per_copy_keeps_its_sign() {
     }
     assert!(negative, "the example has a negative force\n{table}");
 }
+
+/// Issues 12 and 17: with `--format json` a failure is also a JSON document on
+/// stdout (a stable code, the message, the exit code, the field and the
+/// line/column where known), with the same exit code.
+#[test]
+fn failures_are_json_when_json_is_asked() {
+    let bad = "frame = \"f\"\nlinks = [{ name = \"a\" }, { name = \"b\" }]\nrevolutes = [{ links = [\"f\", \"a\", \"b\"], level = \"a\" }]\n";
+    let r = egt(&["check", "-", "--format", "json"], Some(bad));
+    assert_eq!(r.code, 2);
+    let v: Value = serde_json::from_str(&r.stdout).expect("a JSON error document");
+    assert_eq!(v["error"]["code"], "syntax");
+    assert_eq!(v["error"]["exit"], 2);
+    assert_eq!(v["error"]["path"], "revolutes[0].links");
+    assert_eq!(v["error"]["line"], 3);
+    assert_eq!(v["version"], env!("CARGO_PKG_VERSION"));
+    assert!(r.stderr.starts_with("error: "), "{}", r.stderr);
+
+    let r = egt(
+        &[
+            "kinematics",
+            "examples/fig3_example61.toml",
+            "-i",
+            "2=1/3/4",
+            "--format",
+            "json",
+        ],
+        None,
+    );
+    assert_eq!(r.code, 2, "usage errors stay clap's: {}", r.stderr);
+
+    let locked =
+        "frame = \"X\"\nadjacency = \"X-A:p X-B:p X-C:p A-Y:q A-Z:r B-Y:G B-Z:G C-Y:G C-Z:G\"\n";
+    let r = egt(&["check", "-", "--format", "json"], Some(locked));
+    let v: Value = serde_json::from_str(&r.stdout).expect("JSON");
+    assert_eq!(
+        (r.code, v["error"]["code"].as_str()),
+        (2, Some("non_planar"))
+    );
+
+    let r = egt(
+        &["check", "examples/no_such_file.toml", "--format", "json"],
+        None,
+    );
+    let v: Value = serde_json::from_str(&r.stdout).expect("JSON");
+    assert_eq!((r.code, v["error"]["code"].as_str()), (1, Some("io")));
+}

@@ -24,7 +24,9 @@ where
     I: IntoIterator<Item = T>,
     T: Into<OsString> + Clone,
 {
-    let cli = match cli::Cli::try_parse_from(args) {
+    let args: Vec<OsString> = args.into_iter().map(Into::into).collect();
+    let json = wants_json(&args);
+    let cli = match cli::Cli::try_parse_from(&args) {
         Ok(cli) => cli,
         Err(e) => {
             // Help and version print to stdout with 0; usage errors to stderr with 2.
@@ -38,10 +40,40 @@ where
         Ok(()) => 0,
         Err(e) if is_broken_pipe(&e) => 0,
         Err(e) => {
+            let code = exit_code(&e);
             eprintln!("error: {e:#}");
-            exit_code(&e)
+            if json {
+                // A program that asked for JSON gets the failure as JSON on stdout too.
+                let _ = report::json(&mut out, &error_document(&e, code));
+                let _ = out.flush();
+            }
+            code
         }
     }
+}
+
+/// `--format json` among the arguments.
+fn wants_json(args: &[OsString]) -> bool {
+    args.windows(2)
+        .any(|w| w[0] == "--format" && w[1] == "json")
+        || args.iter().any(|a| a == "--format=json")
+}
+
+/// The JSON form of a failure: a stable code, the message, the exit code and,
+/// where known, the spec field and the line and column.
+fn error_document(e: &anyhow::Error, exit: u8) -> serde_json::Value {
+    let core = e.chain().find_map(|c| c.downcast_ref::<egt_core::Error>());
+    let (path, position) = core.map_or((None, None), egt_core::Error::location);
+    serde_json::json!({
+        "error": {
+            "code": core.map_or("io", egt_core::Error::code),
+            "message": format!("{e:#}"),
+            "exit": exit,
+            "path": path,
+            "line": position.map(|p| p.0),
+            "column": position.map(|p| p.1),
+        }
+    })
 }
 
 /// 2 when the user's input is wrong (spec or topology), 1 when a valid train

@@ -67,6 +67,51 @@ impl Error {
         }
     }
 
+    /// A short code for the error, stable across versions: callers (the
+    /// CLI's JSON errors, Python's `kind`, batch row errors) branch on it.
+    pub fn code(&self) -> &'static str {
+        match self {
+            Error::Syntax(_) => "syntax",
+            Error::Spec { kind, .. } => match kind {
+                SpecErrorKind::UnknownLink { .. } => "unknown_link",
+                SpecErrorKind::DuplicateLink { .. } => "duplicate_link",
+                SpecErrorKind::Duplicate { .. } => "duplicate",
+                SpecErrorKind::SelfLoop { .. } => "self_loop",
+                SpecErrorKind::InvalidTeeth { .. } => "invalid_teeth",
+                SpecErrorKind::NonFinite { .. } => "non_finite",
+                SpecErrorKind::OutOfRange { .. } => "out_of_range",
+                SpecErrorKind::Missing { .. } => "missing",
+                _ => "invalid",
+            },
+            Error::Topology(t) => match t {
+                TopologyError::Disconnected { .. } => "disconnected",
+                TopologyError::NoTurningPath { .. } => "no_turning_path",
+                TopologyError::RevoluteCycle { .. } => "revolute_cycle",
+                TopologyError::CircuitCount { .. } => "circuit_count",
+                TopologyError::NoTransferVertex { .. } => "no_transfer_vertex",
+                TopologyError::AmbiguousTransferVertex { .. } => "ambiguous_transfer_vertex",
+                TopologyError::NonPlanar { .. } => "non_planar",
+                TopologyError::NoMobility { .. } => "no_mobility",
+                TopologyError::Locked { .. } => "locked",
+                TopologyError::Redundant { .. } => "redundant",
+                TopologyError::Fractionated { .. } => "fractionated",
+                TopologyError::FreeLinks { .. } => "free_links",
+            },
+            Error::Analysis(a) => a.code(),
+            Error::Transmission(t) => t.code(),
+        }
+    }
+
+    /// The field path (spec errors, and syntax errors where known) and the
+    /// line and column (syntax errors) of the error, for machine-readable reports.
+    pub fn location(&self) -> (Option<&str>, Option<(usize, usize)>) {
+        match self {
+            Error::Syntax(s) => (s.path.as_deref(), Some((s.line, s.column))),
+            Error::Spec { path, .. } => (Some(path.as_str()), None),
+            _ => (None, None),
+        }
+    }
+
     /// An `Invalid` spec error at `path` with a message.
     pub fn invalid(path: impl Into<String>, message: impl Into<String>) -> Self {
         Error::spec(
@@ -442,6 +487,30 @@ pub fn finite_results<'a>(what: &str, values: impl IntoIterator<Item = &'a f64>)
         detail: "a result overflowed: the inputs exceed the range of double precision".into(),
     }
     .into())
+}
+
+impl AnalysisError {
+    /// The stable code of [`Error::code`].
+    pub fn code(&self) -> &'static str {
+        match self {
+            AnalysisError::WrongInputCount { .. } => "wrong_input_count",
+            AnalysisError::FrameInput { .. } => "frame_input",
+            AnalysisError::Underdetermined { .. } => "underdetermined",
+            AnalysisError::Inconsistent { .. } => "inconsistent",
+            AnalysisError::Singular { .. } => "singular",
+            AnalysisError::IllConditioned { .. } => "ill_conditioned",
+            AnalysisError::MissingData { .. } => "missing_data",
+            AnalysisError::RepeatedLink { .. } => "repeated_link",
+            AnalysisError::OverConstrained { .. } => "over_constrained",
+            AnalysisError::NonFinite { .. } => "non_finite_result",
+            AnalysisError::IndefiniteMass { .. } => "indefinite_mass",
+            AnalysisError::NotConverged { .. } => "not_converged",
+            AnalysisError::SelfLocking => "self_locking",
+            AnalysisError::DirectionsUndecided { .. } => "directions_undecided",
+            AnalysisError::ConfigurationDependent { .. } => "configuration_dependent",
+            AnalysisError::Other(_) => "other",
+        }
+    }
 }
 
 /// A number as a person reads it: plain, or in exponent form when tiny or huge.

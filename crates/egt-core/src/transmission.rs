@@ -142,6 +142,24 @@ pub enum TransmissionError {
     },
 }
 
+impl TransmissionError {
+    /// The stable code of [`crate::Error::code`].
+    pub fn code(&self) -> &'static str {
+        match self {
+            TransmissionError::NoStates => "no_states",
+            TransmissionError::UnknownState { .. } => "unknown_state",
+            TransmissionError::Underconstrained { .. } => "underconstrained",
+            TransmissionError::Locked { .. } => "locked_state",
+            TransmissionError::Redundant { .. } => "redundant_elements",
+            TransmissionError::InputHeld { .. } => "input_held",
+            TransmissionError::OutputHeld { .. } => "output_held",
+            TransmissionError::InState { cause, .. } => cause.code(),
+            #[allow(unreachable_patterns)]
+            _ => "transmission",
+        }
+    }
+}
+
 fn list(items: &[String]) -> String {
     let quoted: Vec<String> = items.iter().map(|s| format!("`{s}`")).collect();
     quoted.join(", ")

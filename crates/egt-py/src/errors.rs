@@ -186,59 +186,9 @@ pub fn panic_message(p: &(dyn Any + Send)) -> String {
 }
 
 /// A short, stable code for a core error (the `kind` attribute), used also for
-/// per-row error codes in batches.
+/// per-row error codes in batches: the core's [`egt_core::Error::code`].
 pub fn kind(e: &egt_core::Error) -> &'static str {
-    match e {
-        egt_core::Error::Syntax(_) => "syntax",
-        egt_core::Error::Spec { kind, .. } => match kind {
-            SpecErrorKind::UnknownLink { .. } => "unknown_link",
-            SpecErrorKind::DuplicateLink { .. } => "duplicate_link",
-            SpecErrorKind::Duplicate { .. } => "duplicate",
-            SpecErrorKind::SelfLoop { .. } => "self_loop",
-            SpecErrorKind::InvalidTeeth { .. } => "invalid_teeth",
-            SpecErrorKind::NonFinite { .. } => "non_finite",
-            SpecErrorKind::OutOfRange { .. } => "out_of_range",
-            SpecErrorKind::Missing { .. } => "missing",
-            _ => "invalid",
-        },
-        egt_core::Error::Topology(t) => match t {
-            CoreTopo::Disconnected { .. } => "disconnected",
-            CoreTopo::NoTurningPath { .. } => "no_turning_path",
-            CoreTopo::RevoluteCycle { .. } => "revolute_cycle",
-            CoreTopo::CircuitCount { .. } => "circuit_count",
-            CoreTopo::NoTransferVertex { .. } => "no_transfer_vertex",
-            CoreTopo::AmbiguousTransferVertex { .. } => "ambiguous_transfer_vertex",
-            CoreTopo::NonPlanar { .. } => "non_planar",
-            CoreTopo::NoMobility { .. } => "no_mobility",
-            CoreTopo::Locked { .. } => "locked",
-            CoreTopo::Redundant { .. } => "redundant",
-            CoreTopo::Fractionated { .. } => "fractionated",
-            CoreTopo::FreeLinks { .. } => "free_links",
-            _ => "topology",
-        },
-        egt_core::Error::Analysis(a) => match a {
-            CoreAnalysis::WrongInputCount { .. } => "wrong_input_count",
-            CoreAnalysis::FrameInput { .. } => "frame_input",
-            CoreAnalysis::Underdetermined { .. } => "underdetermined",
-            CoreAnalysis::Inconsistent { .. } => "inconsistent",
-            CoreAnalysis::Singular { .. } => "singular",
-            CoreAnalysis::IllConditioned { .. } => "ill_conditioned",
-            CoreAnalysis::MissingData { .. } => "missing_data",
-            _ => "other",
-        },
-        egt_core::Error::Transmission(t) => match t {
-            CoreTransmission::NoStates => "no_states",
-            CoreTransmission::UnknownState { .. } => "unknown_state",
-            CoreTransmission::Underconstrained { .. } => "underconstrained",
-            CoreTransmission::Locked { .. } => "locked_state",
-            CoreTransmission::Redundant { .. } => "redundant_elements",
-            CoreTransmission::InputHeld { .. } => "input_held",
-            CoreTransmission::OutputHeld { .. } => "output_held",
-            CoreTransmission::InState { cause, .. } => kind(cause),
-            _ => "transmission",
-        },
-        _ => "other",
-    }
+    e.code()
 }
 
 type Attr<'py> = (&'static str, Bound<'py, PyAny>);
