@@ -328,7 +328,8 @@ impl Train {
                     .iter()
                     .map(|&r| exact::simplest_near(r, 1e-12))
                     .collect();
-                if let Err(near) = self.solve_exact(&plan, &simple, &ins) {
+                let zero_pivot = matches!(e, Error::Analysis(AnalysisError::Singular { .. }));
+                if zero_pivot && let Err(near) = self.solve_exact(&plan, &simple, &ins) {
                     return Err(AnalysisError::Singular {
                         what: "the Willis system".into(),
                         detail: format!("it is singular to round-off (with the ratios as the simplest fractions within 1e-12: {near})"),
