@@ -7,8 +7,9 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 wheel=$(ls -t target/wheels/egt_gears-*-cp39-abi3-manylinux2014_x86_64*.whl | head -n 1)
 echo "wheel: $wheel ($(du -h "$wheel" | cut -f1))"
-python3 -m zipfile -l "$wheel" | grep -q "licenses/LICENSE-APACHE"
-python3 -m zipfile -l "$wheel" | grep -q "licenses/LICENSE-MIT"
+listing=$(python3 -m zipfile -l "$wheel")
+grep -q "licenses/LICENSE-APACHE" <<<"$listing"
+grep -q "licenses/LICENSE-MIT" <<<"$listing"
 venv=$(mktemp -d)/venv
 python3 -m venv "$venv"
 "$venv/bin/pip" install --quiet "$wheel"
@@ -18,7 +19,8 @@ if readelf -S "$so" 2>/dev/null | grep -q "\.debug_info"; then
     exit 1
 fi
 clean=(env -i "PATH=/usr/bin:/bin" "HOME=$(mktemp -d)")
-"${clean[@]}" "$venv/bin/egt" check examples/fig3_example61.toml | grep -q "valid geared kinematic chain"
+checked=$("${clean[@]}" "$venv/bin/egt" check examples/fig3_example61.toml)
+grep -q "valid geared kinematic chain" <<<"$checked"
 "${clean[@]}" "$venv/bin/python" - <<'PY'
 import pickle
 import egt
