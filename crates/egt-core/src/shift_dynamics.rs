@@ -11,14 +11,19 @@
 //!   reference case whose slip time, lock-up speed and dissipated energy have
 //!   closed forms.
 //!
-//! The full train-level shift (modes from the null space of the Willis plus
-//! locked-element rows, shift schedules, the CLI `shift-sim`) is not built yet:
-//! see docs/shift_dynamics.md.
+//! - [`mode`]: the reduced coordinates of a mode, the null space of the Willis
+//!   rows plus the locked-element rows (a gear: 1 DOF; mid-shift: 2).
+//!
+//! The train-level shift integration (a schedule driving [`mode`] bases
+//! through the engagement logic), one-way elements and the CLI `shift-sim` are
+//! not built yet: see docs/shift_dynamics.md.
 
 pub mod engagement;
 pub mod friction;
 pub mod lockup;
+pub mod mode;
 
 pub use engagement::{Engagement, EngagementResult, EngagementSample, Phase};
 pub use friction::{Capacity, FrictionLaw};
 pub use lockup::{LockUp, lock_projection};
+pub use mode::{ModeBasis, mode_basis};
