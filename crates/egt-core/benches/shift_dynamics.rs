@@ -29,6 +29,7 @@ fn ramped() -> Engagement {
             from: 0.0,
             to: 4000.0,
         },
+        one_way: false,
         t_end: 2.0,
         rtol: 1e-8,
         atol: 1e-8,

@@ -47,6 +47,11 @@ pub struct Engagement {
     pub law: FrictionLaw,
     /// Capacity of the clutch against time.
     pub capacity: Capacity,
+    /// A one-way element instead of a friction clutch: it never lets side 1
+    /// run faster than side 2 (it locks in drive, carrying any torque that
+    /// holds side 1 back) and overruns freely, with no torque, when side 1
+    /// falls behind (coast). `law` and `capacity` are then unused.
+    pub one_way: bool,
     /// End time (s).
     pub t_end: f64,
     /// Relative tolerance of the integrator.
@@ -163,7 +168,7 @@ impl Engagement {
             }
             Phase::Slipping => {
                 let slip = y[0] - y[1];
-                let tc = -dir * self.law.mu(slip) * self.capacity.at(t);
+                let tc = self.slipping_torque(dir, t, slip);
                 [
                     (self.t1 + tc) / self.j1,
                     (load - tc) / self.j2,
@@ -171,6 +176,15 @@ impl Engagement {
                     self.t1 * y[0] + load * y[1],
                 ]
             }
+        }
+    }
+
+    /// Clutch torque on side 1 while slipping (none for an overrunning one-way).
+    fn slipping_torque(&self, dir: f64, t: f64, slip: f64) -> f64 {
+        if self.one_way {
+            0.0
+        } else {
+            -dir * self.law.mu(slip) * self.capacity.at(t)
         }
     }
 
@@ -182,6 +196,7 @@ impl Engagement {
     fn event(&self, phase: Phase, dir: f64, t: f64, y: &State) -> f64 {
         match phase {
             Phase::Slipping => dir * (y[0] - y[1]),
+            Phase::Locked if self.one_way => -self.locked_torque(y[0]),
             Phase::Locked => {
                 self.law.static_limit(self.capacity.at(t)) - self.locked_torque(y[0]).abs()
             }
@@ -192,6 +207,14 @@ impl Engagement {
     /// slipping in the direction the free relative acceleration points.
     fn mode_at_zero_slip(&self, t: f64, w: f64) -> (Phase, f64) {
         let tc = self.locked_torque(w);
+        if self.one_way {
+            // Holds while it pulls side 1 back (tc <= 0), else side 1 falls behind.
+            return if tc <= 0.0 {
+                (Phase::Locked, 0.0)
+            } else {
+                (Phase::Slipping, -1.0)
+            };
+        }
         if tc.abs() <= self.law.static_limit(self.capacity.at(t)) {
             return (Phase::Locked, 0.0);
         }
@@ -210,8 +233,18 @@ impl Engagement {
         let mut y: State = [self.speed[0], self.speed[1], 0.0, 0.0];
         let ke0 = self.kinetic(&y);
         let mut t = 0.0;
+        let mut lock_loss = 0.0;
         let (mut phase, mut dir) = if y[0] == y[1] {
             self.mode_at_zero_slip(0.0, y[0])
+        } else if self.one_way && y[0] > y[1] {
+            // A one-way element meeting side 1 ahead engages at once: the
+            // momentum-consistent jump of lockup.rs, its energy loss recorded.
+            let w = (self.j1 * y[0] + self.j2 * y[1]) / (self.j1 + self.j2);
+            let before = self.kinetic(&y);
+            y[0] = w;
+            y[1] = w;
+            lock_loss = before - self.kinetic(&y);
+            self.mode_at_zero_slip(0.0, w)
         } else {
             (Phase::Slipping, (y[0] - y[1]).signum())
         };
@@ -225,12 +258,15 @@ impl Engagement {
             max_energy_residual: 0.0,
             steps: 0,
         };
-        let mut lock_loss = 0.0;
+        if lock_loss > 0.0 && phase == Phase::Locked {
+            out.lock_time = Some(0.0);
+            out.lock_speed = Some(y[0]);
+        }
         let record =
             |out: &mut EngagementResult, t: f64, y: &State, phase: Phase, dir: f64, loss: f64| {
                 let tc = match phase {
                     Phase::Locked => self.locked_torque(y[0]),
-                    Phase::Slipping => -dir * self.law.mu(y[0] - y[1]) * self.capacity.at(t),
+                    Phase::Slipping => self.slipping_torque(dir, t, y[0] - y[1]),
                 };
                 let residual = y[3] - (self.kinetic(y) - ke0) - y[2] - loss;
                 out.max_energy_residual = out.max_energy_residual.max(residual.abs());
@@ -438,6 +474,7 @@ mod tests {
             damping: 0.0,
             law: FrictionLaw::coulomb(0.12),
             capacity: Capacity::Constant(2500.0),
+            one_way: false,
             t_end: 2.0,
             rtol: 1e-10,
             atol: 1e-10,
@@ -579,5 +616,62 @@ mod tests {
                 .to_string()
                 .contains("engagement.t1")
         );
+    }
+
+    #[test]
+    fn one_way_locks_in_drive_and_overruns_in_coast() {
+        // Drive: equal speeds, engine torque pushes side 1 ahead: it locks
+        // and carries J1 a - T1 < 0 on side 1 for the whole run.
+        let drive = Engagement {
+            speed: [100.0, 100.0],
+            t1: 100.0,
+            t2: -20.0,
+            one_way: true,
+            ..base()
+        };
+        let r = drive.simulate().expect("test case is valid");
+        assert_eq!(r.events, vec![(0.0, Phase::Locked)]);
+        let a = 80.0 / (drive.j1 + drive.j2);
+        for s in &r.samples {
+            assert!(s.slip.abs() < 1e-12 * s.speed[0]);
+            assert!((s.clutch_torque - (drive.j1 * a - 100.0)).abs() < 1e-9);
+        }
+        // Coast: engine drag holds side 1 back; the element overruns with no
+        // torque, each side decelerating on its own torque.
+        let coast = Engagement {
+            speed: [100.0, 100.0],
+            t1: -30.0,
+            t2: -5.0,
+            one_way: true,
+            ..base()
+        };
+        let r = coast.simulate().expect("test case is valid");
+        assert_eq!(r.events, vec![(0.0, Phase::Slipping)]);
+        let last = r.samples.last().expect("samples");
+        assert!((last.speed[0] - (100.0 - 30.0 / coast.j1 * last.t)).abs() < 1e-9 * 100.0);
+        assert!((last.speed[1] - (100.0 - 5.0 / coast.j2 * last.t)).abs() < 1e-9 * 100.0);
+        assert!(
+            r.samples
+                .iter()
+                .all(|s| s.clutch_torque == 0.0 && s.slip <= 0.0)
+        );
+        assert_eq!(r.dissipated, 0.0);
+    }
+
+    #[test]
+    fn one_way_engaging_with_side_1_ahead_loses_the_closed_form_energy() {
+        // Side 1 ahead by 100 rad/s: the element engages at once by the
+        // momentum-consistent jump; KE falls by ½ J1 J2/(J1+J2) Δω², never rises.
+        let e = Engagement {
+            speed: [200.0, 100.0],
+            one_way: true,
+            ..base()
+        };
+        let r = e.simulate().expect("test case is valid");
+        let loss = 0.5 * e.j1 * e.j2 / (e.j1 + e.j2) * 100.0f64.powi(2);
+        assert!(rel(r.lock_loss, loss) < 1e-12);
+        let w = (e.j1 * 200.0 + e.j2 * 100.0) / (e.j1 + e.j2);
+        assert!(rel(r.lock_speed.expect("locked"), w) < 1e-12);
+        assert!(r.max_energy_residual < 1e-9 * loss);
     }
 }
