@@ -51,6 +51,7 @@ pub mod modp;
 pub mod parse;
 pub mod power;
 pub mod prepared;
+pub mod shift_dynamics;
 pub mod simulate;
 pub mod spec;
 pub mod stability;

@@ -1,0 +1,43 @@
+//! Time of one simulated clutch engagement (divan): a 2-3-like inertia phase
+//! with a pressure ramp, Stribeck friction, drive torque and road load, from
+//! release to lock-up and on to the end time. Numbers in docs/benchmarks.md.
+
+use std::hint::black_box;
+
+use egt_core::shift_dynamics::{Capacity, Engagement, FrictionLaw};
+
+fn main() {
+    divan::main();
+}
+
+fn ramped() -> Engagement {
+    Engagement {
+        j1: 0.25,
+        j2: 1.5,
+        speed: [300.0, 120.0],
+        t1: 120.0,
+        t2: -10.0,
+        damping: 0.4,
+        law: FrictionLaw {
+            mu_static: 0.14,
+            mu_kinetic: 0.1,
+            decay: Some(5.0),
+        },
+        capacity: Capacity::Ramp {
+            t0: 0.05,
+            t1: 0.4,
+            from: 0.0,
+            to: 4000.0,
+        },
+        one_way: false,
+        t_end: 2.0,
+        rtol: 1e-8,
+        atol: 1e-8,
+    }
+}
+
+#[divan::bench]
+fn one_engagement_rtol_1e8() -> usize {
+    let e = ramped();
+    black_box(&e).simulate().map(|r| r.steps).unwrap_or(0)
+}

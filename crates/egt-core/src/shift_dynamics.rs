@@ -1,0 +1,29 @@
+//! Shift dynamics (issue 14): the pieces of a gear-change simulation with
+//! friction elements that slip, stick and lock.
+//!
+//! - [`friction`]: the friction law of a clutch or brake (Coulomb, static >
+//!   kinetic, optional speed-dependent coefficient) times a capacity that is a
+//!   function of time (a pressure ramp).
+//! - [`lockup`]: the momentum-consistent projection applied when an element
+//!   locks (kinetic energy never rises).
+//! - [`engagement`]: a clutch joining two inertias, integrated with event
+//!   location of the slip-speed zero crossing on the step's dense output; the
+//!   reference case whose slip time, lock-up speed and dissipated energy have
+//!   closed forms.
+//!
+//! - [`mode`]: the reduced coordinates of a mode, the null space of the Willis
+//!   rows plus the locked-element rows (a gear: 1 DOF; mid-shift: 2).
+//!
+//! The train-level shift integration (a schedule driving [`mode`] bases
+//! through the engagement logic), one-way elements and the CLI `shift-sim` are
+//! not built yet: see docs/shift_dynamics.md.
+
+pub mod engagement;
+pub mod friction;
+pub mod lockup;
+pub mod mode;
+
+pub use engagement::{Engagement, EngagementResult, EngagementSample, Phase};
+pub use friction::{Capacity, FrictionLaw};
+pub use lockup::{LockUp, lock_projection};
+pub use mode::{ModeBasis, mode_basis};
