@@ -1,6 +1,6 @@
 //! The reduced coordinates of one shift mode. A mode is a set of locked
 //! elements (brakes, clutches, engaged one-way elements); its constraint rows
-//! are the Willis rows [psi_w] (paper eq. 4/10, one per fundamental circuit)
+//! are the Willis rows \[psi_w\] (paper eq. 4/10, one per fundamental circuit)
 //! plus one row per locked element (`ω_l = 0` for a brake, `ω_a - ω_b = 0` for
 //! a clutch). The admissible link speeds are the null space of those rows, so
 //! the mode's coordinates are exactly its degrees of freedom: 1 in a gear,
