@@ -50,6 +50,7 @@ pub mod prepared;
 pub mod simulate;
 pub mod spec;
 pub mod stability;
+pub mod synthesis;
 pub mod topology;
 pub mod train;
 pub mod transmission;
