@@ -42,6 +42,8 @@ pub enum Command {
     Batch(commands::batch::Args),
     /// Print the JSON Schema of the spec format.
     Schema(commands::schema::Args),
+    /// The atlas of non-isomorphic gear train graphs with N links and F DOF, one per line.
+    Enumerate(commands::enumerate::Args),
 }
 
 /// How results are printed.

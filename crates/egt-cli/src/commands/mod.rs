@@ -9,6 +9,7 @@ pub mod batch;
 pub mod check;
 pub mod circuits;
 pub mod dynamics;
+pub mod enumerate;
 pub mod graph;
 pub mod kinematics;
 pub mod power;
@@ -34,5 +35,6 @@ pub fn run(command: &Command, out: &mut dyn Write) -> anyhow::Result<()> {
         Command::Simulate(args) => simulate::run(args, out),
         Command::Batch(args) => batch::run(args, out),
         Command::Schema(args) => schema::run(args, out),
+        Command::Enumerate(args) => enumerate::run(args, out),
     }
 }

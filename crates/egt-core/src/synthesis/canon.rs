@@ -156,6 +156,7 @@ pub fn canonical(g: &ChainGraph, extra: Extra<'_>) -> (Code, Vec<usize>) {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
 
@@ -165,13 +166,10 @@ mod tests {
         let mut perm: Vec<usize> = (0..n).collect();
         let mut best = code_of(g, extra, &perm);
         // Lexicographic next-permutation.
-        loop {
-            let Some(i) = (0..n.saturating_sub(1))
-                .rev()
-                .find(|&i| perm[i] < perm[i + 1])
-            else {
-                break;
-            };
+        while let Some(i) = (0..n.saturating_sub(1))
+            .rev()
+            .find(|&i| perm[i] < perm[i + 1])
+        {
             let j = (i + 1..n).rev().find(|&j| perm[j] > perm[i]).unwrap();
             perm.swap(i, j);
             perm[i + 1..].reverse();

@@ -88,9 +88,9 @@ impl ChainGraph {
             if u == b {
                 break;
             }
-            for v in 0..self.n {
-                if self.joint(u, v) == Joint::Turning && prev[v] == usize::MAX {
-                    prev[v] = u;
+            for (v, p) in prev.iter_mut().enumerate() {
+                if self.adj[u * self.n + v] == Joint::Turning && *p == usize::MAX {
+                    *p = u;
                     stack.push(v);
                 }
             }

@@ -1,5 +1,6 @@
 //! Tests of the atlas: egt's checks on every member, partitions, known trains.
 //! (The canonical form is tested against brute force in `canon.rs`.)
+#![allow(clippy::unwrap_used)]
 
 use super::*;
 
