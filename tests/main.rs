@@ -30,3 +30,6 @@ mod transmission;
 
 // Issue 4: stability (example 6.2, eigenvalues vs simulation) and forward dynamics, with the failure edges.
 mod stability;
+
+// Issue 15: `egt enumerate`, the atlas of gear-train graphs, read back by `egt check`.
+mod enumerate;
