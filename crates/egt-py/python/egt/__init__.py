@@ -20,6 +20,7 @@ Pythonic surface. Every error is an :class:`EgtError`.
 from __future__ import annotations
 
 from ._batch import BatchDynamics, BatchKinematics, BatchPlan, BatchResult, RowError
+from ._egt import atlas
 from ._egt import (
     AnalysisError,
     EgtError,
@@ -65,6 +66,7 @@ from ._transmission import (
 
 __all__ = [
     "__version__",
+    "atlas",
     "Train",
     "load",
     "loads",

@@ -16,6 +16,7 @@ __all__ = [
     "simulate",
     "gear",
     "shift_table",
+    "atlas",
     "EgtError",
     "SpecError",
     "SpecSyntaxError",
@@ -86,6 +87,9 @@ class TrainCore:
     def _panic(self) -> None: ...
 
 def structure(core: TrainCore) -> Dict[str, Any]: ...
+def atlas(
+    links: int, dof: int = 1, level: str = "rotation", part: Optional[Tuple[int, int]] = None
+) -> List[Dict[str, Any]]: ...
 @final
 class BatchPlanCore:
     @property
