@@ -39,3 +39,6 @@ mod golden;
 
 // Issue 12: one row per class of bad input through the binary (exit code, words in the message).
 mod bad_inputs;
+
+// Issue 15: `egt enumerate`, the atlas of gear-train graphs, read back by `egt check`.
+mod enumerate;

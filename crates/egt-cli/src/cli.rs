@@ -46,6 +46,8 @@ pub enum Command {
     Completions(commands::completions::Args),
     /// Print the man page (roff).
     Man(commands::completions::ManArgs),
+    /// The atlas of non-isomorphic gear train graphs with N links and F DOF, one per line.
+    Enumerate(commands::enumerate::Args),
 }
 
 /// How results are printed.

@@ -55,6 +55,7 @@ pub mod shift_dynamics;
 pub mod simulate;
 pub mod spec;
 pub mod stability;
+pub mod synthesis;
 pub mod topology;
 pub mod train;
 pub mod transmission;

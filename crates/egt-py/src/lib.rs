@@ -5,6 +5,7 @@
 //! lives in the `egt` package (`python/egt`). Errors map to Python exceptions
 //! in exactly one place, [`errors`].
 
+mod atlas;
 mod batch;
 mod convert;
 mod errors;
@@ -36,6 +37,7 @@ fn _egt(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(transmission::gear, m)?)?;
     m.add_function(wrap_pyfunction!(transmission::shift_table, m)?)?;
     m.add_function(wrap_pyfunction!(cli, m)?)?;
+    m.add_function(wrap_pyfunction!(atlas::atlas, m)?)?;
     errors::register(m)?;
     Ok(())
 }

@@ -10,6 +10,7 @@ pub mod check;
 pub mod circuits;
 pub mod completions;
 pub mod dynamics;
+pub mod enumerate;
 pub mod graph;
 pub mod kinematics;
 pub mod power;
@@ -37,5 +38,6 @@ pub fn run(command: &Command, out: &mut dyn Write) -> anyhow::Result<()> {
         Command::Schema(args) => schema::run(args, out),
         Command::Completions(args) => completions::run(args, out),
         Command::Man(args) => completions::man(args, out),
+        Command::Enumerate(args) => enumerate::run(args, out),
     }
 }

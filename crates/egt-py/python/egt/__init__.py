@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from ._args import ArgumentError, ArgumentKeyError, ArgumentTypeError
 from ._batch import BatchDynamics, BatchKinematics, BatchPlan, BatchResult, RowError
+from ._egt import atlas
 from ._egt import (
     AnalysisError,
     EgtError,
@@ -68,6 +69,7 @@ from ._transmission import (
 
 __all__ = [
     "__version__",
+    "atlas",
     "Train",
     "load",
     "loads",

@@ -17,6 +17,7 @@ __all__ = [
     "gear",
     "shift_table",
     "cli",
+    "atlas",
     "EgtError",
     "SpecError",
     "SpecSyntaxError",
@@ -89,6 +90,9 @@ class TrainCore:
     def _panic(self) -> None: ...
 
 def structure(core: TrainCore) -> Dict[str, Any]: ...
+def atlas(
+    links: int, dof: int = 1, level: str = "rotation", part: Optional[Tuple[int, int]] = None
+) -> List[Dict[str, Any]]: ...
 @final
 class BatchPlanCore:
     @property
