@@ -35,6 +35,7 @@
 pub mod accuracy;
 pub mod batch;
 pub mod circuits;
+pub mod design;
 pub mod dynamics;
 pub mod error;
 pub mod exact;
