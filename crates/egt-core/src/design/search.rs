@@ -672,4 +672,16 @@ mod tests {
         let err = Search::new(spec, parse_spec(ZF, Format::Toml, "zf").unwrap()).unwrap_err();
         assert!(err.to_string().contains("sets.P9"), "{err}");
     }
+
+    /// The ranges (suns 20-80, rings 60-130, all four sets unknown,
+    /// 8.9e10 tooth combinations): the bound leaves one candidate, the 8HP's
+    /// basic ratios 2, 2, 111/69, 85/23.
+    #[test]
+    fn rediscovers_8hp_full_ranges() {
+        let r = "{ sun = [20, 80], ring = [60, 130] }";
+        let s = zf_search(&format!("[sets]\nP1 = {r}\nP2 = {r}\nP3 = {r}\nP4 = {r}"));
+        let (found, stats) = s.run().unwrap();
+        assert!(stats.tooth_space > 1e10);
+        assert_eq!(found[0].basic, ["2", "2", "37/23", "85/23"]);
+    }
 }
