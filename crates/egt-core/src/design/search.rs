@@ -613,8 +613,12 @@ mod tests {
         let text = format!(
             "base = \"zf_8hp70.toml\"\ntop = 5\n{sets}\n[targets]\nratios = {{ \"1\" = 4.696, \"2\" = 3.130, \"3\" = 2.104, \"4\" = 1.667, \"5\" = 1.285, \"6\" = 1.000, \"7\" = 0.839, \"8\" = 0.667, \"R\" = -3.297 }}\n"
         );
-        let spec: SynthSpec = toml::from_str(&text).unwrap();
-        Search::new(spec, parse_spec(ZF, Format::Toml, "zf").unwrap()).unwrap()
+        let spec: SynthSpec = toml::from_str(&text).expect("test input");
+        Search::new(
+            spec,
+            parse_spec(ZF, Format::Toml, "zf").expect("test input"),
+        )
+        .expect("test input")
     }
 
     /// Rediscovery of the 8HP teeth from the published ratios (to three
@@ -625,7 +629,7 @@ mod tests {
         let s = zf_search(
             "[sets]\nP1 = { sun = [44, 52], ring = [90, 100] }\nP2 = { sun = [44, 52], ring = [90, 100] }\nP3 = { sun = [64, 72], ring = [106, 114] }\nP4 = { sun = [20, 26], ring = [80, 88] }",
         );
-        let (found, stats) = s.run().unwrap();
+        let (found, stats) = s.run().expect("test input");
         assert!(stats.leaves as f64 <= stats.ratio_space);
         let real = [(48, 96), (48, 96), (69, 111), (23, 85)];
         // The real set or one with identical basic ratios (ring/sun).
@@ -637,7 +641,7 @@ mod tests {
         }));
         for c in &found {
             for (state, ratio, exact) in &c.ratios {
-                let q = crate::exact::parse_rational(exact).unwrap();
+                let q = crate::exact::parse_rational(exact).expect("test input");
                 assert!((crate::exact::to_f64(&q) - ratio).abs() < 1e-12);
                 let t = s.spec.targets.ratios[state];
                 assert!((ratio - t).abs() <= 5e-4, "{state}: {ratio} vs {t}");
@@ -652,10 +656,10 @@ mod tests {
         let s = zf_search(
             "[sets]\nP3 = { sun = [60, 76], ring = [100, 120] }\nP4 = { sun = [20, 28], ring = [76, 92] }",
         );
-        let (whole, _) = s.run().unwrap();
+        let (whole, _) = s.run().expect("test input");
         let mut merged = Vec::new();
         for p in 0..3 {
-            merged.extend(s.run_partition(p, 3).unwrap().0);
+            merged.extend(s.run_partition(p, 3).expect("test input").0);
         }
         rank(&mut merged, 5);
         let key = |c: &Vec<Candidate>| c.iter().map(|x| x.teeth.clone()).collect::<Vec<_>>();
@@ -668,8 +672,12 @@ mod tests {
         let spec: SynthSpec = toml::from_str(
             "base = \"x\"\n[sets]\nP9 = { sun = [20, 30], ring = [60, 80] }\n[targets]\nratios = { \"1\" = 4.7 }",
         )
-        .unwrap();
-        let err = Search::new(spec, parse_spec(ZF, Format::Toml, "zf").unwrap()).unwrap_err();
+        .expect("test input");
+        let err = Search::new(
+            spec,
+            parse_spec(ZF, Format::Toml, "zf").expect("test input"),
+        )
+        .expect_err("must fail");
         assert!(err.to_string().contains("sets.P9"), "{err}");
     }
 
@@ -680,7 +688,7 @@ mod tests {
     fn rediscovers_8hp_full_ranges() {
         let r = "{ sun = [20, 80], ring = [60, 130] }";
         let s = zf_search(&format!("[sets]\nP1 = {r}\nP2 = {r}\nP3 = {r}\nP4 = {r}"));
-        let (found, stats) = s.run().unwrap();
+        let (found, stats) = s.run().expect("test input");
         assert!(stats.tooth_space > 1e10);
         assert_eq!(found[0].basic, ["2", "2", "37/23", "85/23"]);
     }
