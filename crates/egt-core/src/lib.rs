@@ -37,6 +37,7 @@
 pub mod accuracy;
 pub mod batch;
 pub mod circuits;
+pub mod design;
 pub mod dynamics;
 pub mod equations;
 pub mod error;

@@ -1,0 +1,109 @@
+//! The design-search specification (`egt synth SPEC`): a base train with named
+//! simple planetary sets and a transmission table, tooth ranges per unknown set,
+//! the engineering constraints on each set, and the target ratios with their
+//! tolerance. Serde only; validation happens when the search is prepared.
+
+use indexmap::IndexMap;
+use serde::{Deserialize, Serialize};
+
+/// A design search as written (TOML or JSON). See `docs/synth.md`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SynthSpec {
+    /// Path of the base train spec, relative to the search spec's file.
+    pub base: String,
+    /// Unknown sets: planetary set name -> tooth ranges. Sets not listed keep
+    /// the base train's teeth.
+    pub sets: IndexMap<String, SetRange>,
+    /// Constraints applied to every unknown set.
+    #[serde(default)]
+    pub constraints: Constraints,
+    /// Targets and tolerances.
+    pub targets: Targets,
+    /// How many of the best candidates to keep. Default 20.
+    #[serde(default = "default_top")]
+    pub top: usize,
+}
+
+fn default_top() -> usize {
+    20
+}
+
+/// Inclusive tooth ranges of one simple set.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SetRange {
+    /// Sun teeth `[min, max]`.
+    pub sun: [i64; 2],
+    /// Ring teeth `[min, max]`.
+    pub ring: [i64; 2],
+    /// Number of equally spaced planets (assembly and non-interference). Default 3.
+    #[serde(default = "default_planets")]
+    pub planets: i64,
+}
+
+fn default_planets() -> i64 {
+    3
+}
+
+/// Engineering constraints on each unknown set.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Constraints {
+    /// Smallest planet tooth count. Default 13.
+    #[serde(default = "default_min_planet")]
+    pub min_planet: i64,
+    /// Profile-shift allowance in teeth: |ring - sun - 2 planet| <= this.
+    /// 0 (default) is the coaxial condition of unshifted gears.
+    #[serde(default)]
+    pub profile_shift: i64,
+    /// Require (sun + ring) / planets to be an integer (equally spaced planets).
+    /// Default true.
+    #[serde(default = "yes")]
+    pub assembly: bool,
+    /// Require neighbouring planets' tip circles not to touch:
+    /// (sun + planet) sin(pi / n) > planet + 2. Default true.
+    #[serde(default = "yes")]
+    pub non_interference: bool,
+    /// Limits `[min, max]` of ring / sun.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ring_sun: Option<[f64; 2]>,
+}
+
+fn default_min_planet() -> i64 {
+    13
+}
+
+fn yes() -> bool {
+    true
+}
+
+impl Default for Constraints {
+    fn default() -> Self {
+        Constraints {
+            min_planet: default_min_planet(),
+            profile_shift: 0,
+            assembly: true,
+            non_interference: true,
+            ring_sun: None,
+        }
+    }
+}
+
+/// What the ratios must be.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Targets {
+    /// Gear state name -> target ratio input/output speed (negative for reverse).
+    pub ratios: IndexMap<String, f64>,
+    /// Largest accepted |ratio - target|. Default 0.0005 (three decimals).
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+    /// Accepted spread (largest / smallest forward ratio) `[min, max]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spread: Option<[f64; 2]>,
+}
+
+fn default_tolerance() -> f64 {
+    5e-4
+}
