@@ -178,3 +178,66 @@ fn every_bad_input_class_is_refused_by_name() {
         );
     }
 }
+
+/// Resource bounds (issue 12): a train too large for its dense matrices and a
+/// transmission with too many gear states are refused by name, with the limit,
+/// before the work starts (asserting the refusal, not a time).
+#[test]
+fn resource_limits_are_refused_by_name() {
+    // A chain of 1500 simple links: 1-2:a 2-3:a ... with one gear per pair of neighbours.
+    let n = 1500;
+    let mut items: Vec<String> = (1..n).map(|k| format!("0-{k}:a")).collect();
+    items.extend((1..n - 1).map(|k| format!("{k}-{}:G=-2", k + 1)));
+    let spec = format!("frame = \"0\"\nadjacency = \"{}\"\n", items.join(" "));
+    let row = Row {
+        name: "huge train",
+        spec: None,
+        args: &["check"],
+        exit: 2,
+        words: &[],
+    };
+    let (code, text) = run_with(&row, &spec);
+    assert_eq!(code, 2, "{text}");
+    assert!(text.contains("MiB") && text.contains("links"), "{text}");
+
+    let states: Vec<String> = (0..300).map(|k| format!("\"s{k}\" = [\"A\"]")).collect();
+    let spec = format!(
+        "frame = \"ring\"\n[[planetary]]\nname = \"P\"\nsun = \"sun\"\nring = \"ring\"\ncarrier = \"c\"\nteeth = {{ sun = 30, ring = 72 }}\n\
+         [[elements]]\nname = \"A\"\nkind = \"clutch\"\nlinks = [\"sun\", \"c\"]\n[transmission]\ninput = \"sun\"\noutput = \"c\"\n[transmission.states]\n{}\n",
+        states.join("\n")
+    );
+    let row = Row {
+        name: "many states",
+        spec: None,
+        args: &["shift"],
+        exit: 2,
+        words: &[],
+    };
+    let (code, text) = run_with(&row, &spec);
+    assert_eq!(code, 2, "{text}");
+    assert!(
+        text.contains("transmission.states") && text.contains("256"),
+        "{text}"
+    );
+}
+
+/// [`run`] with `spec` on stdin.
+fn run_with(row: &Row, spec: &str) -> (i32, String) {
+    let mut args: Vec<String> = row.args.iter().map(|s| s.to_string()).collect();
+    args.push("-".into());
+    let mut child = Command::new(env!("CARGO_BIN_EXE_egt"))
+        .args(&args)
+        .current_dir(root())
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn egt");
+    let mut pipe = child.stdin.take().expect("stdin");
+    pipe.write_all(spec.as_bytes()).expect("write stdin");
+    drop(pipe);
+    let out = child.wait_with_output().expect("wait");
+    let text =
+        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
+    (out.status.code().expect("exit code"), text)
+}

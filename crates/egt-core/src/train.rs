@@ -581,7 +581,40 @@ fn gear_pair(g: &DraftGear, ids: &HashMap<&str, LinkId>) -> Result<GearPair> {
     })
 }
 
+/// The most memory the dense matrices of one train may take. The topology rank
+/// test, the kinematics and the prepared solver hold a few dense n x n matrices
+/// (u64, f64, rationals) for n links; [`dense_bytes`] estimates them before any
+/// is allocated, so a huge train is refused by name instead of aborting on a
+/// failed allocation (or running for minutes, the work being cubic in n).
+pub const MAX_DENSE_BYTES: usize = 64 << 20;
+
+/// Estimated bytes of the dense matrices of a train of `links` links: about
+/// eight n x n matrices of 8-byte entries (see [`MAX_DENSE_BYTES`]).
+pub fn dense_bytes(links: usize) -> usize {
+    links.saturating_mul(links).saturating_mul(64)
+}
+
 fn build(spec: &Spec, draft: &Draft) -> Result<Train> {
+    let n = draft.links.len();
+    if dense_bytes(n) > MAX_DENSE_BYTES {
+        let most = (1..=n)
+            .take_while(|&k| dense_bytes(k) <= MAX_DENSE_BYTES)
+            .last();
+        #[allow(clippy::cast_precision_loss)]
+        return Err(Error::spec(
+            "links",
+            SpecErrorKind::OutOfRange {
+                value: n as f64,
+                expected: format!(
+                    "a train of {n} links needs about {} MiB of dense matrices; the limit is {} MiB, \
+                     at most {} links",
+                    dense_bytes(n) >> 20,
+                    MAX_DENSE_BYTES >> 20,
+                    most.unwrap_or(0)
+                ),
+            },
+        ));
+    }
     // Links.
     let mut links = Vec::with_capacity(draft.links.len());
     for (n, (name, dl)) in draft.links.iter().enumerate() {
