@@ -68,3 +68,16 @@ chart: venv ## Re-measure Rust, SymPy and NumPy side by side; redraw docs/img/sp
 clean: ## Remove build outputs and the virtualenv
 	cargo clean
 	rm -rf $(VENV)
+
+FUZZ_SECONDS ?= 30
+FUZZ_TARGETS := spec adjacency input_value
+
+.PHONY: fuzz-seed fuzz-smoke
+fuzz-seed: ## Seed fuzz/corpus/* from examples/ (specs, adjacency strings, input values)
+	bash fuzz/seed-corpus.sh
+
+fuzz-smoke: fuzz-seed ## A short libFuzzer run of every fuzz target (FUZZ_SECONDS each; needs cargo-fuzz; see docs/fuzzing.md)
+	@command -v cargo-fuzz >/dev/null || cargo install cargo-fuzz --locked
+	cd fuzz && for t in $(FUZZ_TARGETS); do \
+		RUSTC_BOOTSTRAP=1 cargo fuzz run $$t corpus/$$t -- -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 || exit 1; \
+	done
