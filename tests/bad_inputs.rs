@@ -123,35 +123,15 @@ const ROWS: &[Row] = &[
 ];
 
 fn run(row: &Row) -> (i32, String) {
-    let mut args: Vec<String> = row.args.iter().map(|s| s.to_string()).collect();
-    let mut stdin = None;
-    if let Some(text) = row.spec {
-        args.push("-".into());
-        stdin = Some(text.to_string());
-    }
     if row.name.contains("byte-order") {
-        args.push("-".into());
-        stdin = Some(
-            "\u{feff}{\"frame\": \"f\", \"adjacency\": \"f-2:a 2-3:b f-4:a f-3:G=-2 3-4:G=-3/2\"}"
-                .into(),
-        );
+        let bom =
+            "\u{feff}{\"frame\": \"f\", \"adjacency\": \"f-2:a 2-3:b f-4:a f-3:G=-2 3-4:G=-3/2\"}";
+        return run_with(row, bom);
     }
-    let mut child = Command::new(env!("CARGO_BIN_EXE_egt"))
-        .args(&args)
-        .current_dir(root())
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn egt");
-    let mut pipe = child.stdin.take().expect("stdin");
-    pipe.write_all(stdin.unwrap_or_default().as_bytes())
-        .expect("write stdin");
-    drop(pipe);
-    let out = child.wait_with_output().expect("wait");
-    let text =
-        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
-    (out.status.code().expect("exit code"), text)
+    match row.spec {
+        Some(text) => run_with(row, text),
+        None => run_args(row.args, None),
+    }
 }
 
 #[test]
@@ -221,12 +201,17 @@ fn resource_limits_are_refused_by_name() {
     );
 }
 
-/// [`run`] with `spec` on stdin.
+/// [`run`] with `spec` on stdin (the spec argument is `-`).
 fn run_with(row: &Row, spec: &str) -> (i32, String) {
-    let mut args: Vec<String> = row.args.iter().map(|s| s.to_string()).collect();
-    args.push("-".into());
+    let mut args = row.args.to_vec();
+    args.push("-");
+    run_args(&args, Some(spec))
+}
+
+/// Run `egt args` from the workspace root, with `stdin` (or nothing) on standard input.
+fn run_args(args: &[&str], stdin: Option<&str>) -> (i32, String) {
     let mut child = Command::new(env!("CARGO_BIN_EXE_egt"))
-        .args(&args)
+        .args(args)
         .current_dir(root())
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
@@ -234,7 +219,8 @@ fn run_with(row: &Row, spec: &str) -> (i32, String) {
         .spawn()
         .expect("spawn egt");
     let mut pipe = child.stdin.take().expect("stdin");
-    pipe.write_all(spec.as_bytes()).expect("write stdin");
+    pipe.write_all(stdin.unwrap_or_default().as_bytes())
+        .expect("write stdin");
     drop(pipe);
     let out = child.wait_with_output().expect("wait");
     let text =

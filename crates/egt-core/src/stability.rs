@@ -55,7 +55,7 @@ use serde::{Serialize, Serializer};
 use crate::error::{AnalysisError, Error, Result, SpecErrorKind};
 use crate::exact::{self, Q};
 use crate::kinematics::SpeedInput;
-use crate::linalg::{COND_REFUSE, COND_WARN, Lu};
+use crate::linalg::{COND_WARN, Lu};
 use crate::train::{Curve, LinkId, Train};
 use num_traits::Zero;
 
@@ -873,20 +873,10 @@ impl ReducedModel {
                 }
             }
         }
-        let what = "the reduced slope matrix [K] (equilibrium)";
-        lu.factor().map_err(|_| AnalysisError::Singular {
-            what: what.into(),
-            detail: "the curves do not fix a unique steady state".into(),
-        })?;
-        let cond = lu.condition();
-        if cond > COND_REFUSE {
-            return Err(AnalysisError::IllConditioned {
-                what: what.into(),
-                condition: cond,
-                threshold: COND_REFUSE,
-            }
-            .into());
-        }
+        let cond = lu.factor_checked(
+            "the reduced slope matrix [K] (equilibrium)",
+            "the curves do not fix a unique steady state",
+        )?;
         let mut b: Vec<f64> = self
             .basis
             .tr_mul(&DVector::from_column_slice(&self.link_offset))
