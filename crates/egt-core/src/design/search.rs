@@ -115,6 +115,9 @@ pub struct Stats {
     pub leaves: u64,
 }
 
+/// Most (sun, ring) pairs one set's ranges may span (each is visited once).
+pub const MAX_SET_PAIRS: i64 = 10_000_000;
+
 /// Admissible tooth triples of one set, grouped by reduced ring/sun, sorted by k.
 fn basics(name: &str, r: &SetRange, c: &Constraints) -> Result<Vec<Basic>, DesignError> {
     let bad = |f: &str, m: &str| DesignError::Invalid {
@@ -132,6 +135,23 @@ fn basics(name: &str, r: &SetRange, c: &Constraints) -> Result<Vec<Basic>, Desig
     }
     if r.planets < 1 {
         return Err(bad("planets", "need at least one planet"));
+    }
+    // Bounded work per set: every (sun, ring) pair of the ranges is visited once.
+    let max = crate::error::MAX_TEETH;
+    if r.sun[1] > max || r.ring[1] > max {
+        return Err(bad(
+            "sun",
+            &format!("tooth counts above {max} are not searched"),
+        ));
+    }
+    let pairs = (r.sun[1] - r.sun[0] + 1).saturating_mul(r.ring[1] - r.ring[0] + 1);
+    if pairs > MAX_SET_PAIRS {
+        return Err(bad(
+            "ring",
+            &format!(
+                "{pairs} (sun, ring) pairs in this set; at most {MAX_SET_PAIRS} are searched per set"
+            ),
+        ));
     }
     let mut map: HashMap<Ratio<i64>, Vec<Teeth>> = HashMap::new();
     for sun in r.sun[0]..=r.sun[1] {
@@ -679,6 +699,33 @@ mod tests {
         )
         .expect_err("must fail");
         assert!(err.to_string().contains("sets.P9"), "{err}");
+    }
+
+    /// Ranges that would take minutes or exhaust memory are refused by name
+    /// before any pair is visited.
+    #[test]
+    fn huge_ranges_are_refused_by_field() {
+        let err = Search::new(
+            toml::from_str(
+                "base = \"x\"\n[sets]\nP1 = { sun = [20, 100000], ring = [60, 200000] }\n[targets]\nratios = { \"1\" = 4.7 }",
+            )
+            .expect("test input"),
+            parse_spec(ZF, Format::Toml, "zf").expect("test input"),
+        )
+        .expect_err("must refuse");
+        assert!(
+            err.to_string().contains("sets.P1.ring") && err.to_string().contains("10000000"),
+            "{err}"
+        );
+        let err = Search::new(
+            toml::from_str(
+                "base = \"x\"\n[sets]\nP1 = { sun = [20, 30], ring = [60, 2000000] }\n[targets]\nratios = { \"1\" = 4.7 }",
+            )
+            .expect("test input"),
+            parse_spec(ZF, Format::Toml, "zf").expect("test input"),
+        )
+        .expect_err("must refuse");
+        assert!(err.to_string().contains("1000000"), "{err}");
     }
 
     /// The ranges (suns 20-80, rings 60-130, all four sets unknown,
