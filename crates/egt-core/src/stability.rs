@@ -583,7 +583,7 @@ impl Train {
     ///
     /// # Errors
     /// As [`Train::velocity_matrix`] (wrong count, links that do not determine
-    /// the train, [`AnalysisError::IllConditioned`] past [`COND_REFUSE`]) and
+    /// the train, [`AnalysisError::IllConditioned`] past [`COND_REFUSE`](crate::linalg::COND_REFUSE)) and
     /// [`Train::mass_matrix`]; a non-finite curve.
     pub fn reduced_model(&self, coordinates: &[LinkId], curves: &[Curve]) -> Result<ReducedModel> {
         self.reduced_model_from(coordinates, CoordinateSource::Given, curves)
