@@ -56,6 +56,7 @@ lint: ## Clippy, format check, the core's docs (no broken links, no missing docs
 	cargo clippy --workspace --all-targets -- -D warnings
 	RUSTDOCFLAGS="-D warnings" cargo doc -p egt-core --no-deps
 	python3 scripts/msrv.py
+	python3 scripts/layers.py
 
 bench: ## Benchmarks by phase and train size, 3 to 30 links (divan, short settings; see docs/benchmarks.md)
 	cargo bench -p egt-core --bench scenarios -- --sample-count 20 --min-time 0.05

@@ -788,7 +788,7 @@ fn nested_carrier_inverse_dynamics_balances_the_explicit_energy_rate() {
     assert!(d.velocity_torque.iter().any(|&v| v != 0.0));
     for err in [
         t.stability(&egt_core::StabilityRequest {
-            curves: Some(vec![egt_core::train::Curve {
+            curves: Some(vec![egt_core::model::train::Curve {
                 link: s,
                 torque: 1.0,
                 slope: -1.0,
@@ -798,7 +798,7 @@ fn nested_carrier_inverse_dynamics_balances_the_explicit_energy_rate() {
         })
         .map(|_| ())
         .unwrap_err(),
-        egt_core::prepared::MassModel::new(&t)
+        egt_core::solve::prepared::MassModel::new(&t)
             .map(|_| ())
             .unwrap_err(),
     ] {
@@ -929,13 +929,14 @@ fn prescribed_accelerations_are_echoed_exactly() {
             extras: vec![],
         };
         let d = t.inverse_dynamics(&req, Some(&mass)).unwrap();
-        let plan = egt_core::prepared::PreparedTrain::new(&t, &[l2, l4], &[l5, l3], &[l2, l4], &[])
-            .unwrap();
+        let plan =
+            egt_core::solve::prepared::PreparedTrain::new(&t, &[l2, l4], &[l5, l3], &[l2, l4], &[])
+                .unwrap();
         let mut ws = plan.workspace();
         let (inertia, masses) = plan.mass_model().train_values(&t);
         let ratios = t.ratios().unwrap();
         let alpha = accelerations.map(|a| a.1);
-        let scenario = egt_core::prepared::Scenario {
+        let scenario = egt_core::solve::prepared::Scenario {
             ratios: &ratios,
             speeds: &[300.0, 100.0],
             accelerations: if accelerations[0].0 == l5 {
@@ -949,8 +950,12 @@ fn prescribed_accelerations_are_echoed_exactly() {
             efficiency: &vec![1.0; ratios.len()],
             mass_matrix: None,
         };
-        plan.solve(&mut ws, &scenario, egt_core::prepared::Compute::Dynamics)
-            .unwrap();
+        plan.solve(
+            &mut ws,
+            &scenario,
+            egt_core::solve::prepared::Compute::Dynamics,
+        )
+        .unwrap();
         for (l, a) in accelerations {
             assert_eq!(d.acceleration[l.index()].to_bits(), a.to_bits(), "{a}");
             let k = t.coordinate(l).unwrap();

@@ -14,7 +14,7 @@
 // A failed unwrap is a failed test, with its location.
 #![allow(clippy::unwrap_used)]
 
-use egt_core::exact::{self, Q};
+use egt_core::numerics::exact::{self, Q};
 use egt_core::{Driver, Format, GearState, Train};
 use num_traits::{Signed, Zero};
 

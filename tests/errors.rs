@@ -4,7 +4,7 @@
 // A failed unwrap is a failed test, with its location.
 #![allow(clippy::unwrap_used)]
 
-use egt_core::exact;
+use egt_core::numerics::exact;
 use egt_core::{AnalysisError, Error, Format, SpecErrorKind, TopologyError, Train};
 
 use crate::paper::fig3;

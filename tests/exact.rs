@@ -4,7 +4,7 @@
 //! as inputs: the held link at speed 0, the clutched links at the input's speed)
 //! and compared with the published ratios to their printed precision.
 
-use egt_core::exact::{self, Q};
+use egt_core::numerics::exact::{self, Q};
 use egt_core::spec::ElementKind;
 use egt_core::{SpeedInput, Train};
 use num_traits::{One, Zero};

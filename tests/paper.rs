@@ -3,7 +3,7 @@
 //! and row sign, and the fundamental-circuit table of Fig. 5 (Table 2).
 
 use egt_core::Train;
-use egt_core::exact::{self, Q};
+use egt_core::numerics::exact::{self, Q};
 use num_traits::{One, Zero};
 use proptest::prelude::*;
 

@@ -5,8 +5,8 @@
 //! determine the train, solve, and check every Willis residual (eq. 2) and the
 //! float speeds against the exact rational ones.
 
-use egt_core::exact::{self, Q};
-use egt_core::kinematics::willis_residual;
+use egt_core::numerics::exact::{self, Q};
+use egt_core::solve::kinematics::willis_residual;
 use egt_core::{Format, LinkId, SpeedInput, Train};
 use proptest::prelude::*;
 

@@ -7,9 +7,9 @@
 // A failed unwrap is a failed test that prints the error: what a test wants.
 #![allow(clippy::unwrap_used)]
 
-use egt_core::simulate::{DIVERGED_SPEED, ReducedDynamics};
-use egt_core::stability::RK4_REAL_LIMIT;
-use egt_core::train::Curve;
+use egt_core::analysis::stability::RK4_REAL_LIMIT;
+use egt_core::model::train::Curve;
+use egt_core::motion::simulate::{DIVERGED_SPEED, ReducedDynamics};
 use egt_core::{
     AnalysisError, Error, Format, LinearCurves, LinkId, Method, SimulationOptions,
     StabilityRequest, TorqueFn, Train, Verdict,
@@ -950,7 +950,7 @@ fn power_split(small: f64, ring: f64, ring_slope: f64) -> (Train, Vec<Curve>) {
 /// with [M] and [K] reduced exactly on an exact null-space basis of the Willis
 /// equations, and the sign of its largest root read off a, b and c (Vieta).
 fn exact_pencil_verdict(t: &Train, inertia: &[(&str, f64)], curves: &[Curve]) -> Verdict {
-    use egt_core::exact::{self, Q};
+    use egt_core::numerics::exact::{self, Q};
     use num_traits::{Signed, Zero};
     let psi = t.willis_jacobian_exact().unwrap();
     let n = t.coordinates().len();

@@ -10,7 +10,7 @@
 use std::collections::BTreeSet;
 use std::process::Command;
 
-use egt_core::exact::{self, Q};
+use egt_core::numerics::exact::{self, Q};
 use egt_core::spec::ElementKind;
 use egt_core::{Error, Freewheel, GearAnalysis, ShiftKind, ShiftTable, Train, TransmissionError};
 use proptest::prelude::*;

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use egt_core::exact::{self, Q};
+use egt_core::numerics::exact::{self, Q};
 use egt_core::{Format, LinkId, SpeedInput, Train};
 
 /// The workspace root.

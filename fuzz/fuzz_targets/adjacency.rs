@@ -3,7 +3,7 @@
 //! and kinematics with the first DOF links driven at unit speed.
 #![no_main]
 
-use egt_core::kinematics::SpeedInput;
+use egt_core::solve::kinematics::SpeedInput;
 use egt_core::{Format, Train};
 use libfuzzer_sys::fuzz_target;
 

@@ -3,7 +3,7 @@
 //! (the size bound), and what it accepts must print back to the same value.
 #![no_main]
 
-use egt_core::exact;
+use egt_core::numerics::exact;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

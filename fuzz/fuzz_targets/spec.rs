@@ -6,7 +6,7 @@
 #![no_main]
 
 use egt_core::batch::{BatchPlan, BatchSpec};
-use egt_core::prepared::Compute;
+use egt_core::solve::prepared::Compute;
 use egt_core::{Format, Train};
 use libfuzzer_sys::fuzz_target;
 

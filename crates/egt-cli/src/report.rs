@@ -4,7 +4,7 @@
 
 use std::io::{self, Write};
 
-use egt_core::exact::{self, Q};
+use egt_core::numerics::exact::{self, Q};
 use serde::Serialize;
 
 /// Column alignment.

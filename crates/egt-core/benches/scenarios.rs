@@ -13,7 +13,7 @@ use std::hint::black_box;
 use divan::Bencher;
 use divan::counter::ItemsCount;
 use egt_core::batch::{BatchPlan, BatchSpec};
-use egt_core::prepared::Compute;
+use egt_core::solve::prepared::Compute;
 use egt_core::{Format, Train, families, parse_spec};
 
 fn main() {

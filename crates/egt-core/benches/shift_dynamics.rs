@@ -4,7 +4,7 @@
 
 use std::hint::black_box;
 
-use egt_core::shift_dynamics::{Capacity, Engagement, FrictionLaw};
+use egt_core::motion::shift_dynamics::{Capacity, Engagement, FrictionLaw};
 
 fn main() {
     divan::main();

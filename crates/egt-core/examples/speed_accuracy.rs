@@ -12,7 +12,7 @@ use std::hint::black_box;
 use std::time::Instant;
 
 use egt_core::accuracy::{Method, Problem};
-use egt_core::linalg::COND_REFUSE;
+use egt_core::numerics::linalg::COND_REFUSE;
 use egt_core::{Format, Train, families};
 use serde_json::json;
 

@@ -9,9 +9,9 @@
 //! factoring, substituting. Errors are normwise and relative, per quantity:
 //! ||x - x*||_inf / ||x*||_inf.
 //!
-//! Methods: egt's prepared path ([`crate::prepared::PreparedTrain::solve`],
+//! Methods: egt's prepared path ([`crate::solve::prepared::PreparedTrain::solve`],
 //! its in-place LU with the condition estimate and refusal past
-//! [`crate::linalg::COND_REFUSE`]); the same LU plus one step of iterative
+//! [`crate::numerics::linalg::COND_REFUSE`]); the same LU plus one step of iterative
 //! refinement with the residual in doubled precision (Dot2, Ogita-Rump-Oishi);
 //! nalgebra's LU with partial pivoting; faer's LU with partial pivoting;
 //! nalgebra's Householder QR; nalgebra's SVD; and exact rationals.
@@ -24,10 +24,10 @@ use num_traits::Zero;
 
 use crate::batch::{BatchPlan, BatchSpec};
 use crate::error::{AnalysisError, Result};
-use crate::exact::{self, Q, QMatrix};
-use crate::linalg::Lu;
-use crate::prepared::{Compute, PreparedTrain, Scenario, exact_of};
-use crate::train::Train;
+use crate::model::train::Train;
+use crate::numerics::exact::{self, Q, QMatrix};
+use crate::numerics::linalg::Lu;
+use crate::solve::prepared::{Compute, PreparedTrain, Scenario, exact_of};
 
 /// A way of solving the three linear systems of a scenario.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -17,7 +17,7 @@
 //!
 //! ```
 //! use egt_core::batch::{BatchPlan, BatchSpec};
-//! use egt_core::prepared::Compute;
+//! use egt_core::solve::prepared::Compute;
 //! use egt_core::{Format, Train, families};
 //!
 //! // Two planetary sets in series (6 links, 1 DOF), with its [analysis] data.
@@ -45,10 +45,10 @@
 
 use rayon::prelude::*;
 
-use crate::dynamics::Extra;
 use crate::error::{AnalysisError, Error, Result};
-use crate::prepared::{Compute, PreparedTrain, Scenario, Workspace};
-use crate::train::{LinkId, Train};
+use crate::model::train::{LinkId, Train};
+use crate::solve::prepared::{Compute, PreparedTrain, Scenario, Workspace};
+use crate::solve::rows::Extra;
 
 /// The worker threads for a batch: the request, capped at the machine's
 /// parallelism (more threads than cores only add switching, and a huge
@@ -146,7 +146,10 @@ impl BatchSpec {
             .iter()
             .map(|&e| {
                 let el = &train.elements()[e.index()];
-                (el.name.clone(), crate::transmission::element_constraint(el))
+                (
+                    el.name.clone(),
+                    crate::analysis::transmission::element_constraint(el),
+                )
             })
             .collect();
         Ok(BatchSpec {
@@ -477,7 +480,7 @@ impl Worker<'_> {
             put(p.loss);
             put(p.kinetic_rate);
             put(if p.input > 0.0 {
-                crate::power::efficiency(p.input, p.loss, p.kinetic_rate)
+                crate::analysis::power::efficiency(p.input, p.loss, p.kinetic_rate)
             } else {
                 f64::NAN
             });

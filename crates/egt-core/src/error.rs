@@ -29,7 +29,7 @@ pub enum Error {
     Analysis(AnalysisError),
     /// A transmission's gear state cannot be analysed as written.
     #[error("{0}")]
-    Transmission(crate::transmission::TransmissionError),
+    Transmission(TransmissionError),
 }
 
 // Written out rather than `#[from]`, which would also make the inner error the
@@ -52,8 +52,8 @@ impl From<AnalysisError> for Error {
     }
 }
 
-impl From<crate::transmission::TransmissionError> for Error {
-    fn from(e: crate::transmission::TransmissionError) -> Self {
+impl From<TransmissionError> for Error {
+    fn from(e: TransmissionError) -> Self {
         Error::Transmission(e)
     }
 }
@@ -583,5 +583,114 @@ mod tests {
             suggest("carier", ["carrier", "sun"]),
             Some("carrier".into())
         );
+    }
+}
+
+/// Why a gear state cannot be analysed as written. Every variant names the state.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum TransmissionError {
+    /// The spec has no `[transmission]` section, or it lists no states.
+    #[error(
+        "no gear states: give `[transmission]` with `input`, `output` and `[transmission.states]`"
+    )]
+    NoStates,
+    /// A state name that the spec does not define.
+    #[error("unknown gear state `{state}`{}", suggestion.as_ref().map(|s| format!(" (did you mean `{s}`?)")).unwrap_or_default())]
+    UnknownState {
+        /// The name asked for.
+        state: String,
+        /// The closest defined name, if close.
+        suggestion: Option<String>,
+    },
+    /// The engaged elements leave more than one DOF.
+    #[error(
+        "gear state `{state}` leaves {dof} degrees of freedom: with the input held, links {} can still turn; engage another element",
+        list(free)
+    )]
+    Underconstrained {
+        /// The state.
+        state: String,
+        /// Its DOF.
+        dof: usize,
+        /// Links not determined by the input speed.
+        free: Vec<String>,
+    },
+    /// The engaged elements leave no DOF: the train is tied up.
+    #[error(
+        "gear state `{state}` locks the train (0 degrees of freedom): elements {} together tie it up",
+        list(elements)
+    )]
+    Locked {
+        /// The state.
+        state: String,
+        /// The engaged elements.
+        elements: Vec<String>,
+    },
+    /// Some engaged elements impose constraints already imposed by the others
+    /// (and by the gear pairs): their torques are statically indeterminate.
+    #[error(
+        "gear state `{state}`: elements {} are redundant: their constraints are linearly dependent{}, so their torques are statically indeterminate (the state has {dof} degree(s) of freedom)",
+        list(elements),
+        if gears.is_empty() { String::new() } else { format!(" together with gear pairs {}", list(gears)) }
+    )]
+    Redundant {
+        /// The state.
+        state: String,
+        /// Engaged elements in a dependent set of rows.
+        elements: Vec<String>,
+        /// Gear pairs whose Willis rows are in the same dependent set.
+        gears: Vec<String>,
+        /// The state's DOF.
+        dof: usize,
+    },
+    /// The state holds the input while other links turn.
+    #[error(
+        "gear state `{state}` holds the input `{input}` at rest (links {} move without it)",
+        list(moving)
+    )]
+    InputHeld {
+        /// The state.
+        state: String,
+        /// The input link.
+        input: String,
+        /// The links that move in the state's one free motion.
+        moving: Vec<String>,
+    },
+    /// The state holds the output while the input turns: no finite ratio.
+    #[error(
+        "gear state `{state}` holds the output `{output}` at rest while the input turns: no finite ratio"
+    )]
+    OutputHeld {
+        /// The state.
+        state: String,
+        /// The output link.
+        output: String,
+    },
+    /// An analysis of a valid state failed.
+    #[error("gear state `{state}`: {cause}")]
+    InState {
+        /// The state.
+        state: String,
+        /// What failed.
+        cause: Box<Error>,
+    },
+}
+
+impl TransmissionError {
+    /// The stable code of [`crate::Error::code`].
+    pub fn code(&self) -> &'static str {
+        match self {
+            TransmissionError::NoStates => "no_states",
+            TransmissionError::UnknownState { .. } => "unknown_state",
+            TransmissionError::Underconstrained { .. } => "underconstrained",
+            TransmissionError::Locked { .. } => "locked_state",
+            TransmissionError::Redundant { .. } => "redundant_elements",
+            TransmissionError::InputHeld { .. } => "input_held",
+            TransmissionError::OutputHeld { .. } => "output_held",
+            TransmissionError::InState { cause, .. } => cause.code(),
+            #[allow(unreachable_patterns)]
+            _ => "transmission",
+        }
     }
 }

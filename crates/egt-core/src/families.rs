@@ -290,7 +290,7 @@ pub fn topology_phase(train: &crate::Train) -> crate::Result<usize> {
             _ => None,
         })
         .collect();
-    let topo = crate::topology::analyse(
+    let topo = crate::model::topology::analyse(
         &train.links,
         train.frame,
         &train.levels,

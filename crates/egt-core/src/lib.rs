@@ -29,57 +29,48 @@
 //! let speeds = train.kinematics(&[SpeedInput::from((sun, 102.0))]).unwrap();
 //! // Willis: w_carrier = w_sun * z_s / (z_s + z_r) = 102 * 30 / 102.
 //! assert!((speeds.speed[carrier.index()] - 30.0).abs() < 1e-12);
-//! assert_eq!(egt_core::exact::display(&speeds.exact.unwrap()[carrier.index()]), "30");
+//! assert_eq!(egt_core::numerics::exact::display(&speeds.exact.unwrap()[carrier.index()]), "30");
 //! ```
 
 #![deny(missing_docs)]
 
-pub mod accuracy;
+// The layers, bottom to top; no module imports one above it (`scripts/layers.py`).
+pub mod analysis;
 pub mod batch;
-pub mod circuits;
 pub mod design;
-pub mod dynamics;
-pub mod equations;
 pub mod error;
-pub mod exact;
-mod expand;
-pub mod families;
-pub mod kinematics;
-pub mod linalg;
-mod losses;
-pub mod mass;
-pub mod modp;
-pub mod parse;
-pub mod power;
-pub mod prepared;
-pub mod shift_dynamics;
-pub mod simulate;
+pub mod model;
+pub mod motion;
+pub mod numerics;
+pub mod solve;
 pub mod spec;
-pub mod stability;
 pub mod synthesis;
-pub mod topology;
-pub mod train;
-pub mod transmission;
 
-pub use circuits::FundamentalCircuit;
-pub use dynamics::{DynamicsRequest, Extra, InverseDynamics, MeshLoad};
-pub use error::{AnalysisError, Error, Result, SpecErrorKind, SyntaxError, TopologyError};
-pub use kinematics::{KinematicsPlan, RelativeSpeed, SpeedInput, Speeds};
-pub use mass::{MassMatrix, Offset};
-pub use parse::{Format, parse_spec, spec_schema};
-pub use power::{Driver, LinkPower, MeshPower, PowerFlow, PowerRequest};
-pub use simulate::{
-    LinearCurves, Method, ReducedDynamics, Sample, Simulation, SimulationOptions,
-    SimulationRequest, TorqueFn, TorqueModel,
-};
-pub use spec::Spec;
-pub use stability::{
+pub mod accuracy;
+pub mod families;
+
+pub use analysis::dynamics::{DynamicsRequest, InverseDynamics, MeshLoad};
+pub use analysis::power::{Driver, LinkPower, MeshPower, PowerFlow, PowerRequest};
+pub use analysis::stability::{
     CoordinateSource, Mode, OperatingPoint, ReducedModel, Stability, StabilityReport,
     StabilityRequest, Verdict,
 };
-pub use train::{Edge, GearId, GearPair, LevelId, Link, LinkId, Ratio, RevoluteId, Train};
-pub use train::{ElementId, GearState, ShiftElement, Transmission};
-pub use transmission::{
+pub use analysis::transmission::{
     ElementLoad, Freewheel, GearAnalysis, GearPower, Shift, ShiftKind, ShiftTable, Slip, Spread,
-    Step, TransmissionError,
+    Step,
 };
+pub use error::{
+    AnalysisError, Error, Result, SpecErrorKind, SyntaxError, TopologyError, TransmissionError,
+};
+pub use model::circuits::FundamentalCircuit;
+pub use model::mass::{MassMatrix, Offset};
+pub use model::train::{Edge, GearId, GearPair, LevelId, Link, LinkId, Ratio, RevoluteId, Train};
+pub use model::train::{ElementId, GearState, ShiftElement, Transmission};
+pub use motion::simulate::{
+    LinearCurves, Method, ReducedDynamics, Sample, Simulation, SimulationOptions,
+    SimulationRequest, TorqueFn, TorqueModel,
+};
+pub use solve::kinematics::{KinematicsPlan, RelativeSpeed, SpeedInput, Speeds};
+pub use solve::rows::Extra;
+pub use spec::Spec;
+pub use spec::parse::{Format, parse_spec, spec_schema};

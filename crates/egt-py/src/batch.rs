@@ -10,7 +10,7 @@
 //! power, is written as 0.0 too (documented in `egt.BatchResult`).
 
 use egt_core::batch::{BatchPlan, BatchSpec};
-use egt_core::prepared::Compute;
+use egt_core::solve::prepared::Compute;
 use numpy::{PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;

@@ -2,8 +2,8 @@
 //! exact rationals to `"p/q"` text (the Python side makes `fractions.Fraction`s),
 //! vectors and matrices to NumPy arrays.
 
-use egt_core::dynamics::Extra;
-use egt_core::exact::{self, Q};
+use egt_core::Extra;
+use egt_core::numerics::exact::{self, Q};
 use egt_core::spec::ElementKind;
 use egt_core::{LinkId, Train};
 use nalgebra::DMatrix;

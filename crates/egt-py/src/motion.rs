@@ -5,9 +5,11 @@
 
 use std::cell::RefCell;
 
-use egt_core::simulate::{LinearCurves, Method, SimulationOptions, SimulationRequest, TorqueModel};
-use egt_core::stability::{CoordinateSource, OperatingSource, StabilityRequest, Verdict};
-use egt_core::train::Curve;
+use egt_core::analysis::stability::{CoordinateSource, OperatingSource, StabilityRequest, Verdict};
+use egt_core::model::train::Curve;
+use egt_core::motion::simulate::{
+    LinearCurves, Method, SimulationOptions, SimulationRequest, TorqueModel,
+};
 use egt_core::{LinkId, Train};
 use numpy::{PyArray1, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;

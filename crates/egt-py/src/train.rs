@@ -2,9 +2,9 @@
 //! names to ids, calls egt-core, and returns plain Python values (dicts, lists,
 //! NumPy arrays); the Python package wraps them in result classes.
 
-use egt_core::dynamics::{DynamicsRequest, Extra};
-use egt_core::mass::MassMatrix;
-use egt_core::power::{Driver, PowerRequest};
+use egt_core::analysis::power::{Driver, PowerRequest};
+use egt_core::model::mass::MassMatrix;
+use egt_core::{DynamicsRequest, Extra};
 use egt_core::{Format, SpeedInput, Train};
 use numpy::PyArray2;
 use pyo3::prelude::*;
@@ -43,9 +43,9 @@ impl TrainCore {
                 let (speed, exact) = match exact {
                     Some(t) => {
                         let q = convert::rational(t, &format!("inputs.{name}"))?;
-                        (egt_core::exact::to_f64(&q), Some(q))
+                        (egt_core::numerics::exact::to_f64(&q), Some(q))
                     }
-                    None => (*v, egt_core::exact::from_f64(*v)),
+                    None => (*v, egt_core::numerics::exact::from_f64(*v)),
                 };
                 Ok(SpeedInput { link, speed, exact })
             })
@@ -527,7 +527,7 @@ impl TrainCore {
                 )));
             }
             let ratios = self.train.ratios()?;
-            Ok(egt_core::kinematics::willis_residual(
+            Ok(egt_core::solve::kinematics::willis_residual(
                 &self.train,
                 &ratios,
                 s,

@@ -2,7 +2,7 @@
 //! `egt.Train.shift_table`: every result with element, gear-pair and link
 //! names in place of ids, exact values as `"p/q"` text.
 
-use egt_core::transmission::{Freewheel, GearAnalysis, ShiftKind};
+use egt_core::analysis::transmission::{Freewheel, GearAnalysis, ShiftKind};
 use egt_core::{ElementId, Train};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};

@@ -14,8 +14,8 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use egt_core::batch::{BatchPlan, BatchSpec};
-use egt_core::linalg::COND_WARN;
-use egt_core::prepared::Compute;
+use egt_core::numerics::linalg::COND_WARN;
+use egt_core::solve::prepared::Compute;
 use egt_core::{Error, Format, SpecErrorKind, Train};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;

@@ -7,7 +7,7 @@
 use std::io::Write;
 
 use anyhow::Context;
-use egt_core::exact::{self, Q};
+use egt_core::numerics::exact::{self, Q};
 use egt_core::{LinkId, SpeedInput, Speeds, Train};
 use num_traits::Zero;
 use serde::Serialize;

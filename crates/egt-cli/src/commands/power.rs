@@ -6,7 +6,7 @@
 use std::io::Write;
 
 use anyhow::Context;
-use egt_core::power::{Driver, PowerFlow, PowerRequest};
+use egt_core::analysis::power::{Driver, PowerFlow, PowerRequest};
 use egt_core::{LinkId, Train};
 use serde::Serialize;
 

@@ -222,7 +222,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
     }
 }
 
-fn exact_str(q: Option<&egt_core::exact::Q>) -> Option<String> {
+fn exact_str(q: Option<&egt_core::numerics::exact::Q>) -> Option<String> {
     q.map(report::exact)
 }
 

@@ -116,7 +116,7 @@ struct Report {
     max_drift: f64,
     energy_error: f64,
     newton_iterations: usize,
-    diverged: Option<egt_core::simulate::Divergence>,
+    diverged: Option<egt_core::motion::simulate::Divergence>,
     /// The equilibrium of the curves (link speeds), when it is unique.
     equilibrium: Option<Vec<f64>>,
     /// Growth rate of the deviation from the equilibrium over the second half.

@@ -8,8 +8,8 @@
 use std::io::Write;
 
 use anyhow::Context;
-use egt_core::stability::matrix_rows;
-use egt_core::train::Curve;
+use egt_core::analysis::stability::matrix_rows;
+use egt_core::model::train::Curve;
 use egt_core::{LinkId, StabilityReport, StabilityRequest, Train};
 use serde::Serialize;
 
@@ -105,7 +105,7 @@ struct MasslessOut {
 
 #[derive(Debug, Serialize)]
 struct OperatingOut {
-    source: egt_core::stability::OperatingSource,
+    source: egt_core::analysis::stability::OperatingSource,
     speeds: Vec<LinkValue>,
     torques: Vec<LinkValue>,
     /// V^T T per driving link: zero at a steady state.
@@ -342,8 +342,10 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
     )?;
     let op = &r.operating;
     let src = match op.source {
-        egt_core::stability::OperatingSource::Speeds => "from the input speeds",
-        egt_core::stability::OperatingSource::Equilibrium => "the equilibrium of the curves",
+        egt_core::analysis::stability::OperatingSource::Speeds => "from the input speeds",
+        egt_core::analysis::stability::OperatingSource::Equilibrium => {
+            "the equilibrium of the curves"
+        }
     };
     writeln!(out, "operating point ({src}):")?;
     let mut t = Table::new(&["link", "speed", "torque", "equilibrium"]).right(&[1, 2, 3]);

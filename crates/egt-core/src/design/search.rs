@@ -20,8 +20,8 @@ use num_rational::Ratio;
 use serde::Serialize;
 
 use super::spec::{Constraints, SetRange, SynthSpec};
+use crate::model::train::Train;
 use crate::spec::{PlanetaryKind, Spec};
-use crate::train::Train;
 
 /// Why a search cannot run. Each variant names the offending field.
 #[derive(Debug, thiserror::Error)]
@@ -576,7 +576,7 @@ impl Search {
             let exact = g
                 .ratio_exact
                 .as_ref()
-                .map(crate::exact::display)
+                .map(crate::numerics::exact::display)
                 .unwrap_or_default();
             if let Some(t) = self.spec.targets.ratios.get(&g.state) {
                 err2 += ((g.ratio - t) / t).powi(2);
@@ -590,7 +590,7 @@ impl Search {
                 .enumerate()
                 .map(|(u, &i)| {
                     let t = self.basics[u][i].teeth[0];
-                    crate::exact::display(&crate::exact::frac(t.ring, t.sun))
+                    crate::numerics::exact::display(&crate::numerics::exact::frac(t.ring, t.sun))
                 })
                 .collect(),
             teeth,
@@ -625,9 +625,12 @@ pub fn rank(c: &mut Vec<Candidate>, top: usize) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::parse::{Format, parse_spec};
+    use crate::spec::parse::{Format, parse_spec};
 
-    const ZF: &str = include_str!("../../../../examples/zf_8hp70.toml");
+    const ZF: &str = include_str!(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/zf_8hp70.toml"
+    ));
 
     fn zf_search(sets: &str) -> Search {
         let text = format!(
@@ -661,8 +664,8 @@ mod tests {
         }));
         for c in &found {
             for (state, ratio, exact) in &c.ratios {
-                let q = crate::exact::parse_rational(exact).expect("test input");
-                assert!((crate::exact::to_f64(&q) - ratio).abs() < 1e-12);
+                let q = crate::numerics::exact::parse_rational(exact).expect("test input");
+                assert!((crate::numerics::exact::to_f64(&q) - ratio).abs() < 1e-12);
                 let t = s.spec.targets.ratios[state];
                 assert!((ratio - t).abs() <= 5e-4, "{state}: {ratio} vs {t}");
             }

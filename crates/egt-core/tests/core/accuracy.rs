@@ -5,7 +5,7 @@
 //! numbers, and below it its error stays within what the condition allows.
 
 use egt_core::accuracy::{Method, Problem, relative_error};
-use egt_core::linalg::{COND_REFUSE, COND_WARN};
+use egt_core::numerics::linalg::{COND_REFUSE, COND_WARN};
 use egt_core::{AnalysisError, Error, SpeedInput, Train, families};
 
 use crate::util::train;

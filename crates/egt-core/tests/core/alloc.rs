@@ -15,7 +15,7 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
 use egt_core::KinematicsPlan;
-use egt_core::prepared::{Compute, MassModel, PreparedTrain, Scenario};
+use egt_core::solve::prepared::{Compute, MassModel, PreparedTrain, Scenario};
 
 use crate::util::{self, one_dof_trains, plan};
 

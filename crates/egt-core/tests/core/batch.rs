@@ -4,7 +4,7 @@
 //! parallel runs equal row-by-row runs; bad rows are reported and the rest go on.
 
 use egt_core::batch::BatchPlan;
-use egt_core::prepared::Compute;
+use egt_core::solve::prepared::Compute;
 use egt_core::{AnalysisError, Error, LinkId, Train};
 use proptest::prelude::*;
 
@@ -240,13 +240,13 @@ fn ill_conditioned_rows_are_refused_not_returned() {
             Ok(()) => {
                 let cond = out[p.output("cond.speeds").unwrap_or(0)];
                 assert!(
-                    cond <= egt_core::linalg::COND_REFUSE,
+                    cond <= egt_core::numerics::linalg::COND_REFUSE,
                     "eps {eps}: returned at cond {cond}"
                 );
                 assert!(out.iter().all(|v| v.is_finite()));
             }
             Err(Error::Analysis(AnalysisError::IllConditioned { condition, .. })) => {
-                assert!(condition > egt_core::linalg::COND_REFUSE);
+                assert!(condition > egt_core::numerics::linalg::COND_REFUSE);
                 assert!(
                     out.iter().all(|v| v.is_nan()),
                     "refused rows carry no numbers"

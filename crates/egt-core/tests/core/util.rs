@@ -1,7 +1,7 @@
 //! Trains shared by the test modules.
 
 use egt_core::batch::{BatchPlan, BatchSpec};
-use egt_core::prepared::Compute;
+use egt_core::solve::prepared::Compute;
 use egt_core::{DynamicsRequest, Format, PowerRequest, SpeedInput, Train, families};
 
 /// Build a train from TOML, panicking with the error and the text.

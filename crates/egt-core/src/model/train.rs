@@ -11,13 +11,13 @@ use std::collections::HashMap;
 use petgraph::graph::{NodeIndex, UnGraph};
 use serde::Serialize;
 
-use crate::circuits::FundamentalCircuit;
 use crate::error::{Error, Result, SpecErrorKind, suggest};
-use crate::exact::{self, Q};
-use crate::expand::{self, Draft, DraftGear};
-use crate::parse::{self, Format};
+use crate::model::circuits::FundamentalCircuit;
+use crate::model::topology::{self, Tree};
+use crate::numerics::exact::{self, Q};
+use crate::spec::expand::{self, Draft, DraftGear};
+use crate::spec::parse::{self, Format};
 use crate::spec::{ElementKind, MeshKind, RatioSpec, Spec};
-use crate::topology::{self, Tree};
 
 macro_rules! id_type {
     ($(#[$m:meta])* $name:ident) => {

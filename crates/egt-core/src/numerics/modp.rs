@@ -187,10 +187,10 @@ mod tests {
             rows.push(dep);
             let field = |x: i64| if x >= 0 { x as u64 % P } else { neg((-x) as u64 % P) };
             let fm: Vec<Vec<u64>> = rows.iter().map(|r| r.iter().map(|&x| field(x)).collect()).collect();
-            let qm: crate::exact::QMatrix = rows.iter().map(|r| r.iter().map(|&x| crate::exact::q(x)).collect()).collect();
+            let qm: crate::numerics::exact::QMatrix = rows.iter().map(|r| r.iter().map(|&x| crate::numerics::exact::q(x)).collect()).collect();
             let (fnull, frank) = nullspace(&fm, 6);
-            proptest::prop_assert_eq!(frank, crate::exact::rank(&qm));
-            proptest::prop_assert_eq!(support(&fnull, 6), crate::exact::support(&crate::exact::nullspace(&qm, 6)));
+            proptest::prop_assert_eq!(frank, crate::numerics::exact::rank(&qm));
+            proptest::prop_assert_eq!(support(&fnull, 6), crate::numerics::exact::support(&crate::numerics::exact::nullspace(&qm, 6)));
         }
     }
 }

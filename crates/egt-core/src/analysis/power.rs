@@ -14,14 +14,14 @@
 
 use serde::Serialize;
 
-pub use crate::losses::Driver;
+pub use crate::solve::losses::Driver;
 
-use crate::dynamics::{DynamicsRequest, InverseDynamics, row_major};
+use crate::analysis::dynamics::{DynamicsRequest, InverseDynamics, row_major};
 use crate::error::Result;
-use crate::kinematics::{SpeedInput, Speeds};
-use crate::mass::MassMatrix;
-use crate::prepared::{Compute, PreparedTrain, Scenario};
-use crate::train::{GearId, LinkId, Train};
+use crate::model::mass::MassMatrix;
+use crate::model::train::{GearId, LinkId, Train};
+use crate::solve::kinematics::{SpeedInput, Speeds};
+use crate::solve::prepared::{Compute, PreparedTrain, Scenario};
 
 /// Power in one mesh.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -100,7 +100,7 @@ impl Train {
     pub(crate) fn constrained_speeds(
         &self,
         inputs: &[SpeedInput],
-        extras: &[crate::dynamics::Extra],
+        extras: &[crate::solve::rows::Extra],
     ) -> Result<Speeds> {
         let links: Vec<LinkId> = inputs.iter().map(|i| i.link).collect();
         let (v, condition) = self.velocity_matrix_cond(&links, extras)?;
@@ -113,7 +113,7 @@ impl Train {
                 .sum();
         }
         let ratios = self.ratios()?;
-        let residual = crate::kinematics::willis_residual(self, &ratios, &speed);
+        let residual = crate::solve::kinematics::willis_residual(self, &ratios, &speed);
         Ok(Speeds {
             known: self.links().iter().map(|l| l.sized).collect(),
             speed,

@@ -10,8 +10,8 @@
 
 use serde::Serialize;
 
-use crate::exact::{self, Q};
-use crate::train::{ElementId, Train, Transmission};
+use crate::model::train::{ElementId, Train, Transmission};
+use crate::numerics::exact::{self, Q};
 
 use super::GearAnalysis;
 

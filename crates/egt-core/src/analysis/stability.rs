@@ -53,10 +53,10 @@ use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use serde::{Serialize, Serializer};
 
 use crate::error::{AnalysisError, Error, Result, SpecErrorKind};
-use crate::exact::{self, Q};
-use crate::kinematics::SpeedInput;
-use crate::linalg::{COND_WARN, Lu};
-use crate::train::{Curve, LinkId, Train};
+use crate::model::train::{Curve, LinkId, Train};
+use crate::numerics::exact::{self, Q};
+use crate::numerics::linalg::{COND_WARN, Lu};
+use crate::solve::kinematics::SpeedInput;
 use num_traits::Zero;
 
 /// Largest relative ||psi_w V|| (eq. 24) accepted without a warning.
@@ -551,10 +551,12 @@ impl Train {
             })
             .collect::<Option<_>>()?;
         let n = self.coordinates().len();
-        let psi =
-            crate::topology::willis_exact(self.links().len(), self.frame(), self.circuits(), |m| {
-                taus[m].clone()
-            });
+        let psi = crate::model::topology::willis_exact(
+            self.links().len(),
+            self.frame(),
+            self.circuits(),
+            |m| taus[m].clone(),
+        );
         let basis = exact::nullspace(&psi, n);
         let slopes: Vec<Q> = self
             .coordinates()
@@ -583,7 +585,7 @@ impl Train {
     ///
     /// # Errors
     /// As [`Train::velocity_matrix`] (wrong count, links that do not determine
-    /// the train, [`AnalysisError::IllConditioned`] past [`COND_REFUSE`](crate::linalg::COND_REFUSE)) and
+    /// the train, [`AnalysisError::IllConditioned`] past [`COND_REFUSE`](crate::numerics::linalg::COND_REFUSE)) and
     /// [`Train::mass_matrix`]; a non-finite curve.
     pub fn reduced_model(&self, coordinates: &[LinkId], curves: &[Curve]) -> Result<ReducedModel> {
         self.reduced_model_from(coordinates, CoordinateSource::Given, curves)

@@ -60,13 +60,13 @@ use std::str::FromStr;
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
-use crate::dynamics::{DynamicsRequest, InverseDynamics};
+use crate::analysis::dynamics::{DynamicsRequest, InverseDynamics};
+use crate::analysis::stability::{InertiaSplit, RK4_REAL_LIMIT, ReducedModel, num};
 use crate::error::{AnalysisError, Error, Result, SpecErrorKind};
-use crate::kinematics::willis_residual;
-use crate::linalg::Lu;
-use crate::mass::MassMatrix;
-use crate::stability::{InertiaSplit, RK4_REAL_LIMIT, ReducedModel, num};
-use crate::train::{Curve, LinkId, Train};
+use crate::model::mass::MassMatrix;
+use crate::model::train::{Curve, LinkId, Train};
+use crate::numerics::linalg::Lu;
+use crate::solve::kinematics::willis_residual;
 
 /// Stop when a speed exceeds this [rad/s]: the solution has blown up.
 pub const DIVERGED_SPEED: f64 = 1e100;
@@ -551,7 +551,7 @@ impl<'a> ReducedDynamics<'a> {
         &mut self,
         t: f64,
         x: &DVector<f64>,
-    ) -> Option<crate::stability::Stability> {
+    ) -> Option<crate::analysis::stability::Stability> {
         let j = self.jr(t, x);
         let mut lin = self.model.clone();
         lin.basis_slope = (&j + j.transpose()) * 0.5;

@@ -14,11 +14,11 @@ use petgraph::visit::EdgeRef;
 use rustworkx_core::connectivity::articulation_points;
 use rustworkx_core::planar::is_planar;
 
-use crate::circuits::{self, FundamentalCircuit};
 use crate::error::TopologyError;
-use crate::exact::{Q, QMatrix};
-use crate::modp;
-use crate::train::{Edge, GearPair, Link, LinkId, Revolute, RevoluteId};
+use crate::model::circuits::{self, FundamentalCircuit};
+use crate::model::train::{Edge, GearPair, Link, LinkId, Revolute, RevoluteId};
+use crate::numerics::exact::{Q, QMatrix};
+use crate::numerics::modp;
 
 /// The tree left by deleting the gear edges, rooted at the frame.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -474,7 +474,7 @@ pub(crate) fn willis_exact(
             // eq. (2): psi_m = w_i - tau w_j + (tau - 1) w_k
             for (l, v) in [c.gear_i, c.gear_j, c.carrier]
                 .into_iter()
-                .zip(crate::equations::willis_row_exact(&t))
+                .zip(crate::model::equations::willis_row_exact(&t))
             {
                 if let Some(k) = col(l) {
                     row[k] += v;

@@ -5,6 +5,9 @@
 //! graph, and nothing downstream reads the spec again. The whole format is
 //! described for users in `docs/spec.md`; `egt schema` prints its JSON Schema.
 
+pub(crate) mod expand;
+pub mod parse;
+
 use indexmap::IndexMap;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};

@@ -2,7 +2,7 @@
 //! fundamental circuit (eq. 2), in floating point and in exact rationals.
 //! Every solver, residual and Jacobian builds its rows from here.
 
-use crate::exact::{self, Q};
+use crate::numerics::exact::{self, Q};
 
 /// The Willis row of eq. (2), the coefficients of (w_i, w_j, w_k) in
 /// psi_m = w_i - tau w_j + (tau - 1) w_k for gear i, gear j and the carrier.

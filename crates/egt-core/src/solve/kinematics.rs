@@ -11,11 +11,11 @@ use nalgebra::DMatrix;
 use num_traits::Zero;
 use serde::Serialize;
 
-use crate::equations::{self, willis_row};
 use crate::error::{AnalysisError, Error, Result};
-use crate::exact::{self, Q, QMatrix};
-use crate::linalg::{COND_REFUSE, COND_WARN, Lu};
-use crate::train::{LinkId, Train};
+use crate::model::equations::{self, willis_row};
+use crate::model::train::{LinkId, Train};
+use crate::numerics::exact::{self, Q, QMatrix};
+use crate::numerics::linalg::{COND_REFUSE, COND_WARN, Lu};
 
 /// One prescribed input speed.
 #[derive(Debug, Clone, PartialEq)]
@@ -268,7 +268,7 @@ impl Train {
             .iter()
             .map(|g| g.ratio.as_ref()?.exact.clone())
             .collect::<Option<_>>()?;
-        Some(crate::topology::willis_exact(
+        Some(crate::model::topology::willis_exact(
             self.links().len(),
             self.frame(),
             self.circuits(),

@@ -18,17 +18,17 @@
 
 use std::ops::Range;
 
-use crate::dynamics::{Extra, Rows, dof_with, link_columns};
+use crate::solve::rows::{Extra, Rows, dof_with, link_columns};
 use num_traits::Zero;
 
-use crate::equations::willis_row;
 use crate::error::{AnalysisError, Result};
-use crate::exact::{self, Q, QMatrix};
-use crate::linalg::Lu;
-use crate::losses::{
+use crate::model::equations::willis_row;
+use crate::model::train::{LinkId, Train};
+use crate::numerics::exact::{self, Q, QMatrix};
+use crate::numerics::linalg::Lu;
+use crate::solve::losses::{
     Directions, Driver, ForceSolution, LossySolver, Meshes, idle_tolerance, mesh_torque,
 };
-use crate::train::{LinkId, Train};
 
 /// One link's share of the mass matrix.
 #[derive(Debug, Clone)]
@@ -975,9 +975,12 @@ impl Workspace {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::parse::Format;
+    use crate::spec::parse::Format;
 
-    const FIG3: &str = include_str!("../../../examples/fig3_example61.toml");
+    const FIG3: &str = include_str!(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/fig3_example61.toml"
+    ));
 
     #[test]
     fn mass_model_reproduces_mass_matrix() {

@@ -12,10 +12,10 @@
 
 use nalgebra::{DMatrix, SymmetricEigen};
 
-use crate::dynamics::Extra;
+use crate::analysis::transmission::element_constraint;
 use crate::error::{Error, Result};
-use crate::train::{ElementId, Train};
-use crate::transmission::element_constraint;
+use crate::model::train::{ElementId, Train};
+use crate::solve::rows::Extra;
 
 /// Eigenvalues of `A^T A` below this fraction of the largest span the null space.
 pub const NULL_TOLERANCE: f64 = 1e-12;
@@ -99,12 +99,15 @@ pub fn mode_basis(train: &Train, locked: &[ElementId]) -> Result<ModeBasis> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::parse::Format;
-    use crate::shift_dynamics::lockup::lock_projection;
+    use crate::motion::shift_dynamics::lockup::lock_projection;
+    use crate::spec::parse::Format;
     use nalgebra::DVector;
 
     fn zf() -> Train {
-        let text = include_str!("../../../../examples/zf_8hp70.toml");
+        let text = include_str!(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../examples/zf_8hp70.toml"
+        ));
         Train::from_str(text, Format::Toml, "zf_8hp70.toml").expect("example parses")
     }
 
@@ -129,7 +132,7 @@ mod tests {
             );
             // Every link speed per unit input matches the steady analysis.
             for (l, s) in g.speed.iter().enumerate() {
-                let link = crate::train::LinkId::from_index(l);
+                let link = crate::model::train::LinkId::from_index(l);
                 if let (Some(s), Some(k)) = (s, train.coordinate(link)) {
                     assert!((col[k] / col[ki] - s).abs() < 1e-9 * (1.0 + s.abs()));
                 }

@@ -23,8 +23,8 @@ use nalgebra::DMatrix;
 use serde::Serialize;
 
 use crate::error::{AnalysisError, Result};
+use crate::model::train::{LevelId, LinkId, Train};
 use crate::spec::MeshKind;
-use crate::train::{LevelId, LinkId, Train};
 
 /// |sum_c e^(i psi_c)| at or below this multiple of the copies counts as
 /// balanced (evenly spaced phases given in degrees sum to round-off).

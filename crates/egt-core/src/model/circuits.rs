@@ -8,8 +8,8 @@
 use serde::Serialize;
 
 use crate::error::TopologyError;
-use crate::topology::Tree;
-use crate::train::{GearId, GearPair, LevelId, Link, LinkId, Revolute};
+use crate::model::topology::Tree;
+use crate::model::train::{GearId, GearPair, LevelId, Link, LinkId, Revolute};
 
 /// One row of the fundamental-circuit table (Table 1).
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]

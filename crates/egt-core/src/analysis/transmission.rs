@@ -32,13 +32,14 @@
 use num_traits::{Signed, Zero};
 use serde::Serialize;
 
-use crate::dynamics::{DynamicsRequest, Extra, MeshLoad};
-use crate::error::{AnalysisError, Error, Result, suggest};
-use crate::exact::{self, Q, QMatrix};
-use crate::kinematics::{RelativeSpeed, SpeedInput};
-use crate::power::{MeshPower, PowerRequest};
+use crate::analysis::dynamics::{DynamicsRequest, MeshLoad};
+use crate::analysis::power::{MeshPower, PowerRequest};
+use crate::error::{AnalysisError, Error, Result, TransmissionError, suggest};
+use crate::model::train::{ElementId, GearId, LinkId, ShiftElement, Train, Transmission};
+use crate::numerics::exact::{self, Q, QMatrix};
+use crate::solve::kinematics::{RelativeSpeed, SpeedInput};
+use crate::solve::rows::Extra;
 use crate::spec::ElementKind;
-use crate::train::{ElementId, GearId, LinkId, ShiftElement, Train, Transmission};
 
 mod table;
 
@@ -51,124 +52,10 @@ pub const HOLD_TOLERANCE: f64 = 1e-9;
 /// balances; above it the state carries a warning.
 pub const BALANCE_TOLERANCE: f64 = 1e-9;
 
-/// Why a gear state cannot be analysed as written. Every variant names the state.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum TransmissionError {
-    /// The spec has no `[transmission]` section, or it lists no states.
-    #[error(
-        "no gear states: give `[transmission]` with `input`, `output` and `[transmission.states]`"
-    )]
-    NoStates,
-    /// A state name that the spec does not define.
-    #[error("unknown gear state `{state}`{}", suggestion.as_ref().map(|s| format!(" (did you mean `{s}`?)")).unwrap_or_default())]
-    UnknownState {
-        /// The name asked for.
-        state: String,
-        /// The closest defined name, if close.
-        suggestion: Option<String>,
-    },
-    /// The engaged elements leave more than one DOF.
-    #[error(
-        "gear state `{state}` leaves {dof} degrees of freedom: with the input held, links {} can still turn; engage another element",
-        list(free)
-    )]
-    Underconstrained {
-        /// The state.
-        state: String,
-        /// Its DOF.
-        dof: usize,
-        /// Links not determined by the input speed.
-        free: Vec<String>,
-    },
-    /// The engaged elements leave no DOF: the train is tied up.
-    #[error(
-        "gear state `{state}` locks the train (0 degrees of freedom): elements {} together tie it up",
-        list(elements)
-    )]
-    Locked {
-        /// The state.
-        state: String,
-        /// The engaged elements.
-        elements: Vec<String>,
-    },
-    /// Some engaged elements impose constraints already imposed by the others
-    /// (and by the gear pairs): their torques are statically indeterminate.
-    #[error(
-        "gear state `{state}`: elements {} are redundant: their constraints are linearly dependent{}, so their torques are statically indeterminate (the state has {dof} degree(s) of freedom)",
-        list(elements),
-        if gears.is_empty() { String::new() } else { format!(" together with gear pairs {}", list(gears)) }
-    )]
-    Redundant {
-        /// The state.
-        state: String,
-        /// Engaged elements in a dependent set of rows.
-        elements: Vec<String>,
-        /// Gear pairs whose Willis rows are in the same dependent set.
-        gears: Vec<String>,
-        /// The state's DOF.
-        dof: usize,
-    },
-    /// The state holds the input while other links turn.
-    #[error(
-        "gear state `{state}` holds the input `{input}` at rest (links {} move without it)",
-        list(moving)
-    )]
-    InputHeld {
-        /// The state.
-        state: String,
-        /// The input link.
-        input: String,
-        /// The links that move in the state's one free motion.
-        moving: Vec<String>,
-    },
-    /// The state holds the output while the input turns: no finite ratio.
-    #[error(
-        "gear state `{state}` holds the output `{output}` at rest while the input turns: no finite ratio"
-    )]
-    OutputHeld {
-        /// The state.
-        state: String,
-        /// The output link.
-        output: String,
-    },
-    /// An analysis of a valid state failed.
-    #[error("gear state `{state}`: {cause}")]
-    InState {
-        /// The state.
-        state: String,
-        /// What failed.
-        cause: Box<Error>,
-    },
-}
-
 /// The most gear states one transmission may list. Real automatics have about
 /// ten; the bound keeps `egt shift` to well under a second (100,000 states took
 /// 29 s and 800 MB before it).
 pub const MAX_GEAR_STATES: usize = 256;
-
-impl TransmissionError {
-    /// The stable code of [`crate::Error::code`].
-    pub fn code(&self) -> &'static str {
-        match self {
-            TransmissionError::NoStates => "no_states",
-            TransmissionError::UnknownState { .. } => "unknown_state",
-            TransmissionError::Underconstrained { .. } => "underconstrained",
-            TransmissionError::Locked { .. } => "locked_state",
-            TransmissionError::Redundant { .. } => "redundant_elements",
-            TransmissionError::InputHeld { .. } => "input_held",
-            TransmissionError::OutputHeld { .. } => "output_held",
-            TransmissionError::InState { cause, .. } => cause.code(),
-            #[allow(unreachable_patterns)]
-            _ => "transmission",
-        }
-    }
-}
-
-fn list(items: &[String]) -> String {
-    let quoted: Vec<String> = items.iter().map(|s| format!("`{s}`")).collect();
-    quoted.join(", ")
-}
 
 /// How an open one-way element behaves at the state's speeds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -480,7 +367,7 @@ impl<'a> GearSolver<'a> {
                     })
             })
             .collect::<Result<_>>()?;
-        let willis = crate::topology::willis_exact(
+        let willis = crate::model::topology::willis_exact(
             train.links().len(),
             train.frame(),
             train.circuits(),
@@ -858,7 +745,7 @@ fn left_nullspace(a: &QMatrix) -> Vec<Vec<Q>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::parse::Format;
+    use crate::spec::parse::Format;
 
     /// One simple set, sun 30 / ring 72, ring held by brake `B`, sun = input,
     /// carrier = output; a clutch `C` can lock sun to carrier.

@@ -1,0 +1,9 @@
+//! Layer 4, the solver: [`PreparedTrain`](prepared::PreparedTrain) and its
+//! `Workspace`, the one place where eq. (2), (8), (10) and the lossy mesh rows
+//! are assembled and solved; the lossy direction search; exact kinematics with
+//! its diagnosis of singular inputs.
+
+pub mod kinematics;
+pub(crate) mod losses;
+pub mod prepared;
+pub mod rows;
