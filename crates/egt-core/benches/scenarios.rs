@@ -14,7 +14,11 @@ use divan::Bencher;
 use divan::counter::ItemsCount;
 use egt_core::batch::{BatchPlan, BatchSpec};
 use egt_core::solve::prepared::Compute;
-use egt_core::{Format, Train, families, parse_spec};
+use egt_core::{Format, Train, parse_spec};
+
+#[path = "../lab/mod.rs"]
+mod lab;
+use lab::families;
 
 fn main() {
     divan::main();
@@ -109,7 +113,7 @@ macro_rules! phases {
             #[divan::bench(args = $sizes)]
             fn topology(b: Bencher, links: usize) {
                 let t = build(&$make(links));
-                b.bench(|| families::topology_phase(black_box(&t)));
+                b.bench(|| black_box(&t).reanalyse_topology());
             }
 
             #[divan::bench(args = $sizes)]

@@ -11,9 +11,12 @@ use std::fmt::Write as _;
 use std::hint::black_box;
 use std::time::Instant;
 
-use egt_core::accuracy::{Method, Problem};
+#[path = "../lab/mod.rs"]
+mod lab;
 use egt_core::numerics::linalg::COND_REFUSE;
-use egt_core::{Format, Train, families};
+use egt_core::{Format, Train};
+use lab::accuracy::{Method, Problem};
+use lab::families;
 use serde_json::json;
 
 /// Chain sizes, in links (a chain of k sets has 2 + 2k links).

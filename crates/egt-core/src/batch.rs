@@ -18,10 +18,39 @@
 //! ```
 //! use egt_core::batch::{BatchPlan, BatchSpec};
 //! use egt_core::solve::prepared::Compute;
-//! use egt_core::{Format, Train, families};
+//! use egt_core::{Format, Train};
 //!
 //! // Two planetary sets in series (6 links, 1 DOF), with its [analysis] data.
-//! let train = Train::from_str(&families::planetary_chain(2), Format::Toml, "chain").unwrap();
+//! let spec = r#"
+//!     frame = "case"
+//!     links = [
+//!         { name = "s1", inertia = 2e-4 },
+//!         { name = "c1", inertia = 3.5e-3, mass = 1.8 },
+//!         { name = "P1.planet", inertia = 1.5e-5, mass = 0.08, copies = 3 },
+//!         { name = "c2", inertia = 7e-3, mass = 1.8 },
+//!         { name = "P2.planet", inertia = 1.5e-5, mass = 0.08, copies = 3 },
+//!     ]
+//!     [[planetary]]
+//!     name = "P1"
+//!     sun = "s1"
+//!     ring = "case"
+//!     carrier = "c1"
+//!     teeth = { sun = 28, planet = 22, ring = 72 }
+//!     module = 1.5e-3
+//!     [[planetary]]
+//!     name = "P2"
+//!     sun = "c1"
+//!     ring = "case"
+//!     carrier = "c2"
+//!     teeth = { sun = 22, planet = 27, ring = 76 }
+//!     module = 1.5e-3
+//!     [analysis]
+//!     speeds = { s1 = 157.0 }
+//!     accelerations = { s1 = 12.5 }
+//!     torques = { c2 = -40.0 }
+//!     driving = ["s1"]
+//! "#;
+//! let train = Train::from_str(spec, Format::Toml, "chain").unwrap();
 //! let plan = BatchPlan::new(&train, &BatchSpec::from_analysis(&train, Compute::Dynamics).unwrap()).unwrap();
 //! // Three scenarios: the spec's values with three loads on the output carrier.
 //! let load = plan.parameter("torque.c2").unwrap();

@@ -34,20 +34,25 @@
 
 #![deny(missing_docs)]
 
-// The layers, bottom to top; no module imports one above it (`scripts/layers.py`).
+// The layers, bottom to top (a blank line between layers keeps rustfmt from
+// sorting them); no module imports one above it (`scripts/layers.py`).
+pub mod error;
+
+pub mod numerics;
+
+pub mod spec;
+
+pub mod model;
+
+pub mod solve;
+
 pub mod analysis;
+
+pub mod motion;
+
 pub mod batch;
 pub mod design;
-pub mod error;
-pub mod model;
-pub mod motion;
-pub mod numerics;
-pub mod solve;
-pub mod spec;
 pub mod synthesis;
-
-pub mod accuracy;
-pub mod families;
 
 pub use analysis::dynamics::{DynamicsRequest, InverseDynamics, MeshLoad};
 pub use analysis::power::{Driver, LinkPower, MeshPower, PowerFlow, PowerRequest};

@@ -931,23 +931,20 @@ mod tests {
 
     #[test]
     fn specs_file_one_train_per_line_with_a_broken_line() {
-        let good = egt_core::parse_spec(
-            &egt_core::families::planetary_chain(2),
-            egt_core::Format::Toml,
-            "x",
-        )
-        .unwrap_or_else(|e| panic!("{e}"));
+        let text = std::fs::read_to_string(FIG3).unwrap_or_else(|e| panic!("{FIG3}: {e}"));
+        let good = egt_core::parse_spec(&text, egt_core::Format::Toml, "x")
+            .unwrap_or_else(|e| panic!("{e}"));
         let json = serde_json::to_string(&good).unwrap_or_default();
         let specs = temp(
             "specs.jsonl",
             &format!("{json}\n{{\"frame\": 3}}\n{json}\n"),
         );
-        let (text, r) = batch(&["--specs", &specs, "--columns", "driving_torque.s1"]);
+        let (text, r) = batch(&["--specs", &specs, "--columns", "driving_torque.2"]);
         let lines = json_lines(&text);
         assert_eq!(lines.len(), 3);
         assert!(lines[1].get("error").is_some());
-        assert_eq!(lines[0]["driving_torque.s1"], lines[2]["driving_torque.s1"]);
-        assert!(lines[0]["driving_torque.s1"].as_f64().is_some());
+        assert_eq!(lines[0]["driving_torque.2"], lines[2]["driving_torque.2"]);
+        assert!(lines[0]["driving_torque.2"].as_f64().is_some());
         assert!(r.is_err());
     }
 

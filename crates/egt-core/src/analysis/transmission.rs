@@ -279,7 +279,8 @@ impl Train {
     /// Analyse every gear state and the table across them.
     ///
     /// ```
-    /// use egt_core::{Format, Train, exact};
+    /// use egt_core::numerics::exact;
+    /// use egt_core::{Format, Train};
     ///
     /// // One simple set (sun 30, ring 72): brake the ring for low, lock the set for direct.
     /// let spec = r#"

@@ -235,6 +235,35 @@ pub enum Edge {
 }
 
 impl Train {
+    /// Run the topology phase of [`Train::from_spec`] again on this validated
+    /// train (eq. 1 checks, the turning-pair tree, the circuit table of
+    /// Table 1) and return the number of fundamental circuits. Validation does
+    /// this once; the benchmarks time it apart from parsing.
+    ///
+    /// # Errors
+    /// None for a train that was valid when built; the [`crate::TopologyError`] otherwise.
+    pub fn reanalyse_topology(&self) -> Result<usize> {
+        let clutches: Vec<[LinkId; 2]> = self
+            .elements
+            .iter()
+            .filter(|e| matches!(e.kind, ElementKind::Clutch | ElementKind::OneWayClutch))
+            .filter_map(|e| match e.links.as_slice() {
+                &[a, b] => Some([a, b]),
+                _ => None,
+            })
+            .collect();
+        let topo = topology::analyse(
+            &self.links,
+            self.frame,
+            &self.levels,
+            &self.revolutes,
+            &self.gears,
+            &self.graph,
+            &clutches,
+        )?;
+        Ok(topo.circuits.len())
+    }
+
     /// Parse and validate a spec from text.
     ///
     /// # Errors

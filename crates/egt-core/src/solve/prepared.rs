@@ -204,8 +204,9 @@ impl MassModel {
 
 impl MassModel {
     /// \[M\] in exact rationals, from exact inertias and masses (the offsets
-    /// taken exactly as their f64 values): the reference of the accuracy study.
-    pub(crate) fn fill_exact(&self, inertia: &[Q], mass: &[Q]) -> QMatrix {
+    /// taken exactly as their f64 values): a reference to verify the float
+    /// fill against (the accuracy study in `lab/` does).
+    pub fn fill_exact(&self, inertia: &[Q], mass: &[Q]) -> QMatrix {
         let n = self.n;
         let mut m = vec![vec![Q::zero(); n]; n];
         for e in &self.entries {
@@ -543,7 +544,7 @@ impl PreparedTrain {
     /// matrix (2) as a sum of terms `f(row, column, coefficient)` whose
     /// coefficients are the data themselves (1, -tau, tau, -1), so that a
     /// residual built from them carries no rounding of tau - 1.
-    pub(crate) fn for_each_term(
+    pub fn for_each_term(
         &self,
         ratios: &[f64],
         system: usize,
@@ -579,8 +580,9 @@ impl PreparedTrain {
     }
 
     /// The speed system, \[Psi_w\] and the force matrix (not transposed) in
-    /// exact rationals, for exact ratios: the reference of the accuracy study.
-    pub(crate) fn exact_matrices(&self, ratios: &[Q]) -> [QMatrix; 3] {
+    /// exact rationals, for exact ratios: a reference to verify float solves
+    /// against (the accuracy study in `lab/` does).
+    pub fn exact_matrices(&self, ratios: &[Q]) -> [QMatrix; 3] {
         let n = self.n;
         let mut base = vec![vec![Q::zero(); n]; n];
         for (m, (cols, t)) in self.circuits.iter().zip(ratios).enumerate() {

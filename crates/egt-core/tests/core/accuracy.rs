@@ -4,9 +4,10 @@
 //! more than round-off); past COND_REFUSE egt refuses instead of returning
 //! numbers, and below it its error stays within what the condition allows.
 
-use egt_core::accuracy::{Method, Problem, relative_error};
+use crate::lab::accuracy::{Method, Problem, relative_error, residual};
+use crate::lab::families;
 use egt_core::numerics::linalg::{COND_REFUSE, COND_WARN};
-use egt_core::{AnalysisError, Error, SpeedInput, Train, families};
+use egt_core::{AnalysisError, Error, SpeedInput, Train};
 
 use crate::util::train;
 
@@ -205,4 +206,31 @@ fn relative_error_is_normwise() {
     assert_eq!(relative_error(&[1.0, 2.0], &[1.0, 2.0]), 0.0);
     assert_eq!(relative_error(&[1.0, 2.5], &[1.0, 2.0]), 0.25);
     assert!(relative_error(&[f64::NAN], &[1.0]).is_infinite());
+}
+
+#[test]
+fn dot2_residual_recovers_what_plain_arithmetic_loses() {
+    // (1 + 2^-30)(1 - 2^-30) - 1 = -2^-60 exactly; plain f64 gives 0.
+    let e = 2f64.powi(-30);
+    let r = residual(&[1.0 + e], &[1.0 - e], 1.0);
+    assert_eq!(r, 2f64.powi(-60));
+}
+
+#[test]
+fn families_are_valid_one_dof_trains_of_the_stated_size() {
+    assert_eq!(train(&families::gear_pair()).links().len(), 3);
+    for k in 1..=14 {
+        let t = train(&families::planetary_chain(k));
+        assert_eq!((t.links().len(), t.dof()), (2 + 2 * k, 1), "chain {k}");
+    }
+    for l in 3..=30 {
+        let t = train(&families::nest(l));
+        assert_eq!((t.links().len(), t.dof()), (l, 1), "nest {l}");
+    }
+    for seed in 0..40 {
+        let t = train(&families::random_train(seed, 1 + (seed as usize % 6), 4.0));
+        assert_eq!(t.dof(), 1, "seed {seed}");
+    }
+    assert_eq!(train(&families::near_locked(1e-6)).dof(), 1);
+    assert_eq!(train(&families::stationary_planet(1e-6)).dof(), 1);
 }

@@ -184,7 +184,7 @@ proptest! {
 
 #[test]
 fn parallel_run_equals_row_by_row_and_reports_bad_rows() {
-    let t = train(&egt_core::families::planetary_chain(2));
+    let t = train(&crate::lab::families::planetary_chain(2));
     let p = plan(&t, Compute::Power);
     let np = p.parameters().len();
     let nq = p.outputs().len();
@@ -224,7 +224,7 @@ fn parallel_run_equals_row_by_row_and_reports_bad_rows() {
 #[test]
 fn ill_conditioned_rows_are_refused_not_returned() {
     // Fig. 3 near lock: tau_1 tau_2 -> 1 makes [Psi_w] singular.
-    let t = train(&egt_core::families::near_locked(0.1));
+    let t = train(&crate::lab::families::near_locked(0.1));
     let p = plan(&t, Compute::Dynamics);
     let c2 = p
         .parameter("ratio.G2")
@@ -268,7 +268,7 @@ fn reused_factorisations_give_the_numbers_of_a_fresh_worker() {
     for compute in [Compute::Kinematics, Compute::Dynamics, Compute::Power] {
         for t in [
             crate::util::example("fig3_example61.toml"),
-            train(&egt_core::families::planetary_chain(3)),
+            train(&crate::lab::families::planetary_chain(3)),
         ] {
             let p = plan(&t, compute);
             let ratio = 0;

@@ -12,5 +12,9 @@ mod alloc;
 // The batch API against the single-scenario analyses (kinematics, inverse dynamics, power flow).
 mod batch;
 
+// The accuracy study and the generated train families (not library API).
+#[path = "../../lab/mod.rs"]
+mod lab;
+
 // Trains used across modules: the bundled examples, generated families, random parameters.
 mod util;

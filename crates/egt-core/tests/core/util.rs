@@ -1,8 +1,9 @@
 //! Trains shared by the test modules.
 
+use crate::lab::families;
 use egt_core::batch::{BatchPlan, BatchSpec};
 use egt_core::solve::prepared::Compute;
-use egt_core::{DynamicsRequest, Format, PowerRequest, SpeedInput, Train, families};
+use egt_core::{DynamicsRequest, Format, PowerRequest, SpeedInput, Train};
 
 /// Build a train from TOML, panicking with the error and the text.
 pub fn train(text: &str) -> Train {

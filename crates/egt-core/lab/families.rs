@@ -164,7 +164,7 @@ pub fn random_train(seed: u64, sets: usize, inertia_decades: f64) -> String {
             sets,
             inertia_decades,
         );
-        if crate::Train::from_str(&last, crate::Format::Toml, "random").is_ok() {
+        if egt_core::Train::from_str(&last, egt_core::Format::Toml, "random").is_ok() {
             break;
         }
     }
@@ -269,64 +269,4 @@ pub fn stationary_planet(eps: f64) -> String {
     );
     analysis(&mut s, "planet", "carrier");
     s
-}
-
-/// Run the topology checks, the tree and the circuit table (Table 1) of a
-/// validated train again, and return the number of circuits: the benchmarks
-/// time this phase apart from parsing and field validation, which
-/// [`crate::Train::from_spec`] performs together with it.
-///
-/// # Errors
-/// None for a train that was valid when built; the [`crate::TopologyError`] otherwise.
-#[doc(hidden)]
-pub fn topology_phase(train: &crate::Train) -> crate::Result<usize> {
-    use crate::spec::ElementKind;
-    let clutches: Vec<[crate::LinkId; 2]> = train
-        .elements
-        .iter()
-        .filter(|e| matches!(e.kind, ElementKind::Clutch | ElementKind::OneWayClutch))
-        .filter_map(|e| match e.links.as_slice() {
-            &[a, b] => Some([a, b]),
-            _ => None,
-        })
-        .collect();
-    let topo = crate::model::topology::analyse(
-        &train.links,
-        train.frame,
-        &train.levels,
-        &train.revolutes,
-        &train.gears,
-        &train.graph,
-        &clutches,
-    )?;
-    Ok(topo.circuits.len())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::{Format, Train};
-
-    fn build(text: &str) -> Train {
-        Train::from_str(text, Format::Toml, "family").unwrap_or_else(|e| panic!("{e}\n{text}"))
-    }
-
-    #[test]
-    fn families_are_valid_one_dof_trains_of_the_stated_size() {
-        assert_eq!(build(&gear_pair()).links().len(), 3);
-        for k in 1..=14 {
-            let t = build(&planetary_chain(k));
-            assert_eq!((t.links().len(), t.dof()), (2 + 2 * k, 1), "chain {k}");
-        }
-        for l in 3..=30 {
-            let t = build(&nest(l));
-            assert_eq!((t.links().len(), t.dof()), (l, 1), "nest {l}");
-        }
-        for seed in 0..40 {
-            let t = build(&random_train(seed, 1 + (seed as usize % 6), 4.0));
-            assert_eq!(t.dof(), 1, "seed {seed}");
-        }
-        assert_eq!(build(&near_locked(1e-6)).dof(), 1);
-        assert_eq!(build(&stationary_planet(1e-6)).dof(), 1);
-    }
 }

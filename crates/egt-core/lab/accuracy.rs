@@ -9,9 +9,9 @@
 //! factoring, substituting. Errors are normwise and relative, per quantity:
 //! ||x - x*||_inf / ||x*||_inf.
 //!
-//! Methods: egt's prepared path ([`crate::solve::prepared::PreparedTrain::solve`],
+//! Methods: egt's prepared path ([`egt_core::solve::prepared::PreparedTrain::solve`],
 //! its in-place LU with the condition estimate and refusal past
-//! [`crate::numerics::linalg::COND_REFUSE`]); the same LU plus one step of iterative
+//! [`egt_core::numerics::linalg::COND_REFUSE`]); the same LU plus one step of iterative
 //! refinement with the residual in doubled precision (Dot2, Ogita-Rump-Oishi);
 //! nalgebra's LU with partial pivoting; faer's LU with partial pivoting;
 //! nalgebra's Householder QR; nalgebra's SVD; and exact rationals.
@@ -22,12 +22,12 @@ use faer::linalg::solvers::Solve;
 use nalgebra::DMatrix;
 use num_traits::Zero;
 
-use crate::batch::{BatchPlan, BatchSpec};
-use crate::error::{AnalysisError, Result};
-use crate::model::train::Train;
-use crate::numerics::exact::{self, Q, QMatrix};
-use crate::numerics::linalg::Lu;
-use crate::solve::prepared::{Compute, PreparedTrain, Scenario, exact_of};
+use egt_core::batch::{BatchPlan, BatchSpec};
+use egt_core::error::{AnalysisError, Result};
+use egt_core::model::train::Train;
+use egt_core::numerics::exact::{self, Q, QMatrix};
+use egt_core::numerics::linalg::Lu;
+use egt_core::solve::prepared::{Compute, PreparedTrain, Scenario};
 
 /// A way of solving the three linear systems of a scenario.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -293,7 +293,7 @@ impl Problem {
         let s = self.scenario();
         let n = pt.n();
         let c = pt.constraints();
-        let singular = || -> crate::Error {
+        let singular = || -> egt_core::Error {
             AnalysisError::Singular {
                 what: "a system of the scenario".into(),
                 detail: "the solver found it singular".into(),
@@ -334,7 +334,7 @@ impl Problem {
         let pt = self.pt();
         let s = self.scenario();
         let (n, c) = (pt.n(), pt.constraints());
-        let singular = || -> crate::Error {
+        let singular = || -> egt_core::Error {
             AnalysisError::Singular {
                 what: "a system of the scenario".into(),
                 detail: "a pivot column is zero".into(),
@@ -426,7 +426,7 @@ impl Problem {
             }
             b
         };
-        let singular = |_| -> crate::Error {
+        let singular = |_| -> egt_core::Error {
             AnalysisError::Singular {
                 what: "a system of the scenario".into(),
                 detail: "exactly singular".into(),
@@ -533,7 +533,7 @@ fn two_sum(a: f64, b: f64) -> (f64, f64) {
 }
 
 /// b - a.x in doubled working precision (Dot2 of Ogita, Rump and Oishi).
-fn residual(a: &[f64], x: &[f64], b: f64) -> f64 {
+pub fn residual(a: &[f64], x: &[f64], b: f64) -> f64 {
     let (mut s, mut c) = (b, 0.0);
     for (&ai, &xi) in a.iter().zip(x) {
         let p = -ai * xi;
@@ -545,15 +545,7 @@ fn residual(a: &[f64], x: &[f64], b: f64) -> f64 {
     s + c
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn dot2_residual_recovers_what_plain_arithmetic_loses() {
-        // (1 + 2^-30)(1 - 2^-30) - 1 = -2^-60 exactly; plain f64 gives 0.
-        let e = 2f64.powi(-30);
-        let r = residual(&[1.0 + e], &[1.0 - e], 1.0);
-        assert_eq!(r, 2f64.powi(-60));
-    }
+/// The exact rational value of a finite float (0 for a non-finite one).
+fn exact_of(v: f64) -> Q {
+    exact::from_f64(v).unwrap_or_else(Q::zero)
 }
