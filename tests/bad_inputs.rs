@@ -2,10 +2,7 @@
 //! user would: the exit code and the words the message must contain. No row
 //! may exit 0, print a non-finite number or take more than an instant.
 
-use std::io::Write;
-use std::process::{Command, Stdio};
-
-use crate::util::root;
+use crate::util::egt;
 
 /// A bad input: a spec (or none), the arguments, the exit code and the words.
 struct Row {
@@ -208,22 +205,8 @@ fn run_with(row: &Row, spec: &str) -> (i32, String) {
     run_args(&args, Some(spec))
 }
 
-/// Run `egt args` from the workspace root, with `stdin` (or nothing) on standard input.
+/// Run `egt args` from the workspace root: the exit code and both streams together.
 fn run_args(args: &[&str], stdin: Option<&str>) -> (i32, String) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_egt"))
-        .args(args)
-        .current_dir(root())
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn egt");
-    let mut pipe = child.stdin.take().expect("stdin");
-    pipe.write_all(stdin.unwrap_or_default().as_bytes())
-        .expect("write stdin");
-    drop(pipe);
-    let out = child.wait_with_output().expect("wait");
-    let text =
-        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
-    (out.status.code().expect("exit code"), text)
+    let r = egt(args, stdin);
+    (r.code, r.stdout + &r.stderr)
 }

@@ -4,11 +4,9 @@
 //! estimates masked) fails here. Failed analyses are part of the record (exit
 //! code and message).
 
-use std::process::Command;
-
 use serde_json::Value;
 
-use crate::util::root;
+use crate::util::egt;
 
 const ANALYSES: [&[&str]; 7] = [
     &["check"],
@@ -60,18 +58,19 @@ fn normalise(v: &mut Value) {
 fn record(example: &str) -> String {
     let mut out = serde_json::Map::new();
     for args in ANALYSES {
-        let r = Command::new(env!("CARGO_BIN_EXE_egt"))
-            .args(args.iter().copied().chain([example, "--format", "json"]))
-            .current_dir(root())
-            .output()
-            .expect("run egt");
-        let mut entry = serde_json::json!({ "exit": r.status.code() });
-        if r.status.success() {
-            let mut v: Value = serde_json::from_slice(&r.stdout).expect("JSON output");
+        let argv: Vec<&str> = args
+            .iter()
+            .copied()
+            .chain([example, "--format", "json"])
+            .collect();
+        let r = egt(&argv, None);
+        let mut entry = serde_json::json!({ "exit": r.code });
+        if r.code == 0 {
+            let mut v: Value = serde_json::from_str(&r.stdout).expect("JSON output");
             normalise(&mut v);
             entry["output"] = v;
         } else {
-            entry["error"] = Value::String(String::from_utf8_lossy(&r.stderr).trim().to_string());
+            entry["error"] = Value::String(r.stderr.trim().to_string());
         }
         out.insert(args.join(" "), entry);
     }

@@ -18,7 +18,7 @@
 //! its eq. (16)-(18) carry the opposite sign: dw_d = X e^(lambda t) gives
 //! (lambda \[M\] - \[K\]) X = 0, so a motor whose torque falls as it speeds up
 //! (K_l < 0) is stabilising. `docs/stability.md` and `docs/errata.md` give the
-//! argument, and `tests/stability.rs` proves it by simulation.
+//! argument, and `crates/egt-core/tests/analyses/stability.rs` proves it by simulation.
 //!
 //! \[M\] is symmetric positive semi-definite and \[K\] is symmetric (each curve
 //! acts on one link's own speed), so every eigenvalue is real: a rigid train
