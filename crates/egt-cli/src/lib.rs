@@ -7,10 +7,12 @@
 //! syntax, spec, topology and gear-state errors; 1 for analysis and I/O
 //! errors. Errors print to stderr as `error: ...`.
 
+mod args;
 pub mod cli;
 pub mod commands;
 mod input;
 mod report;
+mod svg;
 
 use std::ffi::OsString;
 use std::io::{self, Write};

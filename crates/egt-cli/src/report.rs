@@ -4,6 +4,7 @@
 
 use std::io::{self, Write};
 
+use egt_core::Train;
 use egt_core::numerics::exact::{self, Q};
 use serde::Serialize;
 
@@ -145,6 +146,26 @@ pub fn json_document(out: &mut dyn Write, value: &impl Serialize) -> anyhow::Res
     })?;
     writeln!(out)?;
     Ok(())
+}
+
+/// The train's name, or the source it came from.
+pub fn title(train: &Train, source: &str) -> String {
+    train
+        .name()
+        .map_or_else(|| source.to_string(), str::to_string)
+}
+
+/// Six significant digits, scientific when small or large.
+pub fn sci(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    let a = v.abs();
+    if (1e-3..1e6).contains(&a) {
+        float(v)
+    } else {
+        format!("{v:.6e}")
+    }
 }
 
 #[cfg(test)]

@@ -59,6 +59,22 @@ impl From<TransmissionError> for Error {
 }
 
 impl Error {
+    /// The same error with the hint of a missing-data refusal replaced: how a
+    /// front end (the CLI, Python) names its own flag or keyword for the data.
+    #[must_use]
+    pub fn with_hint(self, hint: &str) -> Self {
+        match self {
+            Error::Analysis(AnalysisError::MissingData { what, analysis, .. }) => {
+                Error::Analysis(AnalysisError::MissingData {
+                    what,
+                    analysis,
+                    hint: hint.into(),
+                })
+            }
+            e => e,
+        }
+    }
+
     /// A spec error at `path`.
     pub fn spec(path: impl Into<String>, kind: SpecErrorKind) -> Self {
         Error::Spec {

@@ -54,7 +54,7 @@ pub mod batch;
 pub mod design;
 pub mod synthesis;
 
-pub use analysis::dynamics::{DynamicsRequest, InverseDynamics, MeshLoad};
+pub use analysis::dynamics::{DynamicsRequest, InverseDynamics, LoadOverrides, MeshLoad};
 pub use analysis::power::{Driver, LinkPower, MeshPower, PowerFlow, PowerRequest};
 pub use analysis::stability::{
     CoordinateSource, Mode, OperatingPoint, ReducedModel, Stability, StabilityReport,
@@ -73,7 +73,7 @@ pub use model::train::{Edge, GearId, GearPair, LevelId, Link, LinkId, Ratio, Rev
 pub use model::train::{ElementId, GearState, ShiftElement, Transmission};
 pub use motion::simulate::{
     LinearCurves, Method, ReducedDynamics, Sample, Simulation, SimulationOptions,
-    SimulationRequest, TorqueFn, TorqueModel,
+    SimulationOverrides, SimulationRequest, TorqueFn, TorqueModel,
 };
 pub use solve::kinematics::{KinematicsPlan, RelativeSpeed, SpeedInput, Speeds};
 pub use solve::rows::Extra;

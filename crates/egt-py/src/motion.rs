@@ -8,7 +8,7 @@ use std::cell::RefCell;
 use egt_core::analysis::stability::{CoordinateSource, OperatingSource, StabilityRequest, Verdict};
 use egt_core::model::train::Curve;
 use egt_core::motion::simulate::{
-    LinearCurves, Method, SimulationOptions, SimulationRequest, TorqueModel,
+    LinearCurves, SimulationOverrides, SimulationRequest, TorqueModel,
 };
 use egt_core::{LinkId, Train};
 use numpy::{PyArray1, PyArrayMethods, PyUntypedArrayMethods};
@@ -201,35 +201,32 @@ pub fn simulate<'py>(
 ) -> Result<Bound<'py, PyDict>> {
     guard(|| {
         let t = &core.train;
-        let mut req = match t_end {
-            Some(t_end) => SimulationRequest {
-                initial: Vec::new(),
-                options: SimulationOptions {
-                    t_end,
-                    dt: dt.unwrap_or(t_end / 1000.0),
-                    method: Method::default(),
-                    every,
-                },
-            },
-            None => SimulationRequest::from_spec(t)?,
-        };
-        if let Some(dt) = dt {
-            req.options.dt = dt;
-        }
-        if let Some(m) = &method {
-            req.options.method = m.parse().map_err(value_error)?;
-        }
-        req.options.every = every;
-        for (v, what) in [(req.options.t_end, "t_end"), (req.options.dt, "dt")] {
-            if !(v.is_finite() && v > 0.0) {
+        // Keyword arguments are checked as arguments (ValueError); the spec's
+        // values are checked by the core, naming their field.
+        for (v, what) in [(t_end, "t_end"), (dt, "dt")] {
+            if let Some(v) = v
+                && !(v.is_finite() && v > 0.0)
+            {
                 return Err(value_error(format!(
                     "{what} must be a positive number, got {v}"
                 )));
             }
         }
-        if let Some(i) = &initial {
-            req.initial = convert::valued(t, i, "initial")?;
-        }
+        let over = SimulationOverrides {
+            t_end,
+            dt,
+            method: method
+                .as_deref()
+                .map(str::parse)
+                .transpose()
+                .map_err(value_error)?,
+            every: Some(every),
+            initial: initial
+                .as_ref()
+                .map(|i| convert::valued(t, i, "initial"))
+                .transpose()?,
+        };
+        let req = SimulationRequest::resolve(t, &over)?;
         let sim = match (&torque, &curves) {
             (Some(_), Some(_)) => {
                 return Err(value_error("give either `curves` or `torque`, not both"));

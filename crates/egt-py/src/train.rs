@@ -4,7 +4,7 @@
 
 use egt_core::analysis::power::{Driver, PowerRequest};
 use egt_core::model::mass::MassMatrix;
-use egt_core::{DynamicsRequest, Extra};
+use egt_core::{DynamicsRequest, Extra, LoadOverrides};
 use egt_core::{Format, SpeedInput, Train};
 use numpy::PyArray2;
 use pyo3::prelude::*;
@@ -52,28 +52,39 @@ impl TrainCore {
             .collect()
     }
 
+    /// The request from Python's keywords (`None`: the spec's `[analysis]`).
     fn request(
         &self,
-        torques: &[(String, f64)],
-        accelerations: &[(String, f64)],
-        driving: &[String],
+        torques: Option<&[(String, f64)]>,
+        accelerations: Option<&[(String, f64)]>,
+        driving: Option<&[String]>,
         engaged: &[String],
     ) -> Result<DynamicsRequest> {
-        Ok(DynamicsRequest {
-            torques: convert::valued(&self.train, torques, "torques")?,
-            accelerations: convert::valued(&self.train, accelerations, "accelerations")?,
-            driving: convert::links(&self.train, driving, "driving")?,
-            extras: convert::engaged(&self.train, engaged)?,
+        let t = &self.train;
+        let over = LoadOverrides {
+            torques: torques
+                .map(|v| convert::valued(t, v, "torques"))
+                .transpose()?,
+            accelerations: accelerations
+                .map(|v| convert::valued(t, v, "accelerations"))
+                .transpose()?,
+            driving: driving
+                .map(|v| convert::links(t, v, "driving"))
+                .transpose()?,
+            extras: convert::engaged(t, engaged)?,
+        };
+        DynamicsRequest::resolve(t, &over).map_err(|e| {
+            e.with_hint("pass `driving=[...]` or give `[analysis] driving`")
+                .into()
         })
     }
 
-    /// The mass matrix when asked for and when accelerations make it matter;
-    /// a static analysis never demands inertia data.
+    /// The mass matrix when the request needs it, unless `inertia` is off.
     fn mass_for(&self, req: &DynamicsRequest, inertia: bool) -> Result<Option<MassMatrix>> {
-        if !inertia || req.accelerations.iter().all(|a| a.1 == 0.0) {
+        if !inertia {
             return Ok(None);
         }
-        Ok(Some(self.train.mass_matrix()?))
+        Ok(self.train.mass_for(req)?)
     }
 
     fn link_name(&self, l: egt_core::LinkId) -> &str {
@@ -388,14 +399,19 @@ impl TrainCore {
     fn dynamics<'py>(
         &self,
         py: Python<'py>,
-        torques: Vec<(String, f64)>,
-        accelerations: Vec<(String, f64)>,
-        driving: Vec<String>,
+        torques: Option<Vec<(String, f64)>>,
+        accelerations: Option<Vec<(String, f64)>>,
+        driving: Option<Vec<String>>,
         engaged: Vec<String>,
         inertia: bool,
     ) -> Result<Bound<'py, PyDict>> {
         guard(|| {
-            let req = self.request(&torques, &accelerations, &driving, &engaged)?;
+            let req = self.request(
+                torques.as_deref(),
+                accelerations.as_deref(),
+                driving.as_deref(),
+                &engaged,
+            )?;
             let mass = self.mass_for(&req, inertia)?;
             let r = self.train.inverse_dynamics(&req, mass.as_ref())?;
             dynamics_dict(py, self, &r)
@@ -409,15 +425,20 @@ impl TrainCore {
         &self,
         py: Python<'py>,
         speeds: Vec<InputArg>,
-        torques: Vec<(String, f64)>,
-        accelerations: Vec<(String, f64)>,
-        driving: Vec<String>,
+        torques: Option<Vec<(String, f64)>>,
+        accelerations: Option<Vec<(String, f64)>>,
+        driving: Option<Vec<String>>,
         engaged: Vec<String>,
         losses: bool,
         inertia: bool,
     ) -> Result<Bound<'py, PyDict>> {
         guard(|| {
-            let dynamics = self.request(&torques, &accelerations, &driving, &engaged)?;
+            let dynamics = self.request(
+                torques.as_deref(),
+                accelerations.as_deref(),
+                driving.as_deref(),
+                &engaged,
+            )?;
             let mass = self.mass_for(&dynamics, inertia)?;
             let req = PowerRequest {
                 speeds: self.speed_inputs(&speeds)?,

@@ -57,7 +57,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
             writeln!(
                 out,
                 "{}: valid geared kinematic chain",
-                circuits::title(train, &loaded.source)
+                report::title(train, &loaded.source)
             )?;
             writeln!(
                 out,

@@ -165,7 +165,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
             writeln!(
                 out,
                 "{}: fundamental circuits",
-                title(train, &loaded.source)
+                report::title(train, &loaded.source)
             )?;
             write_table(out, &report.circuits, 0)?;
             writeln!(
@@ -175,11 +175,4 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
             Ok(())
         }
     }
-}
-
-/// The train's name, or the source it came from.
-pub fn title(train: &Train, source: &str) -> String {
-    train
-        .name()
-        .map_or_else(|| source.to_string(), str::to_string)
 }

@@ -7,29 +7,13 @@
 use std::io::Write;
 
 use anyhow::Context;
-use egt_core::{DynamicsRequest, InverseDynamics, LinkId, MassMatrix, Train};
+use egt_core::{DynamicsRequest, InverseDynamics, LinkId, Train};
 use serde::Serialize;
 
+use crate::args::{LoadArgs, load_request, mass_if_needed};
 use crate::cli::{OutputFormat, SpecArgs};
-use crate::commands::circuits::title;
 use crate::input;
 use crate::report::{self, Table};
-
-/// Loads, accelerations and driving links, from flags or the spec's `[analysis]`.
-#[derive(Debug, Clone, clap::Args)]
-pub struct LoadArgs {
-    /// A known applied torque, `LINK=TORQUE` (positive along positive rotation;
-    /// a resisting load is negative). Repeatable. Default: `[analysis] torques`.
-    #[arg(long = "torque", value_name = "LINK=TORQUE", value_parser = parse_pair)]
-    pub torques: Vec<(String, f64)>,
-    /// A prescribed angular acceleration, `LINK=ACCEL`, one per DOF. Default:
-    /// `[analysis] accelerations`; none means the static case.
-    #[arg(long = "accel", value_name = "LINK=ACCEL", value_parser = parse_pair)]
-    pub accelerations: Vec<(String, f64)>,
-    /// A link whose driving torque is unknown, one per DOF. Default: `[analysis] driving`.
-    #[arg(long = "driving", value_name = "LINK")]
-    pub driving: Vec<String>,
-}
 
 /// Arguments of `egt dynamics`.
 #[derive(Debug, Clone, clap::Args)]
@@ -45,86 +29,6 @@ pub struct Args {
     /// reduce_to`, else the first driving link.
     #[arg(long, value_name = "LINK")]
     pub reduce_to: Option<String>,
-}
-
-pub(crate) fn parse_pair(s: &str) -> Result<(String, f64), String> {
-    let (l, v) = s
-        .split_once('=')
-        .ok_or_else(|| format!("expected LINK=VALUE, got `{s}`"))?;
-    let v: f64 = v
-        .trim()
-        .parse()
-        .map_err(|_| format!("`{}` is not a number", v.trim()))?;
-    if !v.is_finite() {
-        return Err(format!("`{s}`: value must be finite"));
-    }
-    Ok((l.trim().to_string(), v))
-}
-
-/// The dynamics request from the flags, else the spec.
-///
-/// # Errors
-/// Unknown link names (spec errors, with the flag named); no driving links.
-pub(crate) fn request(train: &Train, a: &LoadArgs) -> anyhow::Result<DynamicsRequest> {
-    let resolve = |name: &str, flag: &str| -> anyhow::Result<LinkId> {
-        Ok(train.resolve(name, &format!("--{flag} {name}"))?)
-    };
-    let spec = train.analysis();
-    let torques = if a.torques.is_empty() {
-        spec.torques.clone()
-    } else {
-        a.torques
-            .iter()
-            .map(|(l, v)| Ok((resolve(l, "torque")?, *v)))
-            .collect::<anyhow::Result<_>>()?
-    };
-    let accelerations = if a.accelerations.is_empty() {
-        spec.accelerations.clone()
-    } else {
-        a.accelerations
-            .iter()
-            .map(|(l, v)| Ok((resolve(l, "accel")?, *v)))
-            .collect::<anyhow::Result<_>>()?
-    };
-    let driving: Vec<LinkId> = if a.driving.is_empty() {
-        spec.driving.clone()
-    } else {
-        a.driving
-            .iter()
-            .map(|l| resolve(l, "driving"))
-            .collect::<anyhow::Result<_>>()?
-    };
-    if driving.is_empty() {
-        let e = egt_core::AnalysisError::MissingData {
-            what: format!(
-                "{} driving link(s) (whose torque is solved for)",
-                train.dof()
-            ),
-            analysis: "inverse dynamics".into(),
-            hint: "give `--driving LINK` or `[analysis] driving`".into(),
-        };
-        return Err(egt_core::Error::from(e).into());
-    }
-    Ok(DynamicsRequest {
-        torques,
-        accelerations,
-        driving,
-        extras: Vec::new(),
-    })
-}
-
-/// The mass matrix, only when the request needs it (non-zero accelerations);
-/// for a static analysis inertia data is never demanded.
-pub(crate) fn mass_if_needed(
-    train: &Train,
-    req: &DynamicsRequest,
-) -> anyhow::Result<Option<MassMatrix>> {
-    if req.accelerations.iter().all(|a| a.1 == 0.0) {
-        return Ok(None);
-    }
-    Ok(Some(train.mass_matrix().context(
-        "the mass matrix (needed because accelerations are prescribed)",
-    )?))
 }
 
 #[derive(Debug, Serialize)]
@@ -175,7 +79,7 @@ struct Report {
 pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
     let loaded = input::load(&args.spec)?;
     let train = &loaded.train;
-    let req = request(train, &args.loads)?;
+    let req = load_request(train, &args.loads)?;
     let mass = mass_if_needed(train, &req)?;
     let r = train
         .inverse_dynamics(&req, mass.as_ref())
@@ -310,7 +214,12 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
     } else {
         "inverse dynamics"
     };
-    writeln!(out, "{}: {kind} ({} DOF)", title(train, source), r.dof)?;
+    writeln!(
+        out,
+        "{}: {kind} ({} DOF)",
+        report::title(train, source),
+        r.dof
+    )?;
     let f = report::float;
     let mut t = Table::new(&["link", "role", "acceleration", "applied torque"]).right(&[2, 3]);
     for l in &r.links {

@@ -7,13 +7,13 @@
 use std::io::Write;
 
 use anyhow::Context;
-use egt_core::numerics::exact::{self, Q};
+use egt_core::numerics::exact;
 use egt_core::{LinkId, SpeedInput, Speeds, Train};
 use num_traits::Zero;
 use serde::Serialize;
 
+use crate::args::{InputArg, parse_input, speed_inputs};
 use crate::cli::{OutputFormat, SpecArgs};
-use crate::commands::circuits::title;
 use crate::input;
 use crate::report::{self, Table};
 
@@ -27,30 +27,6 @@ pub struct Args {
     /// spec's `[analysis] speeds`.
     #[arg(short, long = "input", value_name = "LINK=SPEED", value_parser = parse_input)]
     pub inputs: Vec<InputArg>,
-}
-
-/// One `--input LINK=SPEED`.
-#[derive(Debug, Clone)]
-pub struct InputArg {
-    /// Link name.
-    pub link: String,
-    /// Exact speed.
-    pub speed: Q,
-}
-
-pub(crate) fn parse_input(s: &str) -> Result<InputArg, String> {
-    let (link, speed) = s
-        .split_once('=')
-        .ok_or_else(|| format!("expected LINK=SPEED, got `{s}`"))?;
-    let link = link.trim();
-    if link.is_empty() {
-        return Err(format!("no link name in `{s}`"));
-    }
-    let (speed, _) = exact::parse_finite(speed).map_err(|e| format!("`{}`: {e}", speed.trim()))?;
-    Ok(InputArg {
-        link: link.to_string(),
-        speed,
-    })
 }
 
 #[derive(Debug, Serialize)]
@@ -104,7 +80,7 @@ struct Report {
 pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
     let loaded = input::load(&args.spec)?;
     let train = &loaded.train;
-    let inputs = inputs(train, &args.inputs)?;
+    let inputs = speed_inputs(train, &args.inputs)?;
     let speeds = train.kinematics(&inputs).with_context(|| {
         let given: Vec<String> = inputs
             .iter()
@@ -120,55 +96,6 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
     match args.spec.format {
         OutputFormat::Json => report::json(out, &report),
         OutputFormat::Table => write_table(out, train, &loaded.source, &report),
-    }
-}
-
-/// Inputs from `--input`, else from the spec's `[analysis] speeds`.
-pub(crate) fn inputs(train: &Train, args: &[InputArg]) -> anyhow::Result<Vec<SpeedInput>> {
-    if !args.is_empty() {
-        return args
-            .iter()
-            .map(|a| {
-                let link = train.resolve(&a.link, &format!("--input {}", a.link))?;
-                Ok(SpeedInput {
-                    link,
-                    speed: exact::to_f64(&a.speed),
-                    exact: Some(a.speed.clone()),
-                })
-            })
-            .collect();
-    }
-    let given = &train.analysis().speeds;
-    if given.is_empty() && train.dof() > 0 {
-        let e = egt_core::AnalysisError::WrongInputCount {
-            dof: train.dof(),
-            given: 0,
-            what: "input speeds".into(),
-        };
-        return Err(anyhow::Error::new(egt_core::Error::from(e))
-            .context("no input speeds: give `--input LINK=SPEED` once per DOF, or `[analysis] speeds` in the spec"));
-    }
-    Ok(given
-        .iter()
-        .map(|(link, speed, exact_speed)| SpeedInput {
-            link: *link,
-            speed: *speed,
-            exact: readable_exact(*speed, exact_speed),
-        })
-        .collect())
-}
-
-/// A speed written as a decimal number in the spec reaches us as the exact
-/// binary value of the double (0.1 = 3602879701896397/36028797018963968);
-/// the user meant the decimal they wrote, which is the shortest round-trip form.
-fn readable_exact(speed: f64, given: &Option<Q>) -> Option<Q> {
-    match given {
-        Some(q) if exact::from_f64(speed).as_ref() == Some(q) => {
-            exact::parse_rational(&speed.to_string())
-                .ok()
-                .or_else(|| Some(q.clone()))
-        }
-        other => other.clone(),
     }
 }
 
@@ -259,7 +186,7 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
             }
         })
         .collect();
-    writeln!(out, "{}: kinematics", title(train, source))?;
+    writeln!(out, "{}: kinematics", report::title(train, source))?;
     writeln!(
         out,
         "degree of freedom: {}; inputs: {}",

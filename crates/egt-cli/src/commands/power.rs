@@ -10,10 +10,8 @@ use egt_core::analysis::power::{Driver, PowerFlow, PowerRequest};
 use egt_core::{LinkId, Train};
 use serde::Serialize;
 
+use crate::args::{InputArg, LoadArgs, load_request, mass_if_needed, parse_input, speed_inputs};
 use crate::cli::{OutputFormat, SpecArgs};
-use crate::commands::circuits::title;
-use crate::commands::dynamics::{LoadArgs, mass_if_needed, request};
-use crate::commands::kinematics::{InputArg, inputs, parse_input};
 use crate::input;
 use crate::report::{self, Table};
 
@@ -79,8 +77,8 @@ struct Report {
 pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
     let loaded = input::load(&args.spec)?;
     let train = &loaded.train;
-    let speeds = inputs(train, &args.inputs)?;
-    let dynamics = request(train, &args.loads)?;
+    let speeds = speed_inputs(train, &args.inputs)?;
+    let dynamics = load_request(train, &args.loads)?;
     let mass = mass_if_needed(train, &dynamics)?;
     let req = PowerRequest {
         speeds,
@@ -161,7 +159,7 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
     } else {
         "ideal meshes"
     };
-    writeln!(out, "{}: power flow ({kind})", title(train, source))?;
+    writeln!(out, "{}: power flow ({kind})", report::title(train, source))?;
     let mut t =
         Table::new(&["link", "speed", "torque", "power in", "to inertia"]).right(&[1, 2, 3, 4]);
     for l in &r.links {

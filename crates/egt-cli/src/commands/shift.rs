@@ -17,7 +17,6 @@ use egt_core::{Driver, Freewheel, GearAnalysis, ShiftKind, ShiftTable, Train};
 use serde::Serialize;
 
 use crate::cli::{OutputFormat, SpecArgs};
-use crate::commands::circuits::title;
 use crate::input;
 use crate::report::{self, Table};
 
@@ -404,7 +403,7 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
     writeln!(
         out,
         "{}: gear table; input `{}`, output `{}`",
-        title(train, source),
+        report::title(train, source),
         r.input,
         r.output
     )?;

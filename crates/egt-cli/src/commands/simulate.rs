@@ -11,15 +11,13 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use egt_core::{
-    LinearCurves, LinkId, Method, ReducedDynamics, Simulation, SimulationOptions,
+    LinearCurves, LinkId, Method, ReducedDynamics, Simulation, SimulationOverrides,
     SimulationRequest, Train,
 };
 use serde::Serialize;
 
+use crate::args::{ModelArgs, curves, parse_pair, resolve_pairs};
 use crate::cli::{OutputFormat, SpecArgs, SpecFormat};
-use crate::commands::circuits::title;
-use crate::commands::dynamics::parse_pair;
-use crate::commands::stability::{ModelArgs, curves, resolve_pairs, sci};
 use crate::input;
 use crate::report::{self, Table};
 
@@ -200,7 +198,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
     if let Some(path) = &args.plot {
         let svg = plot::speeds_svg(
             train,
-            &title(train, &loaded.source),
+            &report::title(train, &loaded.source),
             &report.links_plotted(train),
             &sim,
             report.equilibrium.as_deref(),
@@ -216,15 +214,15 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         let hint = match (sim.method, sim.rk4_step_limit) {
             (Method::Rk4, Some(limit)) if sim.dt > limit => format!(
                 "; dt = {} exceeds RK4's stability limit {} (2.785 / |lambda_min|): use --method implicit or a smaller --dt",
-                sci(sim.dt),
-                sci(limit)
+                report::sci(sim.dt),
+                report::sci(limit)
             ),
             _ => String::new(),
         };
         anyhow::bail!(
             "{}: the solution blew up after t = {}: {}{hint}",
             loaded.source,
-            sci(d.t),
+            report::sci(d.t),
             d.reason
         );
     }
@@ -236,31 +234,22 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
 /// # Errors
 /// No end time; an unknown method name in the spec; unknown links.
 fn request(train: &Train, args: &Args) -> anyhow::Result<SimulationRequest> {
-    let spec = train.analysis().simulate.clone().unwrap_or_default();
-    let t_end = args.t_end.or(spec.t_end).ok_or_else(|| {
-        anyhow::Error::new(egt_core::Error::spec(
-            "analysis.simulate.t_end",
-            egt_core::SpecErrorKind::Missing {
-                what: "the end time: give `--t-end T` or `[analysis.simulate] t_end`".into(),
-            },
-        ))
-    })?;
-    let method = match (args.method, &spec.method) {
-        (Some(MethodArg::Rk4), _) => Method::Rk4,
-        (Some(MethodArg::Implicit), _) => Method::Implicit,
-        (None, Some(m)) => m
-            .parse()
-            .map_err(|e: String| egt_core::Error::invalid("analysis.simulate.method", e))?,
-        (None, None) => Method::default(),
+    let initial = resolve_pairs(train, &args.initial, "initial")?;
+    let over = SimulationOverrides {
+        t_end: args.t_end,
+        dt: args.dt,
+        method: args.method.map(|m| match m {
+            MethodArg::Rk4 => Method::Rk4,
+            MethodArg::Implicit => Method::Implicit,
+        }),
+        every: args.every,
+        initial: (!initial.is_empty()).then_some(initial),
     };
-    Ok(SimulationRequest {
-        initial: resolve_pairs(train, &args.initial, "initial")?,
-        options: SimulationOptions {
-            t_end,
-            dt: args.dt.or(spec.dt).unwrap_or(t_end / 1000.0),
-            method,
-            every: args.every.unwrap_or(0),
-        },
+    SimulationRequest::resolve(train, &over).map_err(|e| match e {
+        egt_core::Error::Spec { ref path, .. } if path == "analysis.simulate.t_end" => {
+            anyhow::Error::new(e).context("give `--t-end T` or `[analysis.simulate] t_end`")
+        }
+        e => anyhow::Error::new(e),
     })
 }
 
@@ -353,22 +342,22 @@ fn csv_name(n: &str) -> String {
 const TABLE_ROWS: usize = 20;
 
 fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> anyhow::Result<()> {
-    writeln!(out, "{}: simulation", title(train, source))?;
+    writeln!(out, "{}: simulation", report::title(train, source))?;
     writeln!(
         out,
         "degree of freedom: {}; method: {}; dt = {}; t_end = {}; steps: {}",
         r.dof,
         r.method,
-        sci(r.dt),
-        sci(r.t_end),
+        report::sci(r.dt),
+        report::sci(r.t_end),
         r.steps
     )?;
-    let eig: Vec<String> = r.eigenvalues.iter().map(|&v| sci(v)).collect();
+    let eig: Vec<String> = r.eigenvalues.iter().map(|&v| report::sci(v)).collect();
     writeln!(
         out,
         "eigenvalues at the start [1/s]: {}; RK4 step limit: {}",
         eig.join(", "),
-        r.rk4_step_limit.map_or_else(|| "none".into(), sci)
+        r.rk4_step_limit.map_or_else(|| "none".into(), report::sci)
     )?;
     let moving = r.links_plotted(train);
     let mut headers = vec!["t [s]".to_string()];
@@ -383,9 +372,9 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
         if k % stride != 0 && k + 1 != n {
             continue;
         }
-        let mut row = vec![sci(s.t)];
+        let mut row = vec![report::sci(s.t)];
         row.extend(moving.iter().map(|l| report::float(s.speeds[l.index()])));
-        row.push(sci(s.energy));
+        row.push(report::sci(s.energy));
         row.push(format!("{:.1e}", s.drift));
         t.row(row);
     }
@@ -401,10 +390,10 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
         writeln!(
             out,
             "deviation from the equilibrium over the second half grows at {} 1/s (largest eigenvalue {})",
-            sci(rate),
+            report::sci(rate),
             r.eigenvalues
                 .first()
-                .map_or_else(|| "-".into(), |&v| sci(v))
+                .map_or_else(|| "-".into(), |&v| report::sci(v))
         )?;
     }
     writeln!(
@@ -422,7 +411,7 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
         writeln!(
             out,
             "constraint torques at t = {} (inverse dynamics, eq. 6-11):",
-            sci(r.samples.last().map_or(0.0, |s| s.t))
+            report::sci(r.samples.last().map_or(0.0, |s| s.t))
         )?;
         let mut t = Table::new(&[
             "gear pair",
@@ -435,10 +424,10 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
         for x in m {
             t.row(vec![
                 x.gear.clone(),
-                sci(x.multiplier),
-                sci(x.torque_i),
-                sci(x.torque_j),
-                sci(x.torque_carrier),
+                report::sci(x.multiplier),
+                report::sci(x.torque_i),
+                report::sci(x.torque_j),
+                report::sci(x.torque_carrier),
             ]);
         }
         t.write(out, 2)?;

@@ -9,24 +9,13 @@ use std::io::Write;
 
 use anyhow::Context;
 use egt_core::analysis::stability::matrix_rows;
-use egt_core::model::train::Curve;
 use egt_core::{LinkId, StabilityReport, StabilityRequest, Train};
 use serde::Serialize;
 
+use crate::args::{ModelArgs, curves, parse_pair, resolve_pairs};
 use crate::cli::{OutputFormat, SpecArgs};
-use crate::commands::circuits::title;
-use crate::commands::dynamics::parse_pair;
 use crate::input;
 use crate::report::{self, Table};
-
-/// Choices shared by `egt stability` and `egt simulate`.
-#[derive(Debug, Clone, clap::Args)]
-pub struct ModelArgs {
-    /// Replace the slope dT/dw of the curves on a link, `LINK=SLOPE`
-    /// (repeatable), e.g. to find where a train turns unstable.
-    #[arg(long = "slope", value_name = "LINK=SLOPE", value_parser = parse_pair)]
-    pub slopes: Vec<(String, f64)>,
-}
 
 /// Arguments of `egt stability`.
 #[derive(Debug, Clone, clap::Args)]
@@ -43,41 +32,6 @@ pub struct Args {
     /// speeds`, else the equilibrium of the curves.
     #[arg(short, long = "input", value_name = "LINK=SPEED", value_parser = parse_pair)]
     pub inputs: Vec<(String, f64)>,
-}
-
-/// The spec's curves with the `--slope` overrides applied.
-///
-/// # Errors
-/// Unknown links; a link without a curve.
-pub(crate) fn curves(train: &Train, a: &ModelArgs) -> anyhow::Result<Vec<Curve>> {
-    let mut curves = train.analysis().curves.clone();
-    for (name, slope) in &a.slopes {
-        let l = train.resolve(name, &format!("--slope {name}"))?;
-        let mut found = false;
-        for c in curves.iter_mut().filter(|c| c.link == l) {
-            c.slope = *slope;
-            found = true;
-        }
-        if !found {
-            return Err(anyhow::Error::new(egt_core::Error::invalid(
-                format!("--slope {name}"),
-                format!("link `{name}` carries no curve; add it to [[analysis.curves]]"),
-            )));
-        }
-    }
-    Ok(curves)
-}
-
-/// Resolve `LINK=VALUE` flags.
-pub(crate) fn resolve_pairs(
-    train: &Train,
-    pairs: &[(String, f64)],
-    flag: &str,
-) -> anyhow::Result<Vec<(LinkId, f64)>> {
-    pairs
-        .iter()
-        .map(|(l, v)| Ok((train.resolve(l, &format!("--{flag} {l}"))?, *v)))
-        .collect()
 }
 
 #[derive(Debug, Serialize)]
@@ -275,28 +229,15 @@ fn square(
     let mut t = Table::new(&headers).right(&cols);
     for (n, row) in names.iter().zip(m) {
         let mut cells = vec![n.clone()];
-        cells.extend(row.iter().map(|&v| sci(v)));
+        cells.extend(row.iter().map(|&v| report::sci(v)));
         t.row(cells);
     }
     t.write(out, 2)?;
     Ok(())
 }
 
-/// Six significant digits, scientific when small or large.
-pub(crate) fn sci(v: f64) -> String {
-    if v == 0.0 {
-        return "0".into();
-    }
-    let a = v.abs();
-    if (1e-3..1e6).contains(&a) {
-        report::float(v)
-    } else {
-        format!("{v:.6e}")
-    }
-}
-
 fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> anyhow::Result<()> {
-    writeln!(out, "{}: stability", title(train, source))?;
+    writeln!(out, "{}: stability", report::title(train, source))?;
     let from = match r.coordinate_source {
         egt_core::CoordinateSource::Given => "given",
         egt_core::CoordinateSource::SpecSpeeds => "the links of [analysis] speeds",
@@ -311,8 +252,8 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
     writeln!(
         out,
         "[Gamma_w] condition number: {}; orthogonality |psi_w V| (eq. 24): {}",
-        sci(r.gamma_condition),
-        sci(r.orthogonality)
+        report::sci(r.gamma_condition),
+        report::sci(r.orthogonality)
     )?;
     writeln!(out, "[V] (eq. 23): link speeds per unit driving speed")?;
     let mut headers = vec!["link"];
@@ -324,7 +265,7 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
             continue;
         }
         let mut cells = vec![l.clone()];
-        cells.extend(row.iter().map(|&v| sci(v)));
+        cells.extend(row.iter().map(|&v| report::sci(v)));
         t.row(cells);
     }
     t.write(out, 2)?;
@@ -353,7 +294,7 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
         t.row(vec![
             s.link.clone(),
             report::float(s.value),
-            sci(op.torques[k].value),
+            report::sci(op.torques[k].value),
             op.equilibrium
                 .as_ref()
                 .map_or_else(|| "-".into(), |e| report::float(e[k].value)),
@@ -363,7 +304,7 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
     let rt: Vec<String> = op
         .reduced_torque
         .iter()
-        .map(|v| format!("{} {}", v.link, sci(v.value)))
+        .map(|v| format!("{} {}", v.link, report::sci(v.value)))
         .collect();
     writeln!(
         out,
@@ -387,8 +328,8 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
     let mut t = Table::new(&headers).right(&cols);
     for md in &r.modes {
         let mut cells = vec![
-            sci(md.eigenvalue),
-            md.time_constant.map_or_else(|| "-".into(), sci),
+            report::sci(md.eigenvalue),
+            md.time_constant.map_or_else(|| "-".into(), report::sci),
         ];
         cells.extend(md.speeds.iter().map(|v| report::float(v.value)));
         t.row(cells);
@@ -399,7 +340,7 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
             out,
             "massless direction (links {}): torque slope {} -> eliminated as an algebraic torque balance",
             d.links.join(", "),
-            sci(d.slope)
+            report::sci(d.slope)
         )?;
     }
     let verdict = match r.verdict {
@@ -411,9 +352,9 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
     writeln!(
         out,
         "margin (largest eigenvalue): {}; RK4 step limit 2.785/|lambda_min|: {}; stiffness: {}",
-        sci(r.margin),
-        r.rk4_step_limit.map_or_else(|| "none".into(), sci),
-        r.stiffness.map_or_else(|| "-".into(), sci),
+        report::sci(r.margin),
+        r.rk4_step_limit.map_or_else(|| "none".into(), report::sci),
+        r.stiffness.map_or_else(|| "-".into(), report::sci),
     )?;
     for w in &r.warnings {
         writeln!(out, "warning: {w}")?;

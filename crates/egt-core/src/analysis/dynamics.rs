@@ -40,6 +40,59 @@ pub struct DynamicsRequest {
     pub extras: Vec<Extra>,
 }
 
+/// What a caller sets over the spec's `[analysis]` loads (the CLI's flags,
+/// Python's keywords); `None` keeps the spec's value.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LoadOverrides {
+    /// Known applied torques.
+    pub torques: Option<Vec<(LinkId, f64)>>,
+    /// Prescribed accelerations.
+    pub accelerations: Option<Vec<(LinkId, f64)>>,
+    /// Links whose torque is unknown.
+    pub driving: Option<Vec<LinkId>>,
+    /// Brakes and clutches in force (the spec has none to default to).
+    pub extras: Vec<Extra>,
+}
+
+impl DynamicsRequest {
+    /// The request a caller's overrides and the spec's `[analysis]` section
+    /// resolve to: each list from the override, else the spec. The one place
+    /// those defaults are decided, for the CLI and Python alike.
+    ///
+    /// # Errors
+    /// No driving links anywhere (for a train that moves).
+    pub fn resolve(train: &Train, over: &LoadOverrides) -> Result<Self> {
+        let spec = train.analysis();
+        let pick = |o: &Option<Vec<(LinkId, f64)>>, s: &[(LinkId, f64)]| {
+            o.clone().unwrap_or_else(|| s.to_vec())
+        };
+        let driving = over.driving.clone().unwrap_or_else(|| spec.driving.clone());
+        if driving.is_empty() && train.dof() > 0 {
+            return Err(AnalysisError::MissingData {
+                what: format!(
+                    "{} driving link(s) (whose torque is solved for)",
+                    train.dof()
+                ),
+                analysis: "inverse dynamics".into(),
+                hint: "name them in the request or give `[analysis] driving`".into(),
+            }
+            .into());
+        }
+        Ok(DynamicsRequest {
+            torques: pick(&over.torques, &spec.torques),
+            accelerations: pick(&over.accelerations, &spec.accelerations),
+            driving,
+            extras: over.extras.clone(),
+        })
+    }
+
+    /// Whether the analysis needs the mass matrix: only when some prescribed
+    /// acceleration is non-zero (a static analysis never demands inertia data).
+    pub fn needs_mass(&self) -> bool {
+        self.accelerations.iter().any(|a| a.1 != 0.0)
+    }
+}
+
 /// The tangential meshing force and torques of one gear pair (eq. 11).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MeshLoad {
@@ -85,6 +138,18 @@ pub struct InverseDynamics {
 }
 
 impl Train {
+    /// The mass matrix when `req` needs it ([`DynamicsRequest::needs_mass`]),
+    /// else `None`.
+    ///
+    /// # Errors
+    /// Missing inertia data, named by field, when the mass matrix is needed.
+    pub fn mass_for(&self, req: &DynamicsRequest) -> Result<Option<MassMatrix>> {
+        if !req.needs_mass() {
+            return Ok(None);
+        }
+        self.mass_matrix().map(Some)
+    }
+
     /// The links whose accelerations a request prescribes: its
     /// `accelerations`, or the driving links for the static analysis.
     pub(crate) fn accelerated_links(req: &DynamicsRequest) -> Vec<LinkId> {

@@ -1100,7 +1100,15 @@ fn resolve_extras(spec: &Spec, train: &mut Train) -> Result<()> {
             let path = format!("analysis.speeds.{name}");
             let l = train.resolve(name, &path)?;
             let (value, exact) = match v {
-                RatioSpec::Number(x) => (finite(path, *x)?, exact::from_f64(*x)),
+                // A decimal written in the spec is read as the decimal the user
+                // wrote (its shortest round-trip form), not as the binary value
+                // of the double: 0.1 is 1/10, not 3602879701896397/2^55.
+                RatioSpec::Number(x) => (
+                    finite(path, *x)?,
+                    exact::parse_rational(&x.to_string())
+                        .ok()
+                        .or_else(|| exact::from_f64(*x)),
+                ),
                 RatioSpec::Text(t) => {
                     let (q, value) = exact::parse_finite(t)
                         .map_err(|e| Error::invalid(&path, format!("`{t}`: {e}")))?;

@@ -328,6 +328,22 @@ pub struct SimulationRequest {
     pub options: SimulationOptions,
 }
 
+/// What a caller sets over the spec's `[analysis.simulate]` settings (the
+/// CLI's flags, Python's keywords); `None` keeps the spec's value.
+#[derive(Debug, Clone, Default)]
+pub struct SimulationOverrides {
+    /// End time \[s\].
+    pub t_end: Option<f64>,
+    /// Step \[s\].
+    pub dt: Option<f64>,
+    /// Integrator.
+    pub method: Option<Method>,
+    /// Keep every n-th step (0 or 1: every step).
+    pub every: Option<usize>,
+    /// F initial link speeds.
+    pub initial: Option<Vec<(LinkId, f64)>>,
+}
+
 impl SimulationRequest {
     /// The spec's `[analysis.simulate]` settings: t_end (required), dt
     /// (default t_end / 1000), method (default rk4), initial speeds.
@@ -335,28 +351,40 @@ impl SimulationRequest {
     /// # Errors
     /// No `t_end`; an unknown method name.
     pub fn from_spec(train: &Train) -> Result<Self> {
+        Self::resolve(train, &SimulationOverrides::default())
+    }
+
+    /// The request a caller's overrides and the spec's settings resolve to:
+    /// each setting from the override, else the spec, else its default
+    /// (dt = t_end / 1000, rk4, every step, the spec's initial speeds). The
+    /// one place those defaults are decided, for the CLI and Python alike.
+    ///
+    /// # Errors
+    /// No end time anywhere; an unknown method name in the spec.
+    pub fn resolve(train: &Train, over: &SimulationOverrides) -> Result<Self> {
         let sim = train.analysis().simulate.clone().unwrap_or_default();
-        let t_end = sim.t_end.ok_or_else(|| {
+        let t_end = over.t_end.or(sim.t_end).ok_or_else(|| {
             Error::spec(
                 "analysis.simulate.t_end",
                 SpecErrorKind::Missing {
-                    what: "end time of the simulation".into(),
+                    what: "the end time of the simulation (`t_end`)".into(),
                 },
             )
         })?;
-        let method = match &sim.method {
-            Some(m) => m
+        let method = match (over.method, &sim.method) {
+            (Some(m), _) => m,
+            (None, Some(m)) => m
                 .parse()
                 .map_err(|e: String| Error::invalid("analysis.simulate.method", e))?,
-            None => Method::default(),
+            (None, None) => Method::default(),
         };
         Ok(SimulationRequest {
-            initial: sim.initial.clone(),
+            initial: over.initial.clone().unwrap_or_else(|| sim.initial.clone()),
             options: SimulationOptions {
                 t_end,
-                dt: sim.dt.unwrap_or(t_end / 1000.0),
+                dt: over.dt.or(sim.dt).unwrap_or(t_end / 1000.0),
                 method,
-                every: 0,
+                every: over.every.unwrap_or(0),
             },
         })
     }

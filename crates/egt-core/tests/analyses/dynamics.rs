@@ -834,3 +834,38 @@ fn prescribed_accelerations_are_echoed_exactly() {
         }
     }
 }
+
+/// The request a front end resolves: each list from the override, else the
+/// spec's `[analysis]`; no driving links anywhere is refused with the data
+/// named; the mass matrix is demanded only with a non-zero acceleration.
+#[test]
+fn requests_resolve_overrides_over_the_spec() {
+    use egt_core::{AnalysisError, Error, LoadOverrides};
+    let t = crate::util::example("fig3_example61.toml");
+    let spec = DynamicsRequest::resolve(&t, &LoadOverrides::default()).unwrap();
+    assert_eq!(spec.driving, vec![id(&t, "2")]);
+    assert_eq!(spec.torques, vec![(id(&t, "4"), -50.0)]);
+    assert_eq!(spec.accelerations, vec![(id(&t, "4"), 10.0)]);
+    assert!(spec.needs_mass());
+    let over = LoadOverrides {
+        accelerations: Some(vec![(id(&t, "4"), 0.0)]),
+        driving: Some(vec![id(&t, "3")]),
+        ..LoadOverrides::default()
+    };
+    let r = DynamicsRequest::resolve(&t, &over).unwrap();
+    assert_eq!(r.driving, vec![id(&t, "3")]);
+    assert_eq!(r.torques, spec.torques);
+    assert!(!r.needs_mass());
+    assert!(t.mass_for(&r).unwrap().is_none());
+    assert!(t.mass_for(&spec).unwrap().is_some());
+    let none = LoadOverrides {
+        driving: Some(Vec::new()),
+        ..LoadOverrides::default()
+    };
+    match DynamicsRequest::resolve(&t, &none) {
+        Err(Error::Analysis(AnalysisError::MissingData { what, .. })) => {
+            assert!(what.contains("driving"), "{what}")
+        }
+        other => panic!("expected missing driving links, got {other:?}"),
+    }
+}

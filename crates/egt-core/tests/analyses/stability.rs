@@ -867,3 +867,37 @@ fn badly_scaled_verdicts_equal_the_exact_pencil_and_simulation() {
         }
     }
 }
+
+/// The simulation request a front end resolves: each setting from the
+/// override, else `[analysis.simulate]`, else the default (dt = t_end / 1000,
+/// rk4); no end time anywhere is refused naming `t_end`.
+#[test]
+fn simulation_requests_resolve_overrides_over_the_spec() {
+    use egt_core::{SimulationOverrides, SimulationRequest};
+    let t = crate::util::example("fig5_stability.toml");
+    let spec = SimulationRequest::from_spec(&t).unwrap();
+    assert_eq!((spec.options.t_end, spec.options.dt), (1.0, 1.0e-3));
+    assert_eq!(spec.options.method, Method::Rk4);
+    assert_eq!(spec.initial.len(), 2);
+    let over = SimulationOverrides {
+        t_end: Some(4.0),
+        method: Some(Method::Implicit),
+        initial: Some(vec![(id(&t, "2"), 300.0), (id(&t, "4"), 70.0)]),
+        ..SimulationOverrides::default()
+    };
+    let r = SimulationRequest::resolve(&t, &over).unwrap();
+    assert_eq!((r.options.t_end, r.options.dt), (4.0, 1.0e-3));
+    assert_eq!(r.options.method, Method::Implicit);
+    assert_eq!(r.initial[0], (id(&t, "2"), 300.0));
+    let bare = crate::util::example("fig5_example62.toml");
+    match SimulationRequest::from_spec(&bare) {
+        Err(Error::Spec { path, .. }) => assert_eq!(path, "analysis.simulate.t_end"),
+        other => panic!("expected a missing t_end, got {other:?}"),
+    }
+    let over = SimulationOverrides {
+        t_end: Some(2.0),
+        ..SimulationOverrides::default()
+    };
+    let r = SimulationRequest::resolve(&bare, &over).unwrap();
+    assert_eq!(r.options.dt, 2.0 / 1000.0);
+}

@@ -67,18 +67,18 @@ class TrainCore:
     def mass_matrix(self) -> Dict[str, Any]: ...
     def dynamics(
         self,
-        torques: List[_Pair],
-        accelerations: List[_Pair],
-        driving: List[str],
+        torques: Optional[List[_Pair]],
+        accelerations: Optional[List[_Pair]],
+        driving: Optional[List[str]],
         engaged: List[str],
         inertia: bool = True,
     ) -> Dict[str, Any]: ...
     def power(
         self,
         speeds: List[_Input],
-        torques: List[_Pair],
-        accelerations: List[_Pair],
-        driving: List[str],
+        torques: Optional[List[_Pair]],
+        accelerations: Optional[List[_Pair]],
+        driving: Optional[List[str]],
         engaged: List[str],
         losses: bool = True,
         inertia: bool = True,

@@ -262,14 +262,8 @@ class Train:
     # -- defaults from the spec's [analysis] section -----------------------
 
     def _spec_speeds(self) -> List[Tuple[str, float, Optional[str]]]:
-        # A decimal written in the spec reaches us as the exact binary value of
-        # the double; the user meant the decimal they wrote (as the CLI reads it).
-        out: List[Tuple[str, float, Optional[str]]] = []
-        for n, v, ex in self._core.analysis()["speeds"]:
-            if ex is None or Fraction(ex) == Fraction(v):
-                ex = _speed_arg(n, v)[2]
-            out.append((n, v, ex))
-        return out
+        # The core reads a decimal in the spec as the decimal written (as the CLI does).
+        return [(n, v, ex) for n, v, ex in self._core.analysis()["speeds"]]
 
     def _speeds(self, inputs: Optional[Mapping[str, Speed]]) -> List[Tuple[str, float, Optional[str]]]:
         if inputs is None:
@@ -281,12 +275,15 @@ class Train:
         torques: Optional[Mapping[str, float]],
         accelerations: Optional[Mapping[str, float]],
         driving: Optional[Sequence[str]],
-    ) -> Tuple[List[Tuple[str, float]], List[Tuple[str, float]], List[str]]:
-        a = self._core.analysis()
-        t = list(a["torques"]) if torques is None else _pairs(torques, "torques")
-        acc = list(a["accelerations"]) if accelerations is None else _pairs(accelerations, "accelerations")
-        d = list(a["driving"]) if driving is None else _names(driving, "driving")
-        return t, acc, d
+    ) -> Tuple[
+        Optional[List[Tuple[str, float]]], Optional[List[Tuple[str, float]]], Optional[List[str]]
+    ]:
+        # None keeps the spec's [analysis] value; the core resolves it (as for the CLI).
+        return (
+            None if torques is None else _pairs(torques, "torques"),
+            None if accelerations is None else _pairs(accelerations, "accelerations"),
+            None if driving is None else _names(driving, "driving"),
+        )
 
     def _inputs(self, inputs: Optional[Sequence[str]]) -> List[str]:
         if inputs is not None:
@@ -574,8 +571,8 @@ class Train:
         """Integrate the motion in time (eq. 12) from ``initial`` speeds.
 
         ``method``: ``"rk4"`` (default) or ``"implicit"`` (L-stable SDIRK);
-        ``dt`` defaults to ``t_end / 1000``; omitted settings come from the
-        spec's ``[analysis.simulate]``. The applied torques are the ``curves``
+        omitted settings come from the spec's ``[analysis.simulate]``, else
+        the defaults the CLI uses too (``dt = t_end / 1000``). The applied torques are the ``curves``
         (default: the spec's), or ``torque(t, speeds) -> torques``, a Python
         function of time and the per-link speed array returning a float64
         array of per-link torques. ``every``: store every n-th step (0: about

@@ -7,6 +7,7 @@
 use std::fmt::Write as _;
 
 use super::Report;
+use crate::svg::{PALETTE, esc, fmt_tick, ticks};
 
 const WIDTH: f64 = 980.0;
 const LEFT: f64 = 70.0;
@@ -17,41 +18,6 @@ const SPEED_H: f64 = 380.0;
 const TORQUE_TOP: f64 = SPEED_TOP + SPEED_H + 110.0;
 const TORQUE_H: f64 = 260.0;
 const HEIGHT: f64 = TORQUE_TOP + TORQUE_H + 70.0;
-
-/// A colour-blind-friendly palette (Okabe-Ito and Tol), cycled.
-const PALETTE: [&str; 12] = [
-    "#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#882255", "#117733",
-    "#332288", "#999933", "#AA4499", "#44AA99",
-];
-
-fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-}
-
-/// Round tick positions covering [lo, hi].
-fn ticks(lo: f64, hi: f64) -> (f64, f64, Vec<f64>) {
-    let span = (hi - lo).max(1e-9);
-    let raw = span / 6.0;
-    let mag = 10f64.powf(raw.log10().floor());
-    let step = [1.0, 2.0, 2.5, 5.0, 10.0]
-        .iter()
-        .map(|m| m * mag)
-        .find(|s| span / s <= 8.0)
-        .unwrap_or(10.0 * mag);
-    let (a, b) = ((lo / step).floor() * step, (hi / step).ceil() * step);
-    let n = ((b - a) / step).round() as usize;
-    let ts = (0..=n).map(|i| a + i as f64 * step).collect();
-    (a, b, ts)
-}
-
-fn fmt_tick(v: f64) -> String {
-    let s = format!("{v:.3}");
-    let s = s.trim_end_matches('0').trim_end_matches('.');
-    if s == "-0" { "0".into() } else { s.into() }
-}
 
 /// Axes, grid and gear columns for one panel; returns the y mapping.
 fn panel(

@@ -6,6 +6,7 @@
 
 use std::fmt::Write as _;
 
+use crate::svg::{PALETTE, esc, fmt_tick, ticks};
 use egt_core::{LinkId, Simulation, Train};
 
 const WIDTH: f64 = 900.0;
@@ -17,47 +18,6 @@ const PLOT_H: f64 = 330.0;
 const GAP: f64 = 90.0;
 /// At most this many points per line.
 const MAX_POINTS: usize = 600;
-
-/// A colour-blind-friendly palette (Okabe-Ito and Tol), cycled.
-const PALETTE: [&str; 10] = [
-    "#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#882255", "#117733",
-    "#332288", "#999933",
-];
-
-fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-}
-
-/// Round tick positions covering [lo, hi].
-fn ticks(lo: f64, hi: f64) -> (f64, f64, Vec<f64>) {
-    let (lo, hi) = if hi - lo < 1e-12 * hi.abs().max(1.0) {
-        (lo - 0.5 * lo.abs().max(1.0), hi + 0.5 * hi.abs().max(1.0))
-    } else {
-        (lo, hi)
-    };
-    let raw = (hi - lo) / 6.0;
-    let mag = 10f64.powf(raw.log10().floor());
-    let step = [1.0, 2.0, 2.5, 5.0, 10.0]
-        .iter()
-        .map(|m| m * mag)
-        .find(|s| (hi - lo) / s <= 8.0)
-        .unwrap_or(10.0 * mag);
-    let (a, b) = ((lo / step).floor() * step, (hi / step).ceil() * step);
-    let n = ((b - a) / step).round() as usize;
-    (a, b, (0..=n).map(|i| a + i as f64 * step).collect())
-}
-
-fn fmt_tick(v: f64) -> String {
-    if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e6) {
-        return format!("{v:.1e}");
-    }
-    let s = format!("{v:.4}");
-    let s = s.trim_end_matches('0').trim_end_matches('.');
-    if s == "-0" { "0".into() } else { s.into() }
-}
 
 /// One panel: axes, ticks, a line per link of `value(sample, link)`, and
 /// optional dashed reference levels.
