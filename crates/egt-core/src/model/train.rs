@@ -433,30 +433,24 @@ fn finite(path: String, v: f64) -> Result<f64> {
 }
 
 fn positive(path: String, v: f64) -> Result<f64> {
-    let v = finite(path.clone(), v)?;
-    if v > 0.0 {
-        Ok(v)
-    } else {
-        Err(Error::spec(
-            path,
-            SpecErrorKind::OutOfRange {
-                value: v,
-                expected: "must be > 0".into(),
-            },
-        ))
-    }
+    bounded(path, v, v > 0.0, "must be > 0")
 }
 
 fn non_negative(path: String, v: f64) -> Result<f64> {
+    bounded(path, v, v >= 0.0, "must be >= 0")
+}
+
+/// `v`, finite and within the bound `ok` (else an out-of-range error saying `expected`).
+fn bounded(path: String, v: f64, ok: bool, expected: &str) -> Result<f64> {
     let v = finite(path.clone(), v)?;
-    if v >= 0.0 {
+    if ok {
         Ok(v)
     } else {
         Err(Error::spec(
             path,
             SpecErrorKind::OutOfRange {
                 value: v,
-                expected: "must be >= 0".into(),
+                expected: expected.into(),
             },
         ))
     }

@@ -869,15 +869,25 @@ impl LossySolver for LossyScenario<'_, '_> {
     }
 }
 
+/// The search reads the scenario's current solution as a [`Solved`] one.
 impl ForceSolution for LossyScenario<'_, '_> {
     fn multiplier(&self, m: usize) -> f64 {
-        self.ws.x[m]
+        self.solved().multiplier(m)
     }
     fn torque_scale(&self) -> f64 {
-        self.plan.torque_scale(self.ws)
+        self.solved().torque_scale()
     }
     fn condition(&self) -> f64 {
-        self.ws.cond[2]
+        self.solved().condition()
+    }
+}
+
+impl LossyScenario<'_, '_> {
+    fn solved(&self) -> Solved<'_> {
+        Solved {
+            plan: self.plan,
+            ws: self.ws,
+        }
     }
 }
 

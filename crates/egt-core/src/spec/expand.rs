@@ -336,9 +336,17 @@ fn expand_planetary(d: &mut Draft, set: &PlanetarySpec, frame: &str, path: &str)
                 "planet-ring",
             ));
         }
-        PlanetaryKind::DoublePinion => {
+        // A Ravigneaux set is a double-pinion set whose long planet (planet2)
+        // also meshes with a second sun.
+        PlanetaryKind::DoublePinion | PlanetaryKind::Ravigneaux => {
             let ring = need_link(&set.ring, "ring")?;
             let zr = Some(need(t.ring, "ring")?);
+            let sun2 = match set.kind {
+                PlanetaryKind::Ravigneaux => {
+                    Some((need_link(&set.sun2, "sun2")?, Some(need(t.sun2, "sun2")?)))
+                }
+                _ => None,
+            };
             add_planet(d, &planet, t.planet)?;
             add_planet(d, &planet2, t.planet2)?;
             d.gears.push(mesh(
@@ -357,6 +365,16 @@ fn expand_planetary(d: &mut Draft, set: &PlanetarySpec, frame: &str, path: &str)
                 MeshKind::External,
                 "planet-planet2",
             ));
+            if let Some((sun2, z2)) = sun2 {
+                d.gears.push(mesh(
+                    &sun2,
+                    z2,
+                    &planet2,
+                    t.planet2,
+                    MeshKind::External,
+                    "sun2-planet2",
+                ));
+            }
             d.gears.push(mesh(
                 &planet2,
                 t.planet2,
@@ -411,46 +429,6 @@ fn expand_planetary(d: &mut Draft, set: &PlanetarySpec, frame: &str, path: &str)
                     ));
                 }
             }
-        }
-        PlanetaryKind::Ravigneaux => {
-            let ring = need_link(&set.ring, "ring")?;
-            let sun2 = need_link(&set.sun2, "sun2")?;
-            let zr = Some(need(t.ring, "ring")?);
-            let z2 = Some(need(t.sun2, "sun2")?);
-            add_planet(d, &planet, t.planet)?;
-            add_planet(d, &planet2, t.planet2)?;
-            d.gears.push(mesh(
-                &set.sun,
-                zs,
-                &planet,
-                t.planet,
-                MeshKind::External,
-                "sun-planet",
-            ));
-            d.gears.push(mesh(
-                &planet,
-                t.planet,
-                &planet2,
-                t.planet2,
-                MeshKind::External,
-                "planet-planet2",
-            ));
-            d.gears.push(mesh(
-                &sun2,
-                z2,
-                &planet2,
-                t.planet2,
-                MeshKind::External,
-                "sun2-planet2",
-            ));
-            d.gears.push(mesh(
-                &planet2,
-                t.planet2,
-                &ring,
-                zr,
-                MeshKind::Internal,
-                "planet2-ring",
-            ));
         }
     }
     Ok(())
