@@ -77,8 +77,12 @@ FUZZ_TARGETS := spec adjacency input_value
 fuzz-seed: ## Seed fuzz/corpus/* from examples/ (specs, adjacency strings, input values)
 	bash fuzz/seed-corpus.sh
 
-fuzz-smoke: fuzz-seed ## A short libFuzzer run of every fuzz target (FUZZ_SECONDS each; needs cargo-fuzz; see docs/fuzzing.md)
+# The CI run: coverage-guided libFuzzer on the pinned stable toolchain
+# (RUSTC_BOOTSTRAP for cargo-fuzz's flags), no sanitizer: egt-core has no
+# unsafe code, and what is looked for is panics, aborts, timeouts and memory.
+FUZZ_SANITIZER ?= none
+fuzz-smoke: fuzz-seed ## A short libFuzzer run of every fuzz target (FUZZ_SECONDS each; installs cargo-fuzz; see docs/fuzzing.md)
 	@command -v cargo-fuzz >/dev/null || cargo install cargo-fuzz --locked
 	cd fuzz && for t in $(FUZZ_TARGETS); do \
-		RUSTC_BOOTSTRAP=1 cargo fuzz run $$t corpus/$$t -- -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 || exit 1; \
+		RUSTC_BOOTSTRAP=1 cargo fuzz run --sanitizer $(FUZZ_SANITIZER) -O $$t corpus/$$t -- -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 || exit 1; \
 	done

@@ -479,9 +479,6 @@ pub enum AnalysisError {
         /// The analysis.
         analysis: String,
     },
-    /// Anything else, in words.
-    #[error("{0}")]
-    Other(String),
 }
 
 /// The largest tooth count accepted: far past any wheel, small enough that
@@ -524,7 +521,6 @@ impl AnalysisError {
             AnalysisError::SelfLocking => "self_locking",
             AnalysisError::DirectionsUndecided { .. } => "directions_undecided",
             AnalysisError::ConfigurationDependent { .. } => "configuration_dependent",
-            AnalysisError::Other(_) => "other",
         }
     }
 }

@@ -34,8 +34,11 @@ pub fn from_f64(x: f64) -> Option<Q> {
     Q::from_float(x)
 }
 
-/// Most significant digits accepted in an exact number written as text.
-pub const MAX_DIGITS: usize = 1000;
+/// Most digits accepted in an exact number: written as text (significant
+/// digits), and in the numerator and the denominator of its value (so that
+/// whatever is accepted prints back, by [`display`], as text that is accepted
+/// too: `1e1000` is 1001 digits).
+pub const MAX_DIGITS: usize = 1024;
 /// Largest decimal exponent (in absolute value) accepted in an exact number
 /// written as text: far past double precision, and small enough that the
 /// exact value is built in microseconds (1e1000000 would take seconds and
@@ -52,7 +55,9 @@ pub enum RationalError {
     #[error("a fraction with a zero denominator")]
     ZeroDenominator,
     /// Too many digits or too large an exponent.
-    #[error("more than {MAX_DIGITS} digits or an exponent beyond +-{MAX_EXPONENT}")]
+    #[error(
+        "more than {MAX_DIGITS} digits (written, or in the numerator or denominator of the value) or an exponent beyond +-{MAX_EXPONENT}"
+    )]
     TooLarge,
     /// Exact, but beyond the range of double precision.
     #[error("beyond the range of double precision (about 1.8e308)")]
@@ -67,15 +72,36 @@ pub enum RationalError {
 /// [`MAX_DIGITS`] / [`MAX_EXPONENT`].
 pub fn parse_rational(s: &str) -> Result<Q, RationalError> {
     let s = s.trim();
-    if let Some((n, d)) = s.split_once('/') {
+    let q = if let Some((n, d)) = s.split_once('/') {
         let n = parse_decimal(n.trim())?;
         let d = parse_decimal(d.trim())?;
         if d.is_zero() {
             return Err(RationalError::ZeroDenominator);
         }
-        return Ok(n / d);
+        n / d
+    } else {
+        parse_decimal(s)?
+    };
+    if !within_digits(q.numer()) || !within_digits(q.denom()) {
+        return Err(RationalError::TooLarge);
     }
-    parse_decimal(s)
+    Ok(q)
+}
+
+/// Whether |n| has at most [`MAX_DIGITS`] decimal digits: decided from its
+/// bit length away from the limit (a digit of margin), by printing near it.
+fn within_digits(n: &BigInt) -> bool {
+    // 2^(bits-1) <= |n| < 2^bits, so its digits lie in
+    // [(bits-1) log10 2, bits log10 2 + 1].
+    let bits = n.bits() as f64;
+    let log2 = std::f64::consts::LOG10_2;
+    if bits * log2 + 2.0 <= MAX_DIGITS as f64 {
+        true
+    } else if (bits - 1.0) * log2 > MAX_DIGITS as f64 + 1.0 {
+        false
+    } else {
+        n.magnitude().to_string().len() <= MAX_DIGITS
+    }
 }
 
 /// [`parse_rational`] for a value that must also be a finite double: the
@@ -417,6 +443,32 @@ mod tests {
         assert_eq!(parse_rational(&digits), Err(RationalError::TooLarge));
         // The limits themselves are accepted, and leading zeros do not count.
         assert!(parse_rational("1e1000").is_ok() && parse_rational("1e-1000").is_ok());
+        // The value's size counts too, so that what is accepted prints back
+        // as text that is accepted (a fuzz finding: 1e1000 printed 1001 digits).
+        for text in [
+            "1e1000",
+            "1e-1000",
+            "7e1000/3",
+            "1e1000/1e-1000",
+            "-1/3e1000",
+        ] {
+            match parse_rational(text) {
+                Ok(q) => assert_eq!(parse_rational(&display(&q)), Ok(q), "{text}"),
+                Err(e) => assert_eq!(e, RationalError::TooLarge, "{text}"),
+            }
+        }
+        assert_eq!(
+            parse_rational("1e1000/1e-1000"),
+            Err(RationalError::TooLarge)
+        );
+        assert_eq!(
+            parse_rational(&"9".repeat(MAX_DIGITS)).map(|q| display(&q).len()),
+            Ok(MAX_DIGITS)
+        );
+        assert_eq!(
+            parse_rational(&format!("1{}", "0".repeat(MAX_DIGITS))),
+            Err(RationalError::TooLarge)
+        );
         assert!(parse_rational(&format!("000{}", "7".repeat(MAX_DIGITS))).is_ok());
         // Exact but not a double.
         assert_eq!(

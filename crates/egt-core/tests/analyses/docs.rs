@@ -31,3 +31,21 @@ fn spec_md_examples_validate() {
         "only {checked} complete examples found in docs/spec.md"
     );
 }
+
+/// Every stable error code of the core has a row in `docs/errors.md`.
+#[test]
+fn every_error_code_is_documented() {
+    let source =
+        std::fs::read_to_string(root().join("crates/egt-core/src/error.rs")).expect("error.rs");
+    let doc = std::fs::read_to_string(root().join("docs/errors.md")).expect("docs/errors.md");
+    let mut codes = 0;
+    for line in source.lines().filter(|l| l.contains("=> \"")) {
+        let code = line.split('"').nth(1).expect("a quoted code");
+        assert!(
+            doc.contains(&format!("| `{code}` |")),
+            "error code `{code}` has no row in docs/errors.md"
+        );
+        codes += 1;
+    }
+    assert!(codes >= 40, "only {codes} codes found in error.rs");
+}
