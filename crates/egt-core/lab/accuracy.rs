@@ -23,7 +23,7 @@ use nalgebra::DMatrix;
 use num_traits::Zero;
 
 use egt_core::batch::{BatchPlan, BatchSpec};
-use egt_core::error::{AnalysisError, Result};
+use egt_core::error::{AnalysisError, Error, Result, SpecErrorKind};
 use egt_core::model::train::Train;
 use egt_core::numerics::exact::{self, Q, QMatrix};
 use egt_core::numerics::linalg::Lu;
@@ -169,17 +169,16 @@ impl Problem {
     /// A plan that does not compute dynamics, or a row of the wrong length or with NaN.
     pub fn new(plan: BatchPlan, row: Vec<f64>) -> Result<Self> {
         if plan.compute() != Compute::Dynamics || row.len() != plan.parameters().len() {
-            return Err(AnalysisError::Other(
-                "an accuracy problem needs a full row of a dynamics batch plan".into(),
-            )
-            .into());
+            return Err(Error::invalid(
+                "problem",
+                "an accuracy problem needs a full row of a dynamics batch plan",
+            ));
         }
         if let Some(c) = row.iter().position(|v| !v.is_finite()) {
-            return Err(AnalysisError::Other(format!(
-                "parameter `{}` has no finite value",
-                plan.parameters()[c]
-            ))
-            .into());
+            return Err(Error::spec(
+                plan.parameters()[c].clone(),
+                SpecErrorKind::NonFinite { value: row[c] },
+            ));
         }
         Ok(Problem { plan, row })
     }
