@@ -11,7 +11,7 @@ use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pyo3::prelude::*;
 
-use crate::errors::{Error, Result};
+use crate::errors::{Error, Result, value_error};
 
 /// Resolve a link name; an unknown name is a spec error at `where_` with a suggestion.
 pub fn link(train: &Train, name: &str, where_: &str) -> Result<LinkId> {
@@ -108,4 +108,15 @@ pub fn dmatrix<'py>(py: Python<'py>, m: &DMatrix<f64>) -> Result<Bound<'py, PyAr
         }
     }
     mat2(py, m.nrows(), m.ncols(), out)
+}
+
+/// A core result as Python objects (dicts, lists, numbers, strings, None):
+/// the one conversion of every result, through its `Serialize` form, so that
+/// no field is listed by hand here. Ids are indices; exact values are text.
+///
+/// # Errors
+/// A result that does not serialize (a non-finite number becomes None).
+pub fn to_py<'py>(py: Python<'py>, value: &impl serde::Serialize) -> Result<Bound<'py, PyAny>> {
+    let text = serde_json::to_string(value).map_err(|e| value_error(e.to_string()))?;
+    Ok(py.import("json")?.call_method1("loads", (text,))?)
 }

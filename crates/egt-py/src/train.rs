@@ -2,7 +2,7 @@
 //! names to ids, calls egt-core, and returns plain Python values (dicts, lists,
 //! NumPy arrays); the Python package wraps them in result classes.
 
-use egt_core::analysis::power::{Driver, PowerRequest};
+use egt_core::analysis::power::PowerRequest;
 use egt_core::model::mass::MassMatrix;
 use egt_core::{DynamicsRequest, Extra, LoadOverrides};
 use egt_core::{Format, SpeedInput, Train};
@@ -10,7 +10,7 @@ use numpy::PyArray2;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use crate::convert::{self, dmatrix, vec1};
+use crate::convert::{self, dmatrix, to_py};
 use crate::errors::{Result, guard, value_error};
 
 /// A validated gear train (see `egt.Train` for the documented API).
@@ -96,71 +96,6 @@ impl TrainCore {
             .map(|l| self.link_name(l).to_string())
             .collect()
     }
-}
-
-fn speeds_dict<'py>(
-    py: Python<'py>,
-    core: &TrainCore,
-    s: &egt_core::Speeds,
-) -> Result<Bound<'py, PyDict>> {
-    let d = PyDict::new(py);
-    d.set_item("speed", vec1(py, s.speed.clone()))?;
-    d.set_item("known", vec1(py, s.known.clone()))?;
-    d.set_item(
-        "exact",
-        s.exact
-            .as_ref()
-            .map(|e| e.iter().map(convert::q_text).collect::<Vec<_>>()),
-    )?;
-    let rel = PyList::empty(py);
-    for r in &s.relative {
-        rel.append((
-            core.link_name(r.link),
-            core.link_name(r.carrier),
-            r.speed,
-            r.exact.as_ref().map(convert::q_text),
-        ))?;
-    }
-    d.set_item("relative", rel)?;
-    d.set_item("residual", s.residual)?;
-    d.set_item("condition", s.condition)?;
-    d.set_item("warnings", s.warnings.clone())?;
-    Ok(d)
-}
-
-fn dynamics_dict<'py>(
-    py: Python<'py>,
-    core: &TrainCore,
-    r: &egt_core::InverseDynamics,
-) -> Result<Bound<'py, PyDict>> {
-    let d = PyDict::new(py);
-    d.set_item("acceleration", vec1(py, r.acceleration.clone()))?;
-    d.set_item("torque", vec1(py, r.torque.clone()))?;
-    d.set_item(
-        "driving_torques",
-        r.driving_torques
-            .iter()
-            .map(|(l, t)| (core.link_name(*l).to_string(), *t))
-            .collect::<Vec<_>>(),
-    )?;
-    d.set_item("multipliers", vec1(py, r.multipliers.clone()))?;
-    d.set_item("element_torques", vec1(py, r.element_torques.clone()))?;
-    let meshes = PyList::empty(py);
-    for m in &r.meshes {
-        let g = &core.train.gears()[m.gear.index()];
-        let md = PyDict::new(py);
-        md.set_item("gear", g.name.as_str())?;
-        md.set_item("multiplier", m.multiplier)?;
-        md.set_item("torque_i", m.torque_i)?;
-        md.set_item("torque_j", m.torque_j)?;
-        md.set_item("torque_carrier", m.torque_carrier)?;
-        md.set_item("force", m.force.map(|f| (f[0], f[1])))?;
-        meshes.append(md)?;
-    }
-    d.set_item("meshes", meshes)?;
-    d.set_item("conditions", (r.conditions[0], r.conditions[1]))?;
-    d.set_item("warnings", r.warnings.clone())?;
-    Ok(d)
 }
 
 #[pymethods]
@@ -352,15 +287,10 @@ impl TrainCore {
     }
 
     /// Speeds of every link for the inputs `[(link, speed, exact text or None)]`.
-    fn kinematics<'py>(
-        &self,
-        py: Python<'py>,
-        inputs: Vec<InputArg>,
-    ) -> Result<Bound<'py, PyDict>> {
+    fn kinematics<'py>(&self, py: Python<'py>, inputs: Vec<InputArg>) -> Result<Bound<'py, PyAny>> {
         guard(|| {
             let inputs = self.speed_inputs(&inputs)?;
-            let s = self.train.kinematics(&inputs)?;
-            speeds_dict(py, self, &s)
+            to_py(py, &self.train.kinematics(&inputs)?)
         })
     }
 
@@ -404,7 +334,7 @@ impl TrainCore {
         driving: Option<Vec<String>>,
         engaged: Vec<String>,
         inertia: bool,
-    ) -> Result<Bound<'py, PyDict>> {
+    ) -> Result<Bound<'py, PyAny>> {
         guard(|| {
             let req = self.request(
                 torques.as_deref(),
@@ -413,8 +343,7 @@ impl TrainCore {
                 &engaged,
             )?;
             let mass = self.mass_for(&req, inertia)?;
-            let r = self.train.inverse_dynamics(&req, mass.as_ref())?;
-            dynamics_dict(py, self, &r)
+            to_py(py, &self.train.inverse_dynamics(&req, mass.as_ref())?)
         })
     }
 
@@ -431,7 +360,7 @@ impl TrainCore {
         engaged: Vec<String>,
         losses: bool,
         inertia: bool,
-    ) -> Result<Bound<'py, PyDict>> {
+    ) -> Result<Bound<'py, PyAny>> {
         guard(|| {
             let dynamics = self.request(
                 torques.as_deref(),
@@ -445,56 +374,7 @@ impl TrainCore {
                 dynamics,
                 losses,
             };
-            let p = self.train.power_flow(&req, mass.as_ref())?;
-            let d = PyDict::new(py);
-            d.set_item("speeds", speeds_dict(py, self, &p.speeds)?)?;
-            d.set_item("dynamics", dynamics_dict(py, self, &p.dynamics)?)?;
-            let meshes = PyList::empty(py);
-            for m in &p.meshes {
-                let md = PyDict::new(py);
-                md.set_item("gear", self.train.gears()[m.gear.index()].name.as_str())?;
-                md.set_item("absolute", (m.absolute[0], m.absolute[1], m.absolute[2]))?;
-                md.set_item("rolling", m.rolling)?;
-                md.set_item(
-                    "driver",
-                    match m.driver {
-                        Driver::GearI => Some("gear_i"),
-                        Driver::GearJ => Some("gear_j"),
-                        Driver::None => None,
-                    },
-                )?;
-                md.set_item("efficiency", m.efficiency)?;
-                md.set_item("loss", m.loss)?;
-                meshes.append(md)?;
-            }
-            d.set_item("meshes", meshes)?;
-            d.set_item(
-                "links",
-                p.links
-                    .iter()
-                    .map(|l| (self.link_name(l.link).to_string(), l.external, l.inertial))
-                    .collect::<Vec<_>>(),
-            )?;
-            d.set_item("input_power", p.input_power)?;
-            d.set_item("output_power", p.output_power)?;
-            d.set_item("loss", p.loss)?;
-            d.set_item("kinetic_rate", p.kinetic_rate)?;
-            d.set_item("efficiency", p.efficiency)?;
-            d.set_item("circulation_ratio", p.circulation_ratio)?;
-            d.set_item(
-                "circulating",
-                p.circulating.as_ref().map(|(g, l)| {
-                    (
-                        g.iter()
-                            .map(|g| self.train.gears()[g.index()].name.clone())
-                            .collect::<Vec<_>>(),
-                        self.names(l.iter().copied()),
-                    )
-                }),
-            )?;
-            d.set_item("iterations", p.iterations)?;
-            d.set_item("notes", p.notes.clone())?;
-            Ok(d)
+            to_py(py, &self.train.power_flow(&req, mass.as_ref())?)
         })
     }
 

@@ -88,6 +88,35 @@ pub fn parse_rational(s: &str) -> Result<Q, RationalError> {
     Ok(q)
 }
 
+/// Serde helpers that write exact values as their text (`"p/q"`, see
+/// [`display`]): `#[serde(serialize_with = "exact::text::option")]`.
+pub mod text {
+    use super::{Q, display};
+    use serde::Serializer;
+
+    /// An optional exact value as text, or null.
+    ///
+    /// # Errors
+    /// The serializer's.
+    pub fn option<S: Serializer>(q: &Option<Q>, s: S) -> Result<S::Ok, S::Error> {
+        match q {
+            Some(q) => s.serialize_some(&display(q)),
+            None => s.serialize_none(),
+        }
+    }
+
+    /// An optional list of exact values as texts, or null.
+    ///
+    /// # Errors
+    /// The serializer's.
+    pub fn option_vec<S: Serializer>(v: &Option<Vec<Q>>, s: S) -> Result<S::Ok, S::Error> {
+        match v {
+            Some(v) => s.collect_seq(v.iter().map(display)),
+            None => s.serialize_none(),
+        }
+    }
+}
+
 /// Whether |n| has at most [`MAX_DIGITS`] decimal digits: decided from its
 /// bit length away from the limit (a digit of margin), by printing near it.
 fn within_digits(n: &BigInt) -> bool {

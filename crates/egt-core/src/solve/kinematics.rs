@@ -15,7 +15,7 @@ use crate::error::{AnalysisError, Error, Result};
 use crate::model::equations::{self, willis_row};
 use crate::model::train::{LinkId, Train};
 use crate::numerics::exact::{self, Q, QMatrix};
-use crate::numerics::linalg::{COND_REFUSE, COND_WARN, Lu};
+use crate::numerics::linalg::{COND_WARN, Lu};
 
 /// One prescribed input speed.
 #[derive(Debug, Clone, PartialEq)]
@@ -47,8 +47,8 @@ pub struct RelativeSpeed {
     pub carrier: LinkId,
     /// w_link - w_carrier.
     pub speed: f64,
-    /// Exact value, when known.
-    #[serde(skip)]
+    /// Exact value, when known (serialized as text).
+    #[serde(serialize_with = "exact::text::option")]
     pub exact: Option<Q>,
 }
 
@@ -59,8 +59,8 @@ pub struct Speeds {
     pub speed: Vec<f64>,
     /// False where the speed is unknown (a planet given without a tooth count).
     pub known: Vec<bool>,
-    /// Exact speeds, when every ratio and input is exact.
-    #[serde(skip)]
+    /// Exact speeds, when every ratio and input is exact (serialized as text).
+    #[serde(serialize_with = "exact::text::option_vec")]
     pub exact: Option<Vec<Q>>,
     /// Speeds of floating links relative to their carriers.
     pub relative: Vec<RelativeSpeed>,
@@ -159,7 +159,7 @@ impl KinematicsPlan {
     ///
     /// # Errors
     /// [`AnalysisError::Singular`] on a zero pivot, [`AnalysisError::IllConditioned`]
-    /// past [`COND_REFUSE`]. (Use [`Train::kinematics`] for an exact diagnosis.)
+    /// past [`COND_REFUSE`](crate::numerics::linalg::COND_REFUSE). (Use [`Train::kinematics`] for an exact diagnosis.)
     pub fn solve(
         &mut self,
         ratios: &[f64],
@@ -179,16 +179,9 @@ impl KinematicsPlan {
                 }
             }
         }
-        self.lu.factor().map_err(|_| singular())?;
-        let cond = self.lu.condition();
-        if cond > COND_REFUSE {
-            return Err(AnalysisError::IllConditioned {
-                what: "the Willis system".into(),
-                condition: cond,
-                threshold: COND_REFUSE,
-            }
-            .into());
-        }
+        let cond = self
+            .lu
+            .factor_checked("the Willis system", "a pivot column is zero")?;
         self.lu.solve(&mut self.rhs);
         speeds.iter_mut().for_each(|v| *v = 0.0);
         for (k, &l) in self.inputs.iter().enumerate() {
@@ -199,14 +192,6 @@ impl KinematicsPlan {
         }
         Ok(cond)
     }
-}
-
-fn singular() -> Error {
-    AnalysisError::Singular {
-        what: "the Willis system".into(),
-        detail: "a pivot column is zero".into(),
-    }
-    .into()
 }
 
 fn unsized_error(train: &Train, l: LinkId) -> Error {

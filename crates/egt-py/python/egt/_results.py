@@ -158,16 +158,17 @@ class Kinematics(Mapping[str, float]):
     warnings: Tuple[str, ...]
 
     @classmethod
-    def _from_raw(cls, links: Tuple[str, ...], d: Mapping[str, Any]) -> "Kinematics":
+    def _from_core(cls, links: Tuple[str, ...], d: Mapping[str, Any]) -> "Kinematics":
+        """From the core's `Speeds` (its serde form: ids are indices, exact values text)."""
         exact = d["exact"]
         return cls(
             links=links,
-            speeds=d["speed"],
-            known=d["known"],
+            speeds=np.asarray(d["speed"], dtype=np.float64),
+            known=np.asarray(d["known"], dtype=bool),
             exact=None if exact is None else {n: Fraction(x) for n, x in zip(links, exact)},
             relative=tuple(
-                RelativeSpeed(link, carrier, speed, _frac(ex))
-                for link, carrier, speed, ex in d["relative"]
+                RelativeSpeed(links[r["link"]], links[r["carrier"]], r["speed"], _frac(r["exact"]))
+                for r in d["relative"]
             ),
             residual=d["residual"],
             condition=d["condition"],
@@ -276,22 +277,25 @@ class Dynamics:
     warnings: Tuple[str, ...]
 
     @classmethod
-    def _from_raw(cls, links: Tuple[str, ...], d: Mapping[str, Any]) -> "Dynamics":
+    def _from_core(
+        cls, links: Tuple[str, ...], gears: Tuple[str, ...], d: Mapping[str, Any]
+    ) -> "Dynamics":
+        """From the core's `InverseDynamics` (its serde form: ids are indices)."""
         return cls(
             links=links,
-            accelerations=d["acceleration"],
-            torques=d["torque"],
-            driving_torques=dict(d["driving_torques"]),
-            multipliers=d["multipliers"],
-            element_torques=d["element_torques"],
+            accelerations=np.asarray(d["acceleration"], dtype=np.float64),
+            torques=np.asarray(d["torque"], dtype=np.float64),
+            driving_torques={links[l]: t for l, t in d["driving_torques"]},
+            multipliers=np.asarray(d["multipliers"], dtype=np.float64),
+            element_torques=np.asarray(d["element_torques"], dtype=np.float64),
             meshes=tuple(
                 MeshLoad(
-                    gear=m["gear"],
+                    gear=gears[m["gear"]],
                     multiplier=m["multiplier"],
                     torque_i=m["torque_i"],
                     torque_j=m["torque_j"],
                     torque_carrier=m["torque_carrier"],
-                    force=m["force"],
+                    force=None if m["force"] is None else tuple(m["force"]),
                 )
                 for m in d["meshes"]
             ),
@@ -366,6 +370,40 @@ class PowerFlow:
     """The meshes and shafts carrying more than the input power."""
     iterations: int
     notes: Tuple[str, ...] = field(default_factory=tuple)
+
+    @classmethod
+    def _from_core(
+        cls, links: Tuple[str, ...], gears: Tuple[str, ...], d: Mapping[str, Any]
+    ) -> "PowerFlow":
+        """From the core's `PowerFlow` (its serde form: ids are indices)."""
+        circ = d["circulating"]
+        return cls(
+            speeds=Kinematics._from_core(links, d["speeds"]),
+            dynamics=Dynamics._from_core(links, gears, d["dynamics"]),
+            meshes=tuple(
+                MeshPower(
+                    gear=gears[m["gear"]],
+                    absolute=tuple(m["absolute"]),
+                    rolling=m["rolling"],
+                    driver=None if m["driver"] == "none" else m["driver"],
+                    efficiency=m["efficiency"],
+                    loss=m["loss"],
+                )
+                for m in d["meshes"]
+            ),
+            links=tuple(LinkPower(links[p["link"]], p["external"], p["inertial"]) for p in d["links"]),
+            input_power=d["input_power"],
+            output_power=d["output_power"],
+            loss=d["loss"],
+            kinetic_rate=d["kinetic_rate"],
+            efficiency=d["efficiency"],
+            circulation_ratio=d["circulation_ratio"],
+            circulating=None
+            if circ is None
+            else (tuple(gears[g] for g in circ[0]), tuple(links[l] for l in circ[1])),
+            iterations=d["iterations"],
+            notes=tuple(d["notes"]),
+        )
 
     @property
     def balance(self) -> float:

@@ -45,9 +45,7 @@ from ._results import (
     GearPair,
     Kinematics,
     Link,
-    LinkPower,
     MassMatrix,
-    MeshPower,
     Offset,
     PowerFlow,
 )
@@ -133,13 +131,14 @@ class Train:
     (every link but the frame) follow :attr:`coordinates`.
     """
 
-    __slots__ = ("_core", "_links", "_spec")
+    __slots__ = ("_core", "_links", "_gears", "_spec")
 
     def __init__(self, core: TrainCore, spec: Optional[Tuple[str, str, str]] = None) -> None:
         if not isinstance(core, TrainCore):
             raise TypeError("use egt.load, egt.loads or Train.from_dict to build a Train")
         self._core = core
         self._links: Tuple[str, ...] = tuple(core.link_names)
+        self._gears: Tuple[str, ...] = tuple(g["name"] for g in core.gears())
         # The spec as written (text, format, source): a Train pickles through it.
         self._spec = spec
 
@@ -302,7 +301,7 @@ class Train:
         spec's ``[analysis] speeds``. The exact rational solution is included
         when every ratio and input is exact.
         """
-        return Kinematics._from_raw(self._links, self._core.kinematics(self._speeds(inputs)))
+        return Kinematics._from_core(self._links, self._core.kinematics(self._speeds(inputs)))
 
     def willis_jacobian(self) -> np.ndarray:
         """[psi_w] of eq. (2): rows are circuits, columns the :attr:`coordinates`."""
@@ -337,7 +336,7 @@ class Train:
         """
         t, a, d = self._loads(torques, accelerations, driving)
         raw = self._core.dynamics(t, a, d, _names(engaged, "engaged"), inertia)
-        return Dynamics._from_raw(self._links, raw)
+        return Dynamics._from_core(self._links, self._gears, raw)
 
     def power(
         self,
@@ -355,33 +354,7 @@ class Train:
         raw = self._core.power(
             self._speeds(speeds), t, a, d, _names(engaged, "engaged"), losses, inertia
         )
-        return PowerFlow(
-            speeds=Kinematics._from_raw(self._links, raw["speeds"]),
-            dynamics=Dynamics._from_raw(self._links, raw["dynamics"]),
-            meshes=tuple(
-                MeshPower(
-                    gear=m["gear"],
-                    absolute=tuple(m["absolute"]),
-                    rolling=m["rolling"],
-                    driver=m["driver"],
-                    efficiency=m["efficiency"],
-                    loss=m["loss"],
-                )
-                for m in raw["meshes"]
-            ),
-            links=tuple(LinkPower(n, e, i) for n, e, i in raw["links"]),
-            input_power=raw["input_power"],
-            output_power=raw["output_power"],
-            loss=raw["loss"],
-            kinetic_rate=raw["kinetic_rate"],
-            efficiency=raw["efficiency"],
-            circulation_ratio=raw["circulation_ratio"],
-            circulating=None
-            if raw["circulating"] is None
-            else (tuple(raw["circulating"][0]), tuple(raw["circulating"][1])),
-            iterations=raw["iterations"],
-            notes=tuple(raw["notes"]),
-        )
+        return PowerFlow._from_core(self._links, self._gears, raw)
 
     def velocity_matrix(
         self, inputs: Optional[Sequence[str]] = None, *, engaged: Sequence[str] = ()
