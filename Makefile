@@ -84,5 +84,7 @@ FUZZ_SANITIZER ?= none
 fuzz-smoke: fuzz-seed ## A short libFuzzer run of every fuzz target (FUZZ_SECONDS each; installs cargo-fuzz; see docs/fuzzing.md)
 	@command -v cargo-fuzz >/dev/null || cargo install cargo-fuzz --locked
 	cd fuzz && for t in $(FUZZ_TARGETS); do \
-		RUSTC_BOOTSTRAP=1 cargo fuzz run --sanitizer $(FUZZ_SANITIZER) -O $$t corpus/$$t -- -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 || exit 1; \
+		RUSTC_BOOTSTRAP=1 cargo fuzz run --sanitizer $(FUZZ_SANITIZER) -O $$t corpus/$$t -- -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 > $$t.log 2>&1 \
+			|| { tail -n 60 $$t.log; echo "fuzz target $$t failed: full log fuzz/$$t.log, crash in fuzz/artifacts/$$t/"; exit 1; }; \
+		grep -E '^Done [0-9]+ runs' $$t.log | sed "s/^/$$t: /"; \
 	done

@@ -5,17 +5,16 @@
 
 use std::cell::RefCell;
 
-use egt_core::analysis::stability::{CoordinateSource, OperatingSource, StabilityRequest, Verdict};
+use egt_core::Train;
+use egt_core::analysis::stability::StabilityRequest;
 use egt_core::model::train::Curve;
 use egt_core::motion::simulate::{
     LinearCurves, SimulationOverrides, SimulationRequest, TorqueModel,
 };
-use egt_core::{LinkId, Train};
 use numpy::{PyArray1, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
 
-use crate::convert::{self, dmatrix, mat2, vec1};
+use crate::convert::{self, to_py};
 use crate::errors::{Error, Result, guard, value_error};
 use crate::train::TrainCore;
 
@@ -36,10 +35,6 @@ fn curves(train: &Train, cs: &[CurveArg]) -> Result<Vec<Curve>> {
         .collect()
 }
 
-fn names(train: &Train, ls: &[LinkId]) -> Vec<String> {
-    ls.iter().map(|&l| train.link_name(l).to_string()).collect()
-}
-
 /// The stability of the train about an operating point (eq. 12-27, corrected).
 #[pyfunction]
 #[pyo3(signature = (core, coordinates = None, curves = None, speeds = None))]
@@ -49,7 +44,7 @@ pub fn stability<'py>(
     coordinates: Option<Vec<String>>,
     curves: Option<Vec<CurveArg>>,
     speeds: Option<Vec<(String, f64)>>,
-) -> Result<Bound<'py, PyDict>> {
+) -> Result<Bound<'py, PyAny>> {
     guard(|| {
         let t = &core.train;
         let req = StabilityRequest {
@@ -61,79 +56,7 @@ pub fn stability<'py>(
                 .map(|s| convert::valued(t, &s, "speeds"))
                 .transpose()?,
         };
-        let r = t.stability(&req)?;
-        let d = PyDict::new(py);
-        let m = &r.model;
-        d.set_item("coordinates", names(t, &m.coordinates))?;
-        d.set_item(
-            "source",
-            match m.source {
-                CoordinateSource::Given => "given",
-                CoordinateSource::SpecSpeeds => "spec_speeds",
-                CoordinateSource::Automatic => "automatic",
-            },
-        )?;
-        d.set_item("velocity", dmatrix(py, &m.velocity)?)?;
-        d.set_item("gamma_condition", m.gamma_condition)?;
-        d.set_item("orthogonality", m.orthogonality)?;
-        d.set_item("mass", dmatrix(py, &m.mass)?)?;
-        d.set_item("slope", dmatrix(py, &m.slope)?)?;
-        d.set_item("link_slope", vec1(py, m.link_slope.clone()))?;
-        let o = &r.operating;
-        let od = PyDict::new(py);
-        od.set_item(
-            "source",
-            match o.source {
-                OperatingSource::Speeds => "speeds",
-                OperatingSource::Equilibrium => "equilibrium",
-            },
-        )?;
-        od.set_item("speed", vec1(py, o.speed.clone()))?;
-        od.set_item("torque", vec1(py, o.torque.clone()))?;
-        od.set_item("reduced_torque", vec1(py, o.reduced_torque.clone()))?;
-        od.set_item("residual", o.residual)?;
-        od.set_item("steady", o.steady)?;
-        od.set_item("equilibrium", o.equilibrium.clone().map(|e| vec1(py, e)))?;
-        od.set_item("equilibrium_condition", o.equilibrium_condition)?;
-        d.set_item("operating", od)?;
-        let s = &r.stability;
-        d.set_item("eigenvalues", vec1(py, s.eigenvalues.clone()))?;
-        let modes = PyList::empty(py);
-        for mode in &s.modes {
-            modes.append((
-                mode.eigenvalue,
-                mode.time_constant,
-                vec1(py, mode.coordinates.clone()),
-                vec1(py, mode.speeds.clone()),
-            ))?;
-        }
-        d.set_item("modes", modes)?;
-        d.set_item(
-            "verdict",
-            match s.verdict {
-                Verdict::Stable => "stable",
-                Verdict::Unstable => "unstable",
-                Verdict::Marginal => "marginal",
-            },
-        )?;
-        d.set_item("reason", s.reason.as_str())?;
-        d.set_item("margin", s.margin)?;
-        d.set_item("tolerance", s.tolerance)?;
-        let massless = PyList::empty(py);
-        for x in &s.massless {
-            massless.append((
-                vec1(py, x.coordinates.clone()),
-                vec1(py, x.speeds.clone()),
-                names(t, &x.links),
-                x.slope,
-            ))?;
-        }
-        d.set_item("massless", massless)?;
-        d.set_item("rk4_step_limit", s.rk4_step_limit)?;
-        d.set_item("stiffness", s.stiffness)?;
-        d.set_item("residual", s.residual)?;
-        d.set_item("warnings", r.warnings.clone())?;
-        Ok(d)
+        to_py(py, &t.stability(&req)?)
     })
 }
 
@@ -198,7 +121,7 @@ pub fn simulate<'py>(
     curves: Option<Vec<CurveArg>>,
     torque: Option<Bound<'py, PyAny>>,
     every: usize,
-) -> Result<Bound<'py, PyDict>> {
+) -> Result<Bound<'py, PyAny>> {
     guard(|| {
         let t = &core.train;
         // Keyword arguments are checked as arguments (ValueError); the spec's
@@ -253,53 +176,6 @@ pub fn simulate<'py>(
             }
             (None, None) => t.simulate(&req)?,
         };
-        let d = PyDict::new(py);
-        let n = t.links().len();
-        let k = sim.samples.len();
-        d.set_item("method", sim.method.to_string())?;
-        d.set_item("dt", sim.dt)?;
-        d.set_item("steps", sim.steps)?;
-        d.set_item(
-            "t",
-            vec1(py, sim.samples.iter().map(|s| s.t).collect::<Vec<_>>()),
-        )?;
-        d.set_item(
-            "speeds",
-            mat2(
-                py,
-                k,
-                n,
-                sim.samples
-                    .iter()
-                    .flat_map(|s| s.speed.iter().copied())
-                    .collect(),
-            )?,
-        )?;
-        for (name, f) in [
-            (
-                "drift",
-                (|s: &egt_core::Sample| s.drift) as fn(&egt_core::Sample) -> f64,
-            ),
-            ("energy", |s| s.energy),
-            ("work", |s| s.work),
-            ("power", |s| s.power),
-        ] {
-            d.set_item(
-                name,
-                vec1(py, sim.samples.iter().map(f).collect::<Vec<_>>()),
-            )?;
-        }
-        d.set_item("max_drift", sim.max_drift)?;
-        d.set_item("energy_error", sim.energy_error)?;
-        d.set_item(
-            "diverged",
-            sim.diverged.as_ref().map(|x| (x.t, x.reason.clone())),
-        )?;
-        d.set_item("rk4_step_limit", sim.rk4_step_limit)?;
-        d.set_item("eigenvalues", vec1(py, sim.eigenvalues.clone()))?;
-        d.set_item("newton_iterations", sim.newton_iterations)?;
-        d.set_item("halvings", sim.halvings)?;
-        d.set_item("warnings", sim.warnings.clone())?;
-        Ok(d)
+        to_py(py, &sim)
     })
 }

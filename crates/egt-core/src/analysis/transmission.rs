@@ -77,7 +77,7 @@ pub struct Slip {
     /// w_x - w_y for a clutch on (x, y); w_x for a brake on x.
     pub speed: f64,
     /// Exact slip, when the ratios are exact.
-    #[serde(skip)]
+    #[serde(serialize_with = "exact::text::option")]
     pub exact: Option<Q>,
     /// For one-way elements: whether it overruns or would lock.
     pub freewheel: Option<Freewheel>,
@@ -128,13 +128,13 @@ pub struct GearAnalysis {
     /// Input speed over output speed.
     pub ratio: f64,
     /// The exact ratio, when every gear ratio is exact.
-    #[serde(skip)]
+    #[serde(serialize_with = "exact::text::option")]
     pub ratio_exact: Option<Q>,
     /// Speed of every link per unit input speed (by link index; None for a
     /// planet without a tooth count).
     pub speed: Vec<Option<f64>>,
     /// Exact speeds, when every gear ratio is exact.
-    #[serde(skip)]
+    #[serde(serialize_with = "exact::text::option_vec_option")]
     pub speed_exact: Option<Vec<Option<Q>>>,
     /// Planets' speeds relative to their carriers, per unit input speed.
     pub relative: Vec<RelativeSpeed>,

@@ -115,6 +115,20 @@ pub mod text {
             None => s.serialize_none(),
         }
     }
+
+    /// An optional list of optional exact values as texts or nulls, or null.
+    ///
+    /// # Errors
+    /// The serializer's.
+    pub fn option_vec_option<S: Serializer>(
+        v: &Option<Vec<Option<Q>>>,
+        s: S,
+    ) -> Result<S::Ok, S::Error> {
+        match v {
+            Some(v) => s.collect_seq(v.iter().map(|q| q.as_ref().map(display))),
+            None => s.serialize_none(),
+        }
+    }
 }
 
 /// Whether |n| has at most [`MAX_DIGITS`] decimal digits: decided from its

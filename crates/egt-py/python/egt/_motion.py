@@ -24,6 +24,16 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["Curve", "OperatingPoint", "Mode", "MasslessDirection", "StabilityReport", "Simulation"]
 
 
+def _array(v: Any) -> np.ndarray:
+    return np.asarray(v, dtype=np.float64)
+
+
+def _matrix(rows: Any) -> np.ndarray:
+    """A matrix from its rows (the core's serde form), 2-D even when empty."""
+    a = np.asarray(rows, dtype=np.float64)
+    return a if a.ndim == 2 else np.zeros((len(rows), 0))
+
+
 @dataclass(frozen=True)
 class Curve:
     """A linearised torque-speed curve T = torque + slope (w - speed) on a link (eq. 13-15)."""
@@ -116,37 +126,50 @@ class StabilityReport:
         return self.verdict == "stable"
 
     @classmethod
-    def _from_raw(cls, d: Mapping[str, Any]) -> "StabilityReport":
-        o = d["operating"]
+    def _from_core(cls, links: Tuple[str, ...], d: Mapping[str, Any]) -> "StabilityReport":
+        """From the core's `StabilityReport` (its serde form: ids are indices)."""
+        m, o, st = d["model"], d["operating"], d["stability"]
+        eq = o["equilibrium"]
         return cls(
-            coordinates=tuple(d["coordinates"]),
-            source=d["source"],
-            velocity_matrix=d["velocity"],
-            mass_matrix=d["mass"],
-            slope_matrix=d["slope"],
-            link_slopes=d["link_slope"],
-            gamma_condition=d["gamma_condition"],
-            orthogonality=d["orthogonality"],
+            coordinates=tuple(links[c] for c in m["coordinates"]),
+            source=m["source"],
+            velocity_matrix=_matrix(m["velocity"]),
+            mass_matrix=_matrix(m["mass"]),
+            slope_matrix=_matrix(m["slope"]),
+            link_slopes=_array(m["link_slope"]),
+            gamma_condition=m["gamma_condition"],
+            orthogonality=m["orthogonality"],
             operating=OperatingPoint(
                 source=o["source"],
-                speeds=o["speed"],
-                torques=o["torque"],
-                reduced_torque=o["reduced_torque"],
+                speeds=_array(o["speed"]),
+                torques=_array(o["torque"]),
+                reduced_torque=_array(o["reduced_torque"]),
                 residual=o["residual"],
                 steady=o["steady"],
-                equilibrium=o["equilibrium"],
+                equilibrium=None if eq is None else _array(eq),
                 equilibrium_condition=o["equilibrium_condition"],
             ),
-            eigenvalues=d["eigenvalues"],
-            modes=tuple(Mode(*m) for m in d["modes"]),
-            verdict=d["verdict"],
-            reason=d["reason"],
-            margin=d["margin"],
-            tolerance=d["tolerance"],
-            massless=tuple(MasslessDirection(c, s, tuple(ls), k) for c, s, ls, k in d["massless"]),
-            rk4_step_limit=d["rk4_step_limit"],
-            stiffness=d["stiffness"],
-            residual=d["residual"],
+            eigenvalues=_array(st["eigenvalues"]),
+            modes=tuple(
+                Mode(x["eigenvalue"], x["time_constant"], _array(x["coordinates"]), _array(x["speeds"]))
+                for x in st["modes"]
+            ),
+            verdict=st["verdict"],
+            reason=st["reason"],
+            margin=st["margin"],
+            tolerance=st["tolerance"],
+            massless=tuple(
+                MasslessDirection(
+                    _array(x["coordinates"]),
+                    _array(x["speeds"]),
+                    tuple(links[l] for l in x["links"]),
+                    x["slope"],
+                )
+                for x in st["massless"]
+            ),
+            rk4_step_limit=st["rk4_step_limit"],
+            stiffness=st["stiffness"],
+            residual=st["residual"],
             warnings=tuple(d["warnings"]),
         )
 
@@ -209,23 +232,32 @@ class Simulation:
     warnings: Tuple[str, ...]
 
     @classmethod
-    def _from_raw(cls, links: Tuple[str, ...], d: Mapping[str, Any]) -> "Simulation":
+    def _from_core(cls, links: Tuple[str, ...], d: Mapping[str, Any]) -> "Simulation":
+        """From the core's `Simulation` (its serde form: one record per sample)."""
+        samples = d["samples"]
+        div = d["diverged"]
+
+        def series(key: str) -> np.ndarray:
+            return _array([x[key] for x in samples])
+
         return cls(
             links=links,
             method=d["method"],
             dt=d["dt"],
             steps=d["steps"],
-            t=d["t"],
-            speeds=d["speeds"],
-            drift=d["drift"],
-            energy=d["energy"],
-            work=d["work"],
-            power=d["power"],
+            t=series("t"),
+            speeds=np.asarray([x["speed"] for x in samples], dtype=np.float64).reshape(
+                len(samples), len(links)
+            ),
+            drift=series("drift"),
+            energy=series("energy"),
+            work=series("work"),
+            power=series("power"),
             max_drift=d["max_drift"],
             energy_error=d["energy_error"],
-            diverged=d["diverged"],
+            diverged=None if div is None else (div["t"], div["reason"]),
             rk4_step_limit=d["rk4_step_limit"],
-            eigenvalues=d["eigenvalues"],
+            eigenvalues=_array(d["eigenvalues"]),
             newton_iterations=d["newton_iterations"],
             halvings=d["halvings"],
             warnings=tuple(d["warnings"]),

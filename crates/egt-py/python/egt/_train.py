@@ -258,6 +258,10 @@ class Train:
             f"{len(self._core.gears())} gear pairs, dof={self.dof}>"
         )
 
+    def _names(self) -> Tuple[Tuple[str, ...], Tuple[str, ...], Tuple[str, ...]]:
+        """Link, gear-pair and element names by index: the core's ids in its results."""
+        return self._links, self._gears, tuple(n for n, _, _ in self._core.elements())
+
     # -- defaults from the spec's [analysis] section -----------------------
 
     def _spec_speeds(self) -> List[Tuple[str, float, Optional[str]]]:
@@ -528,7 +532,7 @@ class Train:
             None if curves is None else _curves(curves),
             None if speeds is None else _pairs(speeds, "speeds"),
         )
-        return StabilityReport._from_raw(raw)
+        return StabilityReport._from_core(self._links, raw)
 
     def simulate(
         self,
@@ -562,18 +566,18 @@ class Train:
             torque,
             every,
         )
-        return Simulation._from_raw(self._links, raw)
+        return Simulation._from_core(self._links, raw)
 
     # -- transmissions -----------------------------------------------------
 
     def gear(self, state: str) -> GearState:
         """One gear state of the transmission, per unit input speed and torque."""
-        return GearState._from_raw(_gear(self._core, str(state)))
+        return GearState._from_core(self._names(), _gear(self._core, str(state)))
 
     def shift_table(self) -> ShiftTable:
         """Every gear state (ratios, element torques, power flow) and the
         table across them: steps, spread, shifts."""
-        return ShiftTable._from_raw(_shift_table(self._core))
+        return ShiftTable._from_core(self._names(), _shift_table(self._core))
 
     # -- computer algebra --------------------------------------------------
 

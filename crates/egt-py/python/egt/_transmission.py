@@ -15,6 +15,10 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["ElementLoad", "Slip", "GearPowerFlow", "GearState", "Step", "Spread", "Shift", "ShiftTable"]
 
 
+Names = Tuple[Tuple[str, ...], Tuple[str, ...], Tuple[str, ...]]
+"""Link, gear-pair and shift-element names, by index (the core's ids)."""
+
+
 def _frac(x: Optional[str]) -> Optional[Fraction]:
     return None if x is None else Fraction(x)
 
@@ -79,24 +83,34 @@ class GearState:
     notes: Tuple[str, ...]
 
     @classmethod
-    def _from_raw(cls, d: Mapping[str, Any]) -> "GearState":
+    def _from_core(cls, names: Names, d: Mapping[str, Any]) -> "GearState":
+        """From the core's `GearAnalysis` (its serde form: ids are indices, exact values text)."""
+        links, gears, elements = names
         p = d["power"]
+        exact = d["speed_exact"]
         return cls(
             state=d["state"],
             index=d["index"],
-            engaged=tuple(d["engaged"]),
+            engaged=tuple(elements[e] for e in d["engaged"]),
             ratio=d["ratio"],
             ratio_exact=_frac(d["ratio_exact"]),
-            speeds=dict(d["speeds"]),
-            speeds_exact=None
-            if d["speeds_exact"] is None
-            else {n: _frac(x) for n, x in d["speeds_exact"]},
-            relative=tuple(tuple(r) for r in d["relative"]),
-            slips=tuple(Slip(e, s, _frac(x), f) for e, s, x, f in d["slips"]),
+            speeds=dict(zip(links, d["speed"])),
+            speeds_exact=None if exact is None else {n: _frac(x) for n, x in zip(links, exact)},
+            relative=tuple((links[r["link"]], links[r["carrier"]], r["speed"]) for r in d["relative"]),
+            slips=tuple(
+                Slip(elements[x["element"]], x["speed"], _frac(x["exact"]), x["freewheel"])
+                for x in d["slips"]
+            ),
             output_torque=d["output_torque"],
             housing_torque=d["housing_torque"],
-            elements=tuple(ElementLoad(*e) for e in d["elements"]),
-            meshes=tuple(tuple(m) for m in d["meshes"]),
+            elements=tuple(
+                ElementLoad(elements[e["element"]], e["torque"], e["holds"], e["parallel"])
+                for e in d["elements"]
+            ),
+            meshes=tuple(
+                (gears[m["gear"]], m["multiplier"], None if m["force"] is None else tuple(m["force"]))
+                for m in d["meshes"]
+            ),
             power=None
             if p is None
             else GearPowerFlow(
@@ -106,7 +120,10 @@ class GearState:
                 circulation_ratio=p["circulation_ratio"],
                 circulating=None
                 if p["circulating"] is None
-                else (tuple(p["circulating"][0]), tuple(p["circulating"][1])),
+                else (
+                    tuple(gears[g] for g in p["circulating"][0]),
+                    tuple(links[l] for l in p["circulating"][1]),
+                ),
             ),
             power_balance=d["power_balance"],
             torque_balance=d["torque_balance"],
@@ -176,23 +193,40 @@ class ShiftTable:
     warnings: Tuple[str, ...]
 
     @classmethod
-    def _from_raw(cls, d: Mapping[str, Any]) -> "ShiftTable":
-        gears = tuple(GearState._from_raw(g) for g in d["gears"])
+    def _from_core(cls, names: Names, d: Mapping[str, Any]) -> "ShiftTable":
+        """From the core's `ShiftTable` (its serde form: ids and gear states are indices)."""
+        links, _, elements = names
+        gears = tuple(GearState._from_core(names, g) for g in d["gears"])
 
         def name(i: int) -> str:
             return gears[i].state
 
+        def els(ids: Any) -> Tuple[str, ...]:
+            return tuple(elements[e] for e in ids)
+
         sp = d["spread"]
         return cls(
-            input=d["input"],
-            output=d["output"],
+            input=links[d["input"]],
+            output=links[d["output"]],
             gears=gears,
             forward=tuple(d["forward"]),
-            steps=tuple(Step(name(a), name(b), v, _frac(x)) for a, b, v, x in d["steps"]),
-            spread=None if sp is None else Spread(name(sp[0]), name(sp[1]), sp[2], _frac(sp[3])),
+            steps=tuple(
+                Step(name(x["from"]), name(x["to"]), x["value"], _frac(x["exact"])) for x in d["steps"]
+            ),
+            spread=None
+            if sp is None
+            else Spread(name(sp["lowest"]), name(sp["highest"]), sp["value"], _frac(sp["exact"])),
             shifts=tuple(
-                Shift(name(a), name(b), k, tuple(off), tuple(on), tuple(kept), single)
-                for a, b, k, off, on, kept, single in d["shifts"]
+                Shift(
+                    name(x["from"]),
+                    name(x["to"]),
+                    x["kind"],
+                    els(x["off"]),
+                    els(x["on"]),
+                    els(x["kept"]),
+                    x["single_swap"],
+                )
+                for x in d["shifts"]
             ),
             warnings=tuple(d["warnings"]),
         )

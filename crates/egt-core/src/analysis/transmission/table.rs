@@ -25,7 +25,7 @@ pub struct Step {
     /// ratio(from) / ratio(to).
     pub value: f64,
     /// Exact step, when the ratios are exact.
-    #[serde(skip)]
+    #[serde(serialize_with = "exact::text::option")]
     pub exact: Option<Q>,
 }
 
@@ -39,7 +39,7 @@ pub struct Spread {
     /// ratio(lowest) / ratio(highest).
     pub value: f64,
     /// Exact spread, when the ratios are exact.
-    #[serde(skip)]
+    #[serde(serialize_with = "exact::text::option")]
     pub exact: Option<Q>,
 }
 
