@@ -300,28 +300,8 @@ impl TrainCore {
     }
 
     /// The mass matrix with the offsets used and notes.
-    fn mass_matrix<'py>(&self, py: Python<'py>) -> Result<Bound<'py, PyDict>> {
-        guard(|| {
-            let m = self.train.mass_matrix()?;
-            let d = PyDict::new(py);
-            d.set_item("matrix", dmatrix(py, &m.matrix)?)?;
-            d.set_item(
-                "offsets",
-                m.offsets
-                    .iter()
-                    .map(|o| {
-                        (
-                            self.train.level_name(o.levels[0]).to_string(),
-                            self.train.level_name(o.levels[1]).to_string(),
-                            o.distance,
-                            o.source.clone(),
-                        )
-                    })
-                    .collect::<Vec<_>>(),
-            )?;
-            d.set_item("notes", m.notes.clone())?;
-            Ok(d)
-        })
+    fn mass_matrix<'py>(&self, py: Python<'py>) -> Result<Bound<'py, PyAny>> {
+        guard(|| to_py(py, &self.train.mass_matrix()?))
     }
 
     /// Inverse dynamics (eq. 6-11).

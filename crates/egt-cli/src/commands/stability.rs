@@ -8,7 +8,7 @@
 use std::io::Write;
 
 use anyhow::Context;
-use egt_core::analysis::stability::matrix_rows;
+use egt_core::numerics::linalg::matrix_rows;
 use egt_core::{LinkId, StabilityReport, StabilityRequest, Train};
 use serde::Serialize;
 

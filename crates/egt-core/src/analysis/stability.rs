@@ -50,7 +50,7 @@
 //! ```
 
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
-use serde::{Serialize, Serializer};
+use serde::Serialize;
 
 use crate::error::{AnalysisError, Error, Result, SpecErrorKind};
 use crate::model::train::{Curve, LinkId, Train};
@@ -93,18 +93,6 @@ pub const MODE_RESIDUAL_WARN: f64 = 1e-8;
 /// decided exactly.
 pub const EXACT_INERTIA_MAX_DOF: usize = 16;
 
-/// A matrix as a list of rows (for reports).
-pub fn matrix_rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
-    (0..m.nrows())
-        .map(|i| m.row(i).iter().copied().collect())
-        .collect()
-}
-
-/// Serialize a matrix as a list of rows.
-pub(crate) fn rows<S: Serializer>(m: &DMatrix<f64>, s: S) -> std::result::Result<S::Ok, S::Error> {
-    matrix_rows(m).serialize(s)
-}
-
 /// How the driving coordinates were chosen.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -126,20 +114,20 @@ pub struct ReducedModel {
     /// Where they came from.
     pub source: CoordinateSource,
     /// \[V\] (eq. 23) by link: row `LinkId::index()`, the frame's row zero.
-    #[serde(serialize_with = "rows")]
+    #[serde(serialize_with = "crate::numerics::linalg::serde_rows")]
     pub velocity: DMatrix<f64>,
     /// 1-norm condition estimate of \[Gamma_w\] (eq. 22-23).
     pub gamma_condition: f64,
     /// max |psi_w V| / (max |psi_w| max |V|): eq. (24), zero in exact arithmetic.
     pub orthogonality: f64,
     /// The full mass matrix \[M\] over `Train::coordinates()` (eq. 3-6).
-    #[serde(serialize_with = "rows")]
+    #[serde(serialize_with = "crate::numerics::linalg::serde_rows")]
     pub full_mass: DMatrix<f64>,
     /// Reduced mass matrix V^T M V (eq. 25).
-    #[serde(serialize_with = "rows")]
+    #[serde(serialize_with = "crate::numerics::linalg::serde_rows")]
     pub mass: DMatrix<f64>,
     /// Reduced slope matrix V^T diag(K) V (eq. 26-27, corrected).
-    #[serde(serialize_with = "rows")]
+    #[serde(serialize_with = "crate::numerics::linalg::serde_rows")]
     pub slope: DMatrix<f64>,
     /// An orthonormal basis N of the motions the Willis equations allow, by
     /// link (psi_w N = 0, N^T N = 1): \[V\] = N N_S^-1, with N_S the rows of the

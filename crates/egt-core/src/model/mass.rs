@@ -73,10 +73,11 @@ pub(crate) struct FloatingTerms {
 }
 
 /// The mass matrix over the coordinates (every link but the frame).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MassMatrix {
     /// \[M\], symmetric, `coordinates().len()` square, at `angles` when it
-    /// depends on the configuration.
+    /// depends on the configuration (serialized as rows).
+    #[serde(serialize_with = "crate::numerics::linalg::serde_rows")]
     pub matrix: DMatrix<f64>,
     /// The terms that vary with the carrier angles (empty for most trains).
     pub configuration: Vec<ConfigurationTerm>,

@@ -505,6 +505,25 @@ fn argmax_abs(v: &[f64]) -> usize {
     j
 }
 
+/// A matrix as a list of rows (for reports).
+pub fn matrix_rows(m: &nalgebra::DMatrix<f64>) -> Vec<Vec<f64>> {
+    (0..m.nrows())
+        .map(|i| m.row(i).iter().copied().collect())
+        .collect()
+}
+
+/// Serialize a matrix as a list of rows:
+/// `#[serde(serialize_with = "crate::numerics::linalg::serde_rows")]`.
+///
+/// # Errors
+/// The serializer's.
+pub fn serde_rows<S: serde::Serializer>(
+    m: &nalgebra::DMatrix<f64>,
+    s: S,
+) -> std::result::Result<S::Ok, S::Error> {
+    serde::Serialize::serialize(&matrix_rows(m), s)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -313,11 +313,17 @@ class Train:
 
     def mass_matrix(self) -> MassMatrix:
         """The mass matrix [M] (eq. 3-5) from inertias, masses, copies and axis offsets."""
-        d = self._core.mass_matrix()
+        d = self._core.mass_matrix()  # the core's MassMatrix: levels by index, rows
+        levels = self._core.levels
         return MassMatrix(
             coordinates=self.coordinates,
-            matrix=d["matrix"],
-            offsets=tuple(Offset((a, b), dist, src) for a, b, dist, src in d["offsets"]),
+            matrix=np.asarray(d["matrix"], dtype=np.float64).reshape(
+                len(self.coordinates), len(self.coordinates)
+            ),
+            offsets=tuple(
+                Offset((levels[o["levels"][0]], levels[o["levels"][1]]), o["distance"], o["source"])
+                for o in d["offsets"]
+            ),
             notes=tuple(d["notes"]),
         )
 
