@@ -172,3 +172,48 @@ impl BatchPlanCore {
         Ok(d)
     }
 }
+
+/// Willis ratios from tooth counts, `teeth` of shape (rows, gears, 2), by the
+/// core's one rule (`Train::ratios_from_teeth`): the (rows, gears) ratios and
+/// the rows whose counts are refused, as (row, kind, message); their ratios
+/// are -1.0 so that the batch still runs (the caller marks them failed).
+///
+/// # Errors
+/// A gear pair whose mesh kind is unknown (the whole request fails).
+#[pyfunction]
+pub fn ratios_from_teeth<'py>(
+    py: Python<'py>,
+    core: &TrainCore,
+    teeth: numpy::PyReadonlyArray3<'py, i64>,
+) -> Result<(Bound<'py, PyArray2<f64>>, Vec<(usize, String, String)>)> {
+    guard(|| {
+        let t = &core.train;
+        let g = t.gears().len();
+        let shape = teeth.shape();
+        if shape.len() != 3 || shape[1] != g || shape[2] != 2 {
+            return Err(value_error(format!(
+                "`teeth` must have shape (rows, {g}, 2), got {shape:?}"
+            )));
+        }
+        let z = teeth.as_slice().map_err(|e| value_error(e.to_string()))?;
+        let rows = shape[0];
+        let mut out = vec![0.0; rows * g];
+        let mut bad = Vec::new();
+        let mut counts = vec![[0i64; 2]; g];
+        for (r, row) in out.chunks_mut(g.max(1)).enumerate().take(rows) {
+            for (m, c) in counts.iter_mut().enumerate() {
+                *c = [z[(r * g + m) * 2], z[(r * g + m) * 2 + 1]];
+            }
+            match t.ratios_from_teeth(&format!("teeth[{r}]"), &counts, row) {
+                Ok(()) => {}
+                // No mesh kind for a pair: no row can have ratios; refuse the request.
+                Err(e) if e.code() == "missing" => return Err(e.into()),
+                Err(e) => {
+                    row.iter_mut().for_each(|v| *v = -1.0);
+                    bad.push((r, e.code().to_string(), e.to_string()));
+                }
+            }
+        }
+        Ok((mat2(py, rows, g, out)?, bad))
+    })
+}

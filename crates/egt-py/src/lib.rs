@@ -32,6 +32,7 @@ fn _egt(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(structure::structure, m)?)?;
     m.add_class::<batch::BatchPlanCore>()?;
     m.add_function(wrap_pyfunction!(batch::batch_plan, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::ratios_from_teeth, m)?)?;
     m.add_function(wrap_pyfunction!(motion::stability, m)?)?;
     m.add_function(wrap_pyfunction!(motion::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(transmission::gear, m)?)?;

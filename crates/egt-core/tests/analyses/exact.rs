@@ -182,3 +182,53 @@ fn ford_aod_unsized_pinions() {
     let e = train.kinematics(&inputs).expect_err("unsized input");
     assert!(e.to_string().contains("long_pinion"), "{e}");
 }
+
+/// Ratios from tooth counts for a batch row follow the one rule the spec
+/// uses: every bundled example's own teeth give back its ratios exactly, and
+/// bad counts are refused naming the row and the gear pair.
+#[test]
+fn ratios_from_teeth_reproduce_the_spec() {
+    let mut checked = 0;
+    for name in [
+        "zf_8hp70.toml",
+        "ford_c4_simpson.toml",
+        "ford_aod_ravigneaux.toml",
+        "fig3_example61.toml",
+    ] {
+        let t = example(name);
+        let Some(teeth) = t
+            .gears()
+            .iter()
+            .map(|g| g.teeth.map(|z| [i64::from(z[0]), i64::from(z[1])]))
+            .collect::<Option<Vec<_>>>()
+        else {
+            continue;
+        };
+        let mut out = vec![0.0; teeth.len()];
+        t.ratios_from_teeth("row", &teeth, &mut out).unwrap();
+        for (g, v) in t.gears().iter().zip(&out) {
+            assert_eq!(
+                Some(*v),
+                g.ratio.as_ref().map(|r| r.value),
+                "{name} {}",
+                g.name
+            );
+        }
+        let mut bad = teeth.clone();
+        bad[1] = [0, 20];
+        let e = t.ratios_from_teeth("teeth[7]", &bad, &mut out).unwrap_err();
+        assert_eq!(e.code(), "invalid_teeth");
+        let text = e.to_string();
+        assert!(
+            text.contains("teeth[7][1]") && text.contains(&t.gears()[1].name),
+            "{text}"
+        );
+        bad[1] = [20, egt_core::error::MAX_TEETH + 1];
+        assert_eq!(
+            t.ratios_from_teeth("r", &bad, &mut out).unwrap_err().code(),
+            "invalid_teeth"
+        );
+        checked += 1;
+    }
+    assert!(checked >= 3, "{checked}");
+}

@@ -18,7 +18,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ._args import ArgumentError, ArgumentKeyError, count
-from ._egt import BatchPlanCore
+from ._egt import BatchPlanCore, TrainCore
+from ._egt import ratios_from_teeth as _ratios_from_teeth
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas
@@ -115,32 +116,6 @@ def teeth_array(x: ArrayLike, rows: int, gears: int) -> np.ndarray:
 
 
 
-def ratios_from_teeth(
-    teeth: np.ndarray, signs: Sequence[float], names: Sequence[str]
-) -> Tuple[np.ndarray, Dict[int, "RowError"]]:
-    """Willis ratios tau = -/+ z_j / z_i (external/internal) from (rows, gears, 2)
-    tooth counts, and the rows whose counts are invalid (their ratios are set to
-    -1 so the batch runs; the caller marks them failed)."""
-    zi = teeth[:, :, 0].astype(np.float64)
-    zj = teeth[:, :, 1].astype(np.float64)
-    sign = np.asarray(signs, dtype=np.float64)
-    bad = (teeth[:, :, 0] <= 0) | (teeth[:, :, 1] <= 0) | ((sign > 0) & (teeth[:, :, 0] == teeth[:, :, 1]))
-    errors: Dict[int, RowError] = {}
-    for r, m in zip(*np.nonzero(bad)):
-        r, m = int(r), int(m)
-        if r in errors:
-            continue
-        z = (int(teeth[r, m, 0]), int(teeth[r, m, 1]))
-        if min(z) <= 0:
-            msg = f"teeth[{r}, {m}]: tooth counts of gear pair `{names[m]}` must be positive integers, got {list(z)}"
-        else:
-            msg = f"teeth[{r}, {m}]: gear pair `{names[m]}` is an internal mesh and needs different tooth counts, got {list(z)}"
-        errors[r] = RowError(r, "invalid_teeth", msg)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        tau = np.where(bad, -1.0, sign * zj / np.where(zi == 0, 1.0, zi))
-    return np.ascontiguousarray(tau), errors
-
-
 @dataclass(frozen=True)
 class RowError:
     """Why one row of a batch failed."""
@@ -220,21 +195,21 @@ class BatchPlan:
     :meth:`run` solves it in parallel with the GIL released.
     """
 
-    __slots__ = ("_core", "compute", "parameters", "outputs", "_gears", "_signs")
+    __slots__ = ("_core", "compute", "parameters", "outputs", "_gears", "_train")
 
     def __init__(
         self,
         core: BatchPlanCore,
         compute: str,
         gears: Sequence[str],
-        signs: Sequence[Optional[float]],
+        train: TrainCore,
     ) -> None:
         self._core = core
         self.compute = compute
         self.parameters: Tuple[str, ...] = tuple(core.parameters)
         self.outputs: Tuple[str, ...] = tuple(core.outputs)
         self._gears = tuple(gears)
-        self._signs = tuple(signs)
+        self._train = train
 
     @property
     def base(self) -> np.ndarray:
@@ -286,13 +261,10 @@ class BatchPlan:
         if r_arr is not None:
             p[:, ratio_cols] = rows_matrix(r_arr, n_rows, len(self._gears), "ratios")
         if t_arr is not None:
-            if any(s is None for s in self._signs):
-                missing = [g for g, s in zip(self._gears, self._signs) if s is None]
-                raise ValueError(
-                    f"ratios from teeth need the mesh kind of gear pairs {missing}: give `mesh` in the spec"
-                )
+            # The core's one rule (signs from the mesh kinds, bounds on the counts).
             z = teeth_array(t_arr, n_rows, len(self._gears))
-            tau, bad = ratios_from_teeth(z, [float(s) for s in self._signs if s is not None], self._gears)
+            tau, refused = _ratios_from_teeth(self._train, z)
+            bad = {r: RowError(r, k, m) for r, k, m in refused}
             p[:, ratio_cols] = tau
         for n, c in zip(names, cols):
             p[:, self.column(n)] = np.broadcast_to(c.astype(np.float64, copy=False), (n_rows,))

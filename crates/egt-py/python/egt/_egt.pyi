@@ -12,6 +12,7 @@ __all__ = [
     "structure",
     "BatchPlanCore",
     "batch_plan",
+    "ratios_from_teeth",
     "stability",
     "simulate",
     "gear",
@@ -134,6 +135,9 @@ def simulate(
     torque: Optional[Callable[[float, npt.NDArray[np.float64]], npt.NDArray[np.float64]]] = None,
     every: int = 0,
 ) -> Dict[str, Any]: ...
+def ratios_from_teeth(
+    core: TrainCore, teeth: npt.NDArray[np.int64]
+) -> Tuple[npt.NDArray[np.float64], List[Tuple[int, str, str]]]: ...
 def gear(core: TrainCore, state: str) -> Dict[str, Any]: ...
 def shift_table(core: TrainCore) -> Dict[str, Any]: ...
 def cli(args: List[str]) -> int: ...

@@ -421,15 +421,7 @@ class Train:
             _names(engaged, "engaged"),
             None if gear_state is None else str(gear_state),
         )
-        signs: List[Optional[float]] = []
-        for g in self._core.gears():
-            if g["mesh"] is not None:
-                signs.append(-1.0 if g["mesh"] == "external" else 1.0)
-            elif g["ratio"] is not None:
-                signs.append(-1.0 if g["ratio"] < 0 else 1.0)
-            else:
-                signs.append(None)
-        return BatchPlan(core, compute, [g["name"] for g in self._core.gears()], signs)
+        return BatchPlan(core, compute, list(self._gears), self._core)
 
     def batch_kinematics(
         self,
