@@ -173,6 +173,9 @@ impl BatchPlanCore {
     }
 }
 
+/// A refused row: (row, error kind, message).
+type Refused = (usize, String, String);
+
 /// Willis ratios from tooth counts, `teeth` of shape (rows, gears, 2), by the
 /// core's one rule (`Train::ratios_from_teeth`): the (rows, gears) ratios and
 /// the rows whose counts are refused, as (row, kind, message); their ratios
@@ -185,7 +188,7 @@ pub fn ratios_from_teeth<'py>(
     py: Python<'py>,
     core: &TrainCore,
     teeth: numpy::PyReadonlyArray3<'py, i64>,
-) -> Result<(Bound<'py, PyArray2<f64>>, Vec<(usize, String, String)>)> {
+) -> Result<(Bound<'py, PyArray2<f64>>, Vec<Refused>)> {
     guard(|| {
         let t = &core.train;
         let g = t.gears().len();
