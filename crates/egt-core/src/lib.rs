@@ -31,6 +31,55 @@
 //! assert!((speeds.speed[carrier.index()] - 30.0).abs() < 1e-12);
 //! assert_eq!(egt_core::numerics::exact::display(&speeds.exact.unwrap()[carrier.index()]), "30");
 //! ```
+//!
+//! The other analyses of the paper on its example 6.1 (Fig. 3), each checked
+//! here against an independent relation:
+//!
+//! ```
+//! use egt_core::{DynamicsRequest, Format, LoadOverrides, PowerRequest, SpeedInput, Train};
+//!
+//! let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/fig3_example61.toml"));
+//! let train = Train::from_str(text, Format::Toml, "fig3").unwrap();
+//!
+//! // Inverse dynamics (eq. 6-11) with the spec's [analysis] loads; the mass
+//! // matrix only because an acceleration is prescribed.
+//! let req = DynamicsRequest::resolve(&train, &LoadOverrides::default()).unwrap();
+//! let mass = train.mass_for(&req).unwrap();
+//! let dynamics = train.inverse_dynamics(&req, mass.as_ref()).unwrap();
+//! // The accelerations satisfy the Willis equations (eq. 2 differentiated).
+//! let ratios = train.ratios().unwrap();
+//! let residual = egt_core::solve::kinematics::willis_residual(&train, &ratios, &dynamics.acceleration);
+//! assert!(residual < 1e-12);
+//!
+//! // Power flow: input = output + mesh losses + dK/dt.
+//! let speeds: Vec<SpeedInput> = train.analysis().speeds.iter()
+//!     .map(|(l, v, q)| SpeedInput { link: *l, speed: *v, exact: q.clone() })
+//!     .collect();
+//! let flow = train.power_flow(&PowerRequest { speeds, dynamics: req, losses: true }, mass.as_ref()).unwrap();
+//! let balance = flow.input_power - flow.output_power - flow.loss - flow.kinetic_rate;
+//! assert!(balance.abs() <= 1e-9 * flow.input_power.abs());
+//! ```
+//!
+//! Stability about an operating point (eq. 12-27) and an automatic
+//! transmission's shift table from its tooth counts:
+//!
+//! ```
+//! use egt_core::{Format, StabilityRequest, Train, Verdict};
+//!
+//! let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/fig5_stability.toml"));
+//! let report = Train::from_str(text, Format::Toml, "fig5").unwrap()
+//!     .stability(&StabilityRequest::default()).unwrap();
+//! // Stable exactly when no eigenvalue is positive.
+//! let stable = report.stability.eigenvalues.iter().all(|&l| l <= report.stability.tolerance);
+//! assert_eq!(report.stability.verdict == Verdict::Stable, stable);
+//!
+//! let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/zf_8hp70.toml"));
+//! let table = Train::from_str(text, Format::Toml, "8hp").unwrap().shift_table().unwrap();
+//! // First gear of the ZF 8HP70: 4.696 as published, exactly 108/23 from the teeth.
+//! let first = &table.gears[0];
+//! assert_eq!(egt_core::numerics::exact::display(first.ratio_exact.as_ref().unwrap()), "108/23");
+//! assert!((first.ratio - 4.696).abs() < 5e-4);
+//! ```
 
 #![deny(missing_docs)]
 

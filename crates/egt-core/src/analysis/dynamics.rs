@@ -228,6 +228,12 @@ impl Train {
     /// front over the one prepared solver ([`PreparedTrain`]), which it
     /// prepares and solves once.
     ///
+    /// `mass`: the mass matrix, or `None` for **no inertia at all** (every
+    /// link massless: the torques balance the constraints and the applied
+    /// loads only). [`Train::mass_for`] gives the train's own \[M\] exactly
+    /// when the request accelerates something, which is what the CLI and
+    /// Python do.
+    ///
     /// # Errors
     /// Missing ratios or data for the mass matrix, wrong counts, singular or
     /// ill-conditioned systems.
