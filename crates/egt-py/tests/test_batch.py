@@ -232,3 +232,15 @@ def test_batch_results_to_pandas(fig3: egt.Train) -> None:
     b = fig3.batch_kinematics({"2": [1.0, 2.0]})
     assert b.to_pandas().shape == (2, 6)
     assert fig3.batch_dynamics().to_pandas().shape[0] == 1
+
+
+def test_documented_run_of_params_and_exact_echo(fig3: egt.Train) -> None:
+    plan = fig3.batch("kinematics")
+    teeth = np.array([[[30, 20], [18, 32]], [[0, 20], [18, 32]]])
+    res = plan.run(plan.params({"speed.2": [75.0, 0.0]}, teeth=teeth))
+    assert list(res.ok) == [True, False] and res.errors[1].kind == "invalid_teeth"
+    assert (res.values[1] == 0).all()
+    # Input speeds come back as given, and no -0.0 is written.
+    b = fig3.batch_kinematics({"2": [75.0, 0.0]})
+    assert b.speed("2")[0] == 75.0
+    assert not np.signbit(b.speeds[1]).any()

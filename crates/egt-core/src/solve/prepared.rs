@@ -663,6 +663,7 @@ impl PreparedTrain {
             self.input_rhs(s.speeds, &mut ws.speed);
             if what == Compute::Kinematics {
                 ws.kin.solve(&mut ws.speed);
+                self.keep_inputs(s.speeds, &mut ws.speed);
                 return Ok(());
             }
         } else {
@@ -708,6 +709,9 @@ impl PreparedTrain {
         for (&k, &a) in self.accelerated.iter().zip(s.accelerations) {
             ws.accel[k] = a;
         }
+        if speeds {
+            self.keep_inputs(s.speeds, &mut ws.speed);
+        }
         match s.mass_matrix {
             Some(m) => ws.m.copy_from_slice(m),
             None => self.mass.fill(s.inertia, s.mass, &mut ws.m),
@@ -720,6 +724,15 @@ impl PreparedTrain {
         }
         debug_assert!(self.residual_of_motion(ws, s) < 1e-8);
         Ok(())
+    }
+
+    /// The prescribed input speeds are data: keep them, not the solve's
+    /// round-off (75 echoed as 75, not 74.99999999999999), and write no -0.0.
+    fn keep_inputs(&self, values: &[f64], speed: &mut [f64]) {
+        for (&k, &v) in self.inputs.iter().zip(values) {
+            speed[k] = v;
+        }
+        speed.iter_mut().for_each(|v| *v += 0.0);
     }
 
     /// Solve eq. (10) with the force ratios in `ws.tau` and the right-hand side

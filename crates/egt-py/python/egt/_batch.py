@@ -12,7 +12,7 @@ reported in ``ok`` / ``errors``; failed rows hold 0.0, never NaN.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple
+from typing import TYPE_CHECKING, Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -270,8 +270,18 @@ class BatchPlan:
             p[:, self.column(n)] = np.broadcast_to(c.astype(np.float64, copy=False), (n_rows,))
         return p, bad
 
-    def run(self, params: ArrayLike, *, threads: Optional[int] = None) -> BatchResult:
-        """Solve every row of ``params`` ((rows, parameters) or one row)."""
+    def run(
+        self,
+        params: Union[ArrayLike, Tuple[np.ndarray, Dict[int, RowError]]],
+        *,
+        threads: Optional[int] = None,
+    ) -> BatchResult:
+        """Solve every row of ``params`` ((rows, parameters) or one row), or of
+        what :meth:`params` returned (the matrix and its refused rows, which
+        are then reported failed): ``plan.run(plan.params({...}))``."""
+        refused: Dict[int, RowError] = {}
+        if isinstance(params, tuple) and len(params) == 2 and isinstance(params[1], dict):
+            params, refused = params
         a = _numeric(params, "params")
         if a.ndim == 1:
             a = a.reshape(1, -1)
@@ -289,6 +299,8 @@ class BatchPlan:
         )
         ok = np.ones(values.shape[0], dtype=bool)
         errors = {r: RowError(r, k, m) for r, k, m in raw}
+        errors.update(refused)  # rows params() refused (their ratios were placeholders)
+        values[list(refused), :] = 0.0
         ok[list(errors)] = False
         return BatchResult(self.outputs, values, ok, errors)
 
@@ -302,14 +314,7 @@ class BatchPlan:
         threads: Optional[int] = None,
     ) -> BatchResult:
         """:meth:`params` then :meth:`run`; rows with invalid teeth are failed rows."""
-        p, bad = self.params(values, ratios=ratios, teeth=teeth, rows=rows)
-        res = self.run(p, threads=threads)
-        if bad:
-            idx = list(bad)
-            res.values[idx, :] = 0.0
-            res.ok[idx] = False
-            res.errors.update(bad)
-        return res
+        return self.run(self.params(values, ratios=ratios, teeth=teeth, rows=rows), threads=threads)
 
 
 def _known_columns(
