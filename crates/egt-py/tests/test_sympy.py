@@ -189,3 +189,19 @@ def test_planet_names_are_sanitised(planetary: egt.Train) -> None:
     vals = st.values()
     m = float(st.reduced_mass_matrix.subs(vals)[0, 0])
     assert m == pytest.approx(planetary.equivalent_inertia("sun"), rel=1e-12)
+
+
+def test_numeric_gives_float_arrays_equal_to_the_float_path(fig3: egt.Train) -> None:
+    train = fig3
+    st = train.to_sympy()
+    m = st.numeric(st.mass_matrix)
+    assert m.dtype == np.float64
+    np.testing.assert_allclose(m, train.mass_matrix().matrix, rtol=1e-14)
+    tr = sp.Symbol("T_r")
+    dyn = st.inverse_dynamics(torques={"4": tr}, accelerations={"4": 10.0}, driving=["2"])
+    with pytest.raises(egt.ArgumentError, match="T_r"):
+        st.numeric(dyn.driving_torques["2"])
+    t_d = st.numeric(dyn.driving_torques["2"], {tr: -50.0})
+    assert t_d.shape == ()
+    ref = train.dynamics(torques={"4": -50.0}, accelerations={"4": 10.0}, driving=["2"])
+    assert float(t_d) == pytest.approx(ref.driving_torques["2"], rel=1e-12)

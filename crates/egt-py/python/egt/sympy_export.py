@@ -35,6 +35,10 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
+import numpy as np
+
+from ._args import ArgumentError
+
 try:
     import sympy
 except ImportError:  # pragma: no cover - depends on the environment
@@ -373,6 +377,21 @@ class SymbolicTrain:
             if key in distances:
                 out[sym] = sympy.Float(distances[key])
         return out
+
+    def numeric(self, expr: Any, values: Optional[Mapping[Any, Any]] = None) -> np.ndarray:
+        """A symbolic result as float64 NumPy: ``expr`` (an expression or a
+        matrix) with the train's own numbers (:meth:`values`) and ``values``
+        (which win) substituted. Symbols left without a number are refused by
+        name (NumPy would otherwise get an object array it cannot use)."""
+        subs: Dict[Any, Any] = dict(self.values())
+        subs.update(values or {})
+        m = sympy.Matrix(expr) if isinstance(expr, (sympy.MatrixBase, list, tuple)) else sympy.Matrix([expr])
+        m = m.subs(subs)
+        free = sorted(str(x) for x in m.free_symbols)
+        if free:
+            raise ArgumentError(f"no number for the symbols {', '.join(free)}: pass them in `values`")
+        out = np.array(m.evalf(), dtype=np.float64)
+        return out if isinstance(expr, (sympy.MatrixBase, list, tuple)) else out.reshape(())
 
     def __repr__(self) -> str:
         return (
