@@ -1,5 +1,5 @@
-"""Every ```python block of docs/python.md runs (from the repository root),
-in order, in one namespace."""
+"""Every ```python block of docs/python.md runs on its own (from the
+repository root, each in a fresh namespace), as a reader pastes it."""
 
 from __future__ import annotations
 
@@ -20,8 +20,7 @@ def test_python_blocks_of_the_guide_run(capsys: pytest.CaptureFixture[str]) -> N
     cwd = os.getcwd()
     os.chdir(ROOT)
     try:
-        ns: dict = {}
         for block in blocks:
-            exec(compile(block, str(DOC), "exec"), ns)
+            exec(compile(block, str(DOC), "exec"), {})
     finally:
         os.chdir(cwd)

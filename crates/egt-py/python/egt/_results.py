@@ -8,7 +8,7 @@ only there).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Dict, Iterator, Mapping, Optional, Tuple
 
@@ -156,12 +156,17 @@ class Kinematics(Mapping[str, float]):
     """Largest Willis residual |psi_m| relative to the largest speed (eq. 2)."""
     condition: float
     warnings: Tuple[str, ...]
+    unit: str = "rad/s"
+    """The unit of ``speeds``, ``exact`` and the relative speeds."""
 
     @classmethod
-    def _from_core(cls, links: Tuple[str, ...], d: Mapping[str, Any]) -> "Kinematics":
+    def _from_core(
+        cls, links: Tuple[str, ...], d: Mapping[str, Any], unit: str = "rad/s"
+    ) -> "Kinematics":
         """From the core's `Speeds` (its serde form: ids are indices, exact values text)."""
         exact = d["exact"]
         return cls(
+            unit=unit,
             links=links,
             speeds=np.asarray(d["speed"], dtype=np.float64),
             known=np.asarray(d["known"], dtype=bool),
@@ -173,6 +178,26 @@ class Kinematics(Mapping[str, float]):
             residual=d["residual"],
             condition=d["condition"],
             warnings=tuple(d["warnings"]),
+        )
+
+    def to(self, unit: str) -> "Kinematics":
+        """The same speeds in ``unit`` (``"rad/s"``, ``"rpm"``, ``"rev/s"``,
+        ``"deg/s"``). Exact values survive only where the factor is rational
+        (rpm <-> rev/s); otherwise ``exact`` is None."""
+        from . import _units
+
+        k = _units.factor(self.unit) / _units.factor(unit)
+        exact_factors = {("rev/s", "rpm"): Fraction(60), ("rpm", "rev/s"): Fraction(1, 60)}
+        q = Fraction(1) if self.unit == unit else exact_factors.get((self.unit, unit))
+        return replace(
+            self,
+            unit=unit,
+            speeds=self.speeds * k,
+            exact=None if self.exact is None or q is None else {n: x * q for n, x in self.exact.items()},
+            relative=tuple(
+                RelativeSpeed(r.link, r.carrier, r.speed * k, None if r.exact is None or q is None else r.exact * q)
+                for r in self.relative
+            ),
         )
 
     def __getitem__(self, name: str) -> float:

@@ -31,7 +31,7 @@ from numpy.typing import ArrayLike
 
 from . import _batch
 from ._batch import BatchDynamics, BatchKinematics, BatchPlan
-from ._args import ArgumentKeyError, ArgumentTypeError, count, mapping, number
+from ._args import ArgumentError, ArgumentKeyError, ArgumentTypeError, count, mapping, number
 from ._egt import TrainCore, batch_plan
 from ._egt import gear as _gear
 from ._egt import shift_table as _shift_table
@@ -39,6 +39,7 @@ from ._egt import simulate as _simulate
 from ._egt import stability as _stability
 from ._motion import Curve, Simulation, StabilityReport
 from ._transmission import GearState, ShiftTable
+from . import _units
 from ._results import (
     Circuit,
     Dynamics,
@@ -61,13 +62,16 @@ Speed = Union[float, int, Fraction, str]
 PathLike = Union[str, "os.PathLike[str]"]
 
 
-def _speed_arg(name: str, v: Speed) -> Tuple[str, float, Optional[str]]:
-    """(link, float value, exact text) for the native side.
+def _speed_arg(name: str, v: Speed, unit: str = "rad/s") -> Tuple[str, float, Optional[str]]:
+    """(link, float value, exact text) for the native side, in ``unit``.
 
     Floats are taken as the decimal they print as (0.1 means 1/10), as a user
-    writes them; Fractions, ints and ``"p/q"`` text are exact.
+    writes them; Fractions, ints and ``"p/q"`` text are exact. A pint
+    Quantity is converted to ``unit`` (a float).
     """
     what = f"speed of {name!r}"
+    if _units.is_quantity(v):
+        v = _units.quantity_in(v, unit, what)
     if isinstance(v, bool):
         raise ArgumentTypeError(f"{what} must be a number, not bool")
     if isinstance(v, str):
@@ -268,10 +272,14 @@ class Train:
         # The core reads a decimal in the spec as the decimal written (as the CLI does).
         return [(n, v, ex) for n, v, ex in self._core.analysis()["speeds"]]
 
-    def _speeds(self, inputs: Optional[Mapping[str, Speed]]) -> List[Tuple[str, float, Optional[str]]]:
+    def _speeds(
+        self, inputs: Optional[Mapping[str, Speed]], unit: str = "rad/s"
+    ) -> List[Tuple[str, float, Optional[str]]]:
         if inputs is None:
+            if unit != "rad/s":
+                raise ArgumentError("the spec's [analysis] speeds are in rad/s: give `inputs` with `unit`")
             return self._spec_speeds()
-        return [_speed_arg(str(n), v) for n, v in mapping(inputs, "inputs").items()]
+        return [_speed_arg(str(n), v, unit) for n, v in mapping(inputs, "inputs").items()]
 
     def _loads(
         self,
@@ -298,14 +306,21 @@ class Train:
 
     # -- analyses ----------------------------------------------------------
 
-    def kinematics(self, inputs: Optional[Mapping[str, Speed]] = None) -> Kinematics:
+    def kinematics(
+        self, inputs: Optional[Mapping[str, Speed]] = None, *, unit: str = "rad/s"
+    ) -> Kinematics:
         """Speeds of every link (Willis equations, eq. 2).
 
-        ``inputs`` maps one link per DOF to its speed [rad/s]; default: the
-        spec's ``[analysis] speeds``. The exact rational solution is included
-        when every ratio and input is exact.
+        ``inputs`` maps one link per DOF to its speed in ``unit`` (``"rad/s"``,
+        ``"rpm"``, ``"rev/s"``, ``"deg/s"``; or pint Quantities); default: the
+        spec's ``[analysis] speeds``. The speeds come back in ``unit``: the
+        Willis equations are homogeneous, so the exact rational solution is
+        included in any unit when every ratio and input is exact.
+        ``.to(unit)`` converts afterwards.
         """
-        return Kinematics._from_core(self._links, self._core.kinematics(self._speeds(inputs)))
+        _units.factor(unit)
+        raw = self._core.kinematics(self._speeds(inputs, unit))
+        return Kinematics._from_core(self._links, raw, unit)
 
     def willis_jacobian(self) -> np.ndarray:
         """[psi_w] of eq. (2): rows are circuits, columns the :attr:`coordinates`."""
