@@ -12,7 +12,7 @@ the matrix: see docs/errata.md and docs/stability.md.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Dict, Mapping, Optional, Tuple
+from typing import TYPE_CHECKING, Any, Dict, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -173,6 +173,12 @@ class StabilityReport:
             warnings=tuple(d["warnings"]),
         )
 
+    def plot(self, ax: Any = None) -> Any:
+        """The eigenvalues and the verdict (:func:`egt.plot.eigenvalues`)."""
+        from . import plot
+
+        return plot.eigenvalues(self, ax)
+
     def to_dict(self) -> Dict[str, Any]:
         return {
             "coordinates": list(self.coordinates),
@@ -266,6 +272,12 @@ class Simulation:
     def speed(self, link: str) -> np.ndarray:
         """One link's speed over time."""
         return self.speeds[:, self.links.index(link)]
+
+    def plot(self, ax: Any = None, links: Optional[Sequence[str]] = None) -> Any:
+        """Link speeds against time (:func:`egt.plot.simulation`)."""
+        from . import plot
+
+        return plot.simulation(self, ax, links)
 
     def to_dict(self) -> Dict[str, Any]:
         return {

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Dict, Iterator, Mapping, Optional, Tuple
+from typing import TYPE_CHECKING, Any, Dict, Iterable, Iterator, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -41,6 +41,22 @@ def _pandas() -> Any:
             "to_pandas() needs pandas: pip install 'egt[pandas]'"
         ) from e
     return pandas
+
+
+def _html_table(caption: str, headers: Sequence[str], rows: Iterable[Sequence[Any]]) -> str:
+    """A small HTML table for notebooks (``_repr_html_``), every cell escaped."""
+    from html import escape
+
+    def cell(v: Any) -> str:
+        if v is None:
+            return ""
+        if isinstance(v, float):
+            return f"{v:.6g}"
+        return escape(str(v))
+
+    head = "".join(f"<th>{escape(h)}</th>" for h in headers)
+    body = "".join("<tr>" + "".join(f"<td>{cell(v)}</td>" for v in r) + "</tr>" for r in rows)
+    return f"<table><caption>{escape(caption)}</caption><tr>{head}</tr>{body}</table>"
 
 
 def _frac(text: Optional[str]) -> Optional[Fraction]:
@@ -178,6 +194,14 @@ class Kinematics(Mapping[str, float]):
             residual=d["residual"],
             condition=d["condition"],
             warnings=tuple(d["warnings"]),
+        )
+
+    def _repr_html_(self) -> str:
+        exact = self.exact or {}
+        return _html_table(
+            f"speeds [{self.unit}], Willis residual {self.residual:.2g}",
+            ["link", "speed", "exact"],
+            ((n, float(v), exact.get(n)) for n, v in zip(self.links, self.speeds)),
         )
 
     def to(self, unit: str) -> "Kinematics":
@@ -328,6 +352,14 @@ class Dynamics:
             warnings=tuple(d["warnings"]),
         )
 
+    def _repr_html_(self) -> str:
+        rows = [(n, float(a), float(t)) for n, a, t in zip(self.links, self.accelerations, self.torques)]
+        meshes = _html_table(
+            "meshes", ["gear pair", "multiplier", "force i", "force j"],
+            ((m.gear, m.multiplier, *(m.force or (None, None))) for m in self.meshes),
+        )
+        return _html_table("inverse dynamics", ["link", "acceleration", "torque"], rows) + meshes
+
     def to_dict(self) -> Dict[str, Any]:
         return {
             "accelerations": {n: float(v) for n, v in zip(self.links, self.accelerations)},
@@ -434,6 +466,19 @@ class PowerFlow:
     def balance(self) -> float:
         """input - output - loss - dK/dt: zero up to round-off (energy balance)."""
         return self.input_power - self.output_power - self.loss - self.kinetic_rate
+
+    def plot(self, ax: Any = None) -> Any:
+        """Rolling power and loss per mesh (:func:`egt.plot.power_flow`)."""
+        from . import plot
+
+        return plot.power_flow(self, ax)
+
+    def _repr_html_(self) -> str:
+        return _html_table(
+            f"power flow: in {self.input_power:.6g} W, out {self.output_power:.6g} W, loss {self.loss:.6g} W",
+            ["gear pair", "rolling power", "driver", "efficiency", "loss"],
+            ((m.gear, m.rolling, m.driver, m.efficiency, m.loss) for m in self.meshes),
+        )
 
     def to_dict(self) -> Dict[str, Any]:
         return {

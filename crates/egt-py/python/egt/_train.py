@@ -256,6 +256,27 @@ class Train:
         """The topology checks the train passed, in words (section 2)."""
         return list(self._core.checks())
 
+    def _repr_html_(self) -> str:
+        from ._results import _html_table
+
+        title = f"{self.name or 'train'}: {len(self._links)} links, DOF {self.dof}, frame {self.frame}"
+        return _html_table(
+            title + " (fundamental circuits, Table 1)",
+            ["circuit", "gear pair", "gear i", "gear j", "carrier", "levels", "ratio"],
+            (
+                (c.index, c.gear, c.gear_i, c.gear_j, c.carrier, " ".join(c.levels),
+                 c.ratio_exact if c.ratio_exact is not None else c.ratio)
+                for c in self.circuits
+            ),
+        )
+
+    def speed_ladder(self, ax: Any = None, *, inputs: Optional[Mapping[str, Speed]] = None) -> Any:
+        """The speed ladder (lever diagram): of every gear state when the train
+        is a transmission, else of ``inputs`` (:func:`egt.plot.speed_ladder`)."""
+        from . import plot
+
+        return plot.speed_ladder(self, ax, inputs=inputs)
+
     def __repr__(self) -> str:
         return (
             f"<egt.Train {self.name or ''!r}: {len(self._links)} links, "

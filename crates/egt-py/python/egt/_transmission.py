@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Dict, Mapping, Optional, Tuple
 
+from ._args import ArgumentError
 from ._results import _pandas
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -251,6 +252,32 @@ class ShiftTable:
             ],
             "warnings": list(self.warnings),
         }
+
+    def plot(self, kind: str = "ladder", ax: Any = None) -> Any:
+        """``"ladder"``: the speed ladder of every gear state
+        (:func:`egt.plot.speed_ladder`); ``"ratios"``: the gear ratios and
+        steps (:func:`egt.plot.ratios`)."""
+        from . import plot
+
+        if kind == "ladder":
+            return plot.speed_ladder(self, ax)
+        if kind == "ratios":
+            return plot.ratios(self, ax)
+        raise ArgumentError(f"kind must be \"ladder\" or \"ratios\", got {kind!r}")
+
+    def _repr_html_(self) -> str:
+        from ._results import _html_table
+
+        steps = {s.upper: s.value for s in self.steps}
+        return _html_table(
+            f"shift table ({self.input} -> {self.output})",
+            ["state", "engaged", "ratio", "exact", "step", "efficiency"],
+            (
+                (g.state, " ".join(g.engaged), g.ratio, g.ratio_exact, steps.get(g.state),
+                 None if g.power is None else g.power.efficiency)
+                for g in self.gears
+            ),
+        )
 
     def to_pandas(self) -> "pandas.DataFrame":
         pd = _pandas()
