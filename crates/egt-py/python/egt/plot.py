@@ -84,7 +84,9 @@ def speed_ladder(
     ax.set_xticklabels(links, rotation=45, ha="right", fontsize="small")
     ax.set_xlabel("link")
     ax.set_title("speed ladder")
-    ax.figure.tight_layout()
+    fig = ax.get_figure()
+    if fig is not None and hasattr(fig, "tight_layout"):  # a SubFigure lays itself out
+        fig.tight_layout()
     if len(lines) > 1:
         ax.legend(fontsize="small")
     return ax
