@@ -46,3 +46,11 @@ def test_pint_quantities(fig3: egt.Train) -> None:
     assert r["2"] == pytest.approx(120.0, rel=1e-14)
     with pytest.raises(egt.ArgumentError, match="angular speed"):
         fig3.kinematics({"2": 3 * ureg.meter})
+
+
+def test_power_takes_rpm_and_answers_in_si(fig3: egt.Train) -> None:
+    si = fig3.power({"2": 100 * math.pi / 30})
+    rpm = fig3.power({"2": 100}, unit="rpm")
+    assert rpm.input_power == pytest.approx(si.input_power, rel=1e-14)
+    np.testing.assert_allclose(rpm.speeds.speeds, si.speeds.speeds, rtol=1e-14)
+    assert rpm.speeds.unit == "rad/s"

@@ -386,7 +386,7 @@ class Train:
 
     def power(
         self,
-        speeds: Optional[Mapping[str, Speed]] = None,
+        inputs: Optional[Mapping[str, Speed]] = None,
         torques: Optional[Mapping[str, float]] = None,
         accelerations: Optional[Mapping[str, float]] = None,
         driving: Optional[Sequence[str]] = None,
@@ -394,12 +394,19 @@ class Train:
         engaged: Sequence[str] = (),
         losses: bool = True,
         inertia: bool = True,
+        unit: str = "rad/s",
     ) -> PowerFlow:
-        """Power flow through every mesh, with the gear pairs' mesh losses unless ``losses=False``."""
+        """Power flow through every mesh, with the gear pairs' mesh losses unless ``losses=False``.
+
+        ``inputs``: one speed per DOF, as for :meth:`kinematics` (in ``unit``;
+        power is computed in SI, so other units are converted to rad/s and
+        the results are in rad/s, N m and W)."""
         t, a, d = self._loads(torques, accelerations, driving)
-        raw = self._core.power(
-            self._speeds(speeds), t, a, d, _names(engaged, "engaged"), losses, inertia
-        )
+        speeds = self._speeds(inputs, unit)
+        if unit != "rad/s":
+            k = _units.factor(unit)
+            speeds = [(n, v * k, None) for n, v, _ in speeds]
+        raw = self._core.power(speeds, t, a, d, _names(engaged, "engaged"), losses, inertia)
         return PowerFlow._from_core(self._links, self._gears, raw)
 
     def velocity_matrix(
