@@ -502,9 +502,21 @@ fn analysis_to_py(py: Python<'_>, a: &CoreAnalysis, msg: String, k: &str) -> PyE
     }
 }
 
-/// A Python `ValueError` for malformed arguments (shapes, unknown keywords).
+/// A malformed argument (shapes, unknown keywords): `egt.ArgumentError`, an
+/// `EgtError` that is also a `ValueError` (defined in `egt._args`), so that
+/// no bad input escapes the egt hierarchy; a plain `ValueError` only if that
+/// module cannot be imported.
 pub fn value_error(msg: impl Into<String>) -> Error {
-    Error::Py(pyo3::exceptions::PyValueError::new_err(msg.into()))
+    let msg = msg.into();
+    Error::Py(Python::attach(|py| {
+        py.import("egt._args")
+            .and_then(|m| m.getattr("ArgumentError"))
+            .and_then(|cls| cls.call1((msg.clone(),)))
+            .map_or_else(
+                |_| pyo3::exceptions::PyValueError::new_err(msg.clone()),
+                PyErr::from_value,
+            )
+    }))
 }
 
 /// Register the exception classes on the module, with class-level `None`

@@ -8,6 +8,7 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import Any, Callable
 
+import numpy as np
 import pytest
 
 import egt
@@ -81,3 +82,19 @@ def test_threads_are_capped_not_spawned(train: egt.Train) -> None:
     plan = train.batch("kinematics")
     result = plan.run(plan.base, threads=10**6)
     assert len(result) == 1
+
+
+def test_shape_and_keyword_errors_are_egt_errors(fig3: egt.Train) -> None:
+    """Errors raised by the Python layer and by the bindings' argument checks
+    are EgtErrors too (and still the ValueError/TypeError/KeyError Python expects)."""
+    cases = [
+        lambda: fig3.batch_kinematics({"2": 1.0}, teeth=np.ones((3, 2), dtype=int)),
+        lambda: fig3.batch("kinematics").run(np.zeros((2, 99))),
+        lambda: fig3.batch("nonsense"),
+        lambda: fig3.simulate(0.1, method="euler"),
+        lambda: egt.load("examples/zf_8hp70.toml").shift_table()["9"],
+    ]
+    for case in cases:
+        with pytest.raises(egt.EgtError) as info:
+            case()
+        assert isinstance(info.value, (ValueError, TypeError, KeyError)), type(info.value)

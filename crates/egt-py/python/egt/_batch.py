@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any, Dict, Iterable, List, Mapping, Optional, 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._args import ArgumentError, ArgumentKeyError, count
+from ._args import ArgumentError, ArgumentKeyError, ArgumentTypeError, count
 from ._egt import BatchPlanCore, TrainCore
 from ._egt import ratios_from_teeth as _ratios_from_teeth
 
@@ -31,7 +31,7 @@ def _numeric(x: ArrayLike, what: str) -> np.ndarray:
     """``x`` as an array of real numbers (bool, complex, object, text refused)."""
     a = np.asarray(x)
     if a.dtype.kind not in "iuf":
-        raise TypeError(
+        raise ArgumentTypeError(
             f"`{what}` must hold real numbers (int or float), got dtype {a.dtype}"
         )
     return a
@@ -50,7 +50,7 @@ def common_rows(arrays: Iterable[Tuple[str, np.ndarray, int]]) -> int:
     first = ""
     for what, a, nd in arrays:
         if a.ndim not in (nd, nd + 1):
-            raise ValueError(
+            raise ArgumentError(
                 f"`{what}` must have {nd} dimension(s) (one scenario) or {nd + 1} "
                 f"(one row per scenario), got shape {a.shape}"
             )
@@ -60,7 +60,7 @@ def common_rows(arrays: Iterable[Tuple[str, np.ndarray, int]]) -> int:
         if rows is None:
             rows, first = r, what
         elif r != rows:
-            raise ValueError(
+            raise ArgumentError(
                 f"`{what}` has {r} rows but `{first}` has {rows}: every per-row array "
                 "must have one row per scenario"
             )
@@ -70,11 +70,11 @@ def common_rows(arrays: Iterable[Tuple[str, np.ndarray, int]]) -> int:
 def rows_matrix(a: np.ndarray, rows: int, cols: int, what: str) -> np.ndarray:
     """Broadcast ``a`` ((cols,) or (rows, cols)) to C-contiguous float64 (rows, cols)."""
     if a.ndim == 2 and a.shape[1] != cols:
-        raise ValueError(f"`{what}` must have {cols} column(s), got shape {a.shape}")
+        raise ArgumentError(f"`{what}` must have {cols} column(s), got shape {a.shape}")
     if a.ndim == 1 and a.shape[0] != cols:
-        raise ValueError(f"`{what}` must have {cols} entries per row, got shape {a.shape}")
+        raise ArgumentError(f"`{what}` must have {cols} entries per row, got shape {a.shape}")
     if a.ndim not in (1, 2):
-        raise ValueError(f"`{what}` must have shape ({cols},) or (rows, {cols}), got {a.shape}")
+        raise ArgumentError(f"`{what}` must have shape ({cols},) or (rows, {cols}), got {a.shape}")
     return np.ascontiguousarray(np.broadcast_to(a.astype(np.float64, copy=False), (rows, cols)))
 
 
@@ -106,12 +106,12 @@ def teeth_array(x: ArrayLike, rows: int, gears: int) -> np.ndarray:
     """
     a = _numeric(x, "teeth")
     if a.shape[-2:] != (gears, 2):
-        raise ValueError(f"`teeth` must end in shape ({gears}, 2), got {a.shape}")
+        raise ArgumentError(f"`teeth` must end in shape ({gears}, 2), got {a.shape}")
     if a.dtype.kind == "f":
         if not np.all(np.isfinite(a)) or not np.all(a == np.round(a)):
-            raise ValueError("`teeth` must hold whole numbers")
+            raise ArgumentError("`teeth` must hold whole numbers")
     if a.dtype.kind == "u" and a.size and int(a.max()) > np.iinfo(np.int64).max:
-        raise ValueError("`teeth` holds values too large for a tooth count")
+        raise ArgumentError("`teeth` holds values too large for a tooth count")
     return np.ascontiguousarray(np.broadcast_to(a.astype(np.int64), (rows, gears, 2)))
 
 
@@ -245,7 +245,7 @@ class BatchPlan:
         r_arr = None if ratios is None else _numeric(ratios, "ratios")
         t_arr = None if teeth is None else _numeric(teeth, "teeth")
         if r_arr is not None and t_arr is not None:
-            raise ValueError("give either `ratios` or `teeth`, not both")
+            raise ArgumentError("give either `ratios` or `teeth`, not both")
         if r_arr is not None:
             per_row.append(("ratios", r_arr, 1))
         if t_arr is not None:
@@ -253,7 +253,7 @@ class BatchPlan:
         n_rows = common_rows(per_row)
         if rows is not None:
             if any(_rows_of(a, nd) not in (None, rows) for _, a, nd in per_row):
-                raise ValueError(f"rows={rows} disagrees with the per-row arrays")
+                raise ArgumentError(f"rows={rows} disagrees with the per-row arrays")
             n_rows = rows
         p = np.repeat(self.base.reshape(1, -1), n_rows, axis=0)
         bad: Dict[int, RowError] = {}
@@ -286,7 +286,7 @@ class BatchPlan:
         if a.ndim == 1:
             a = a.reshape(1, -1)
         if a.ndim != 2 or a.shape[1] != len(self.parameters):
-            raise ValueError(
+            raise ArgumentError(
                 f"params must have shape (rows, {len(self.parameters)}), got {a.shape}"
             )
         if threads is not None:

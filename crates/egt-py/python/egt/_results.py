@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING, Any, Dict, Iterable, Iterator, Mapping, Option
 
 import numpy as np
 
+from ._args import ArgumentKeyError
+
 if TYPE_CHECKING:  # pragma: no cover
     import pandas
 
@@ -228,7 +230,7 @@ class Kinematics(Mapping[str, float]):
         try:
             return float(self.speeds[self.links.index(name)])
         except ValueError:
-            raise KeyError(name) from None
+            raise ArgumentKeyError(name) from None
 
     def __iter__(self) -> Iterator[str]:
         return iter(self.links)

@@ -139,7 +139,7 @@ class Train:
 
     def __init__(self, core: TrainCore, spec: Optional[Tuple[str, str, str]] = None) -> None:
         if not isinstance(core, TrainCore):
-            raise TypeError("use egt.load, egt.loads or Train.from_dict to build a Train")
+            raise ArgumentTypeError("use egt.load, egt.loads or Train.from_dict to build a Train")
         self._core = core
         self._links: Tuple[str, ...] = tuple(core.link_names)
         self._gears: Tuple[str, ...] = tuple(g["name"] for g in core.gears())
@@ -151,7 +151,7 @@ class Train:
         boundaries (multiprocessing, joblib, Dask); validation is repeated on
         load, which is what makes the copy trustworthy."""
         if self._spec is None:
-            raise TypeError("this Train was not built from a spec text and cannot be pickled")
+            raise ArgumentTypeError("this Train was not built from a spec text and cannot be pickled")
         return (Train.from_str, self._spec)
 
     # -- construction ------------------------------------------------------
@@ -176,7 +176,7 @@ class Train:
         try:
             text = json.dumps(spec, indent=1, allow_nan=True)
         except TypeError as e:
-            raise TypeError(f"the spec dict is not JSON-serialisable: {e}") from e
+            raise ArgumentTypeError(f"the spec dict is not JSON-serialisable: {e}") from e
         return cls(TrainCore.from_text(text, "json", "<dict>"), (text, "json", "<dict>"))
 
     # -- structure ---------------------------------------------------------

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Dict, Mapping, Optional, Tuple
 
-from ._args import ArgumentError
+from ._args import ArgumentError, ArgumentKeyError
 from ._results import _pandas
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -236,7 +236,7 @@ class ShiftTable:
         for g in self.gears:
             if g.state == state:
                 return g
-        raise KeyError(state)
+        raise ArgumentKeyError(state)
 
     def to_dict(self) -> Dict[str, Any]:
         return {

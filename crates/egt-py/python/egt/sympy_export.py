@@ -37,7 +37,7 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
-from ._args import ArgumentError
+from ._args import ArgumentError, ArgumentKeyError, ArgumentTypeError
 
 try:
     import sympy
@@ -133,7 +133,7 @@ class SymbolicTrain:
     _circuits: List[Mapping[str, Any]]
 
     def __init__(self) -> None:
-        raise TypeError("use Train.to_sympy() to build a SymbolicTrain")
+        raise ArgumentTypeError("use Train.to_sympy() to build a SymbolicTrain")
 
     @classmethod
     def _from_structure(
@@ -235,16 +235,16 @@ class SymbolicTrain:
         try:
             return self.coordinates.index(link)
         except ValueError:
-            raise KeyError(f"unknown link {link!r} (coordinates: {', '.join(self.coordinates)})") from None
+            raise ArgumentKeyError(f"unknown link {link!r} (coordinates: {', '.join(self.coordinates)})") from None
 
     def _circuit(self, c: CircuitRef) -> int:
         if isinstance(c, str):
             for m, d in enumerate(self._circuits):
                 if d["gear"] == c:
                     return m
-            raise KeyError(f"no gear pair named {c!r}")
+            raise ArgumentKeyError(f"no gear pair named {c!r}")
         if not 1 <= int(c) <= len(self._circuits):
-            raise KeyError(f"circuits are numbered 1..{len(self._circuits)}, got {c}")
+            raise ArgumentKeyError(f"circuits are numbered 1..{len(self._circuits)}, got {c}")
         return int(c) - 1
 
     def _psi(self, m: int) -> sympy.Expr:
@@ -276,7 +276,7 @@ class SymbolicTrain:
         gamma = self.jacobian.col_join(S)
         rhs = sympy.zeros(len(self._circuits), f).col_join(sympy.eye(f))
         if gamma.rows != gamma.cols or sympy.simplify(gamma.det()) == 0:
-            raise ValueError(f"the inputs {list(inputs)} do not determine the train")
+            raise ArgumentError(f"the inputs {list(inputs)} do not determine the train")
         return gamma.LUsolve(rhs).applyfunc(sympy.factor)
 
     def reduced_mass_matrix_for(self, inputs: Sequence[str]) -> sympy.Matrix:
@@ -320,7 +320,7 @@ class SymbolicTrain:
         n, jg = len(self.coordinates), len(self._circuits)
         f = n - jg
         if len(accelerations) != f or len(driving) != f:
-            raise ValueError(f"the train has {f} DOF: give {f} accelerations and {f} driving links")
+            raise ArgumentError(f"the train has {f} DOF: give {f} accelerations and {f} driving links")
         S = sympy.zeros(f, n)
         alpha = sympy.zeros(jg, 1)
         for r, (name, a) in enumerate(accelerations.items()):
@@ -337,7 +337,7 @@ class SymbolicTrain:
         lam = Psi.T.LUsolve(Q - self.mass_matrix * wdot)
         sol = sympy.solve(list(lam[jg:]), unknown, dict=True)
         if len(sol) != 1:
-            raise ValueError("the driving links cannot balance the loads (eq. 10 is singular)")
+            raise ArgumentError("the driving links cannot balance the loads (eq. 10 is singular)")
         lam = lam.subs(sol[0])
         tidy = sympy.simplify if simplify else (lambda e: e)
         return SymbolicDynamics(
