@@ -809,3 +809,36 @@ fn transaxle_with_a_reversing_final_drive() {
         (1, "R")
     );
 }
+
+/// The named serde view: inside `Train::named` every id is its name (links,
+/// gear pairs, elements), outside it an index, and the two forms carry the
+/// same numbers.
+#[test]
+fn named_view_replaces_ids_by_names() {
+    let t = example("zf_8hp70.toml");
+    let g = t.analyse_gear("1").unwrap();
+    let named = t.named(&g).unwrap();
+    let plain = serde_json::to_value(&g).unwrap();
+    let engaged: Vec<String> = g
+        .engaged
+        .iter()
+        .map(|&e| t.elements()[e.index()].name.clone())
+        .collect();
+    assert_eq!(named["engaged"], serde_json::json!(engaged));
+    assert_eq!(
+        plain["engaged"],
+        serde_json::json!(g.engaged.iter().map(|e| e.index()).collect::<Vec<_>>())
+    );
+    assert_eq!(
+        named["meshes"][0]["gear"],
+        t.gears()[g.meshes[0].gear.index()].name.as_str()
+    );
+    assert_eq!(
+        named["relative"][0]["link"],
+        t.link_name(g.relative[0].link)
+    );
+    assert_eq!(named["ratio"], plain["ratio"]);
+    assert_eq!(named["ratio_exact"], "108/23");
+    // Nested calls and later plain serialization are unaffected.
+    assert_eq!(serde_json::to_value(&g).unwrap(), plain);
+}
