@@ -33,7 +33,9 @@ SERIES = [
     ("exact rationals", "exact rationals (Rust)", "#7f7f7f", "triangle"),
     ("numpy", "NumPy, one scenario at a time", "#2ca02c", "square"),
     ("numpy-batch", "NumPy, 10 000 scenarios stacked", "#98df8a", "square"),
-    ("sympy", "SymPy: derive, lambdify, evaluate", "#e377c2", "triangle"),
+    ("sympy", "SymPy: lambdify, one scenario at a time", "#e377c2", "triangle"),
+    ("sympy-cse", "SymPy: lambdify(cse=True), one at a time", "#f7b6d2", "triangle"),
+    ("sympy-cse-batch", "SymPy: lambdify(cse=True) over 10 000 scenarios", "#ad494a", "triangle"),
     ("sympy-subs", "SymPy: derive, subs/evalf", "#bcbd22", "triangle"),
     ("floor", "flop floor (this machine's rate)", "#000000", "ring"),
 ]
@@ -46,7 +48,8 @@ def points(rust: dict[str, Any], python: dict[str, Any]) -> dict[str, list[tuple
             out[m["method"]].append((size["links"], m["seconds"], m["error"]))
         out["floor"].append((size["links"], size["floor_seconds"], 2.0**-53))
     for row in python["rows"]:
-        out[row["route"]].append((row["links"], row["seconds"], row["error"]))
+        if row["route"] in out and row["seconds"] is not None:
+            out[row["route"]].append((row["links"], row["seconds"], row["error"]))
     return out
 
 
@@ -165,6 +168,8 @@ def fmt_ratio(a: float | None, b: float | None) -> str:
     if a is None or b is None:
         return "–"
     r = a / b
+    if r < 0.095:
+        return f"{r:.2g}×"
     return f"{r:,.0f}×" if r >= 10 else f"{r:.1f}×"
 
 
@@ -174,13 +179,17 @@ def summary(rust: dict[str, Any], python: dict[str, Any], data: dict[str, list[t
     def t(key: str, links: int) -> float | None:
         return by.get(key, {}).get(links, (None, None))[0]
 
-    derive = {r["links"]: r["derive_seconds"] for r in python["rows"] if r["route"] == "sympy"}
+    derive = {r["links"]: r["derive_seconds"] for r in python["rows"] if "derive_seconds" in r}
+    codegen = {(r["route"], r["links"]): r.get("codegen_seconds") for r in python["rows"]}
     lines = [
         f"Measured flop rate (one core, a 384 × 384 matrix product): **{rust['flop_rate'] / 1e9:.1f} GFLOP/s**; "
         f"NumPy {python['numpy']}, SymPy {python['sympy']}.",
         "",
-        "| links | n | egt | flop floor | egt / floor | NumPy | NumPy / egt | NumPy batch | SymPy lambdify | SymPy / egt | SymPy subs | subs / egt | SymPy derivation |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "Per scenario, one core. egt is its prepared path one scenario after another (as `egt batch` runs); "
+        "\"batch\" routes evaluate 10 000 scenarios at once and divide. A ratio below 1× means the other route is faster than egt.",
+        "",
+        "| links | n | egt | flop floor | egt / floor | NumPy | NumPy / egt | NumPy batch | batch / egt | SymPy lambdify | SymPy cse | SymPy cse batch | cse batch / egt | SymPy subs |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for size in rust["sizes"]:
         links = size["links"]
@@ -188,9 +197,25 @@ def summary(rust: dict[str, Any], python: dict[str, Any], data: dict[str, list[t
         lines.append(
             f"| {links} | {size['n']} | {fmt_time(egt)} | {fmt_time(size['floor_seconds'])} | {fmt_ratio(egt, size['floor_seconds'])} "
             f"| {fmt_time(t('numpy', links))} | {fmt_ratio(t('numpy', links), egt)} | {fmt_time(t('numpy-batch', links))} "
-            f"| {fmt_time(t('sympy', links))} | {fmt_ratio(t('sympy', links), egt)} | {fmt_time(t('sympy-subs', links))} "
-            f"| {fmt_ratio(t('sympy-subs', links), egt)} | {fmt_time(derive.get(links))} |"
+            f"| {fmt_ratio(t('numpy-batch', links), egt)} | {fmt_time(t('sympy', links))} | {fmt_time(t('sympy-cse', links))} "
+            f"| {fmt_time(t('sympy-cse-batch', links))} | {fmt_ratio(t('sympy-cse-batch', links), egt)} | {fmt_time(t('sympy-subs', links))} |"
         )
+    lines += [
+        "",
+        "SymPy's one-off costs, apart from the per-scenario times above: the symbolic solve (derivation), "
+        "then code generation by `lambdify` (plain, with CSE, and with CSE for NumPy arrays):",
+        "",
+        "| links | derivation | lambdify | lambdify cse | lambdify cse numpy |",
+        "|---|---|---|---|---|",
+    ]
+    budget = [r for r in python["rows"] if r["route"] == "sympy-budget"]
+    for links in sorted(derive):
+        lines.append(
+            f"| {links} | {fmt_time(derive[links])} | {fmt_time(codegen.get(('sympy', links)))} "
+            f"| {fmt_time(codegen.get(('sympy-cse', links)))} | {fmt_time(codegen.get(('sympy-cse-batch', links)))} |"
+        )
+    for r in budget:
+        lines.append(f"| {r['links']} | more than {fmt_time(r['budget_seconds'])} for derivation and code generation together: stopped | | | |")
     lines += [
         "",
         "Time per scenario of every Rust method and its largest relative error against exact rationals:",
@@ -207,7 +232,8 @@ def summary(rust: dict[str, Any], python: dict[str, Any], data: dict[str, list[t
     lines.append("")
     lines.append(
         "Python routes' errors: "
-        + ", ".join(f"{r['route']} {r['links']} links {r['error']:.0e}" for r in python["rows"] if r["links"] in (6, 30) or r["route"].startswith("sympy"))
+        + ", ".join(f"{r['route']} {r['links']} links {r['error']:.0e}" for r in python["rows"]
+                    if r["error"] is not None and (r["links"] in (6, 30) or r["route"].startswith("sympy")))
         + "."
     )
     return "\n".join(lines) + "\n"
