@@ -26,3 +26,6 @@ mod bad_inputs;
 
 // Issue 15: `egt enumerate`, the atlas of gear-train graphs, read back by `egt check`.
 mod enumerate;
+
+// Issue 16: `egt synth`, the design search, against the real transmissions and `egt shift`.
+mod synth;

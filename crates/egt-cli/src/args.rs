@@ -188,3 +188,21 @@ pub fn resolve_pairs(
         .map(|(l, v)| Ok((train.resolve(l, &format!("--{flag} {l}"))?, *v)))
         .collect()
 }
+
+/// `I/K`: partition I (0-based) of K disjoint parts of a search (`--part`).
+///
+/// # Errors
+/// Not two integers separated by `/`.
+pub fn parse_part(text: &str) -> anyhow::Result<(usize, usize)> {
+    let (i, k) = text
+        .split_once('/')
+        .with_context(|| format!("--part `{text}`: expected I/K, e.g. 0/4"))?;
+    Ok((
+        i.trim()
+            .parse()
+            .with_context(|| format!("--part `{text}`: bad I"))?,
+        k.trim()
+            .parse()
+            .with_context(|| format!("--part `{text}`: bad K"))?,
+    ))
+}

@@ -48,6 +48,8 @@ pub enum Command {
     Man(commands::completions::ManArgs),
     /// The atlas of non-isomorphic gear train graphs with N links and F DOF, one per line.
     Enumerate(commands::enumerate::Args),
+    /// Design search: tooth counts of a transmission's planetary sets for target ratios.
+    Synth(commands::synth::Args),
 }
 
 /// How results are printed.

@@ -40,11 +40,16 @@ pub fn load(args: &SpecArgs) -> anyhow::Result<Loaded> {
     }
 }
 
-fn is_stdin(path: &Path) -> bool {
+/// Whether `path` means standard input (`-`).
+pub fn is_stdin(path: &Path) -> bool {
     path.as_os_str() == "-"
 }
 
-fn read_text(path: &Path) -> anyhow::Result<(String, String)> {
+/// The text of a file, or of standard input for `-`, and its name for messages.
+///
+/// # Errors
+/// I/O errors, with the path.
+pub fn read_text(path: &Path) -> anyhow::Result<(String, String)> {
     if is_stdin(path) {
         let mut text = String::new();
         std::io::stdin()

@@ -6,9 +6,10 @@
 
 use std::io::Write;
 
-use anyhow::Context;
 use egt_core::synthesis::{AtlasRequest, GraphLevel, enumerate_with, units};
 use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::args::parse_part;
 
 /// Arguments of `egt enumerate`.
 #[derive(Debug, Clone, clap::Args)]
@@ -40,20 +41,6 @@ pub enum Level {
     Rotation,
     /// Displacement graphs: with the axis levels.
     Displacement,
-}
-
-fn parse_part(text: &str) -> anyhow::Result<(usize, usize)> {
-    let (i, k) = text
-        .split_once('/')
-        .with_context(|| format!("--part `{text}`: expected I/K, e.g. 0/4"))?;
-    Ok((
-        i.trim()
-            .parse()
-            .with_context(|| format!("--part `{text}`: bad I"))?,
-        k.trim()
-            .parse()
-            .with_context(|| format!("--part `{text}`: bad K"))?,
-    ))
 }
 
 /// Runs `egt enumerate`.

@@ -18,6 +18,7 @@ pub mod schema;
 pub mod shift;
 pub mod simulate;
 pub mod stability;
+pub mod synth;
 
 /// Run one subcommand, writing its report to `out`.
 ///
@@ -39,5 +40,6 @@ pub fn run(command: &Command, out: &mut dyn Write) -> anyhow::Result<()> {
         Command::Completions(args) => completions::run(args, out),
         Command::Man(args) => completions::man(args, out),
         Command::Enumerate(args) => enumerate::run(args, out),
+        Command::Synth(args) => synth::run(args, out),
     }
 }

@@ -46,6 +46,27 @@ pub enum DesignError {
     Egt(#[from] crate::Error),
 }
 
+/// A design error as one of egt's typed errors (so the CLI's exit codes,
+/// JSON error codes and Python's exceptions cover it): the base train's and
+/// candidates' own errors as they are; a field, set or state of the search
+/// spec as a spec error naming it (exit 2).
+impl From<DesignError> for crate::Error {
+    fn from(e: DesignError) -> Self {
+        match e {
+            DesignError::Egt(e) => e,
+            DesignError::UnknownSet(name) => crate::Error::invalid(
+                format!("sets.{name}"),
+                "no simple planetary set of that name in the base train",
+            ),
+            DesignError::UnknownState(name) => crate::Error::invalid(
+                format!("targets.ratios.{name}"),
+                "no gear state of that name in the base train",
+            ),
+            DesignError::Invalid { field, message } => crate::Error::invalid(field, message),
+        }
+    }
+}
+
 /// One way to build a set: sun, ring and planet teeth.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub struct Teeth {
@@ -365,6 +386,11 @@ impl Search {
             basics: basics_all,
             states,
         })
+    }
+
+    /// The unknown sets, in the order of each candidate's lists.
+    pub fn set_names(&self) -> &[String] {
+        &self.set_names
     }
 
     /// Number of partitions the first unknown set's ratios can be split into.

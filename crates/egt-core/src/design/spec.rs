@@ -107,3 +107,24 @@ pub struct Targets {
 fn default_tolerance() -> f64 {
     5e-4
 }
+
+impl SynthSpec {
+    /// Parse a search spec (TOML or JSON) with located errors.
+    ///
+    /// # Errors
+    /// [`crate::Error::Syntax`] with line, column and field path.
+    pub fn from_str(text: &str, format: crate::Format, source_name: &str) -> crate::Result<Self> {
+        crate::spec::parse::parse_document(text, format, source_name)
+    }
+
+    /// Where the base train is: `base` relative to the directory of the
+    /// search spec's file (`spec_file`), or as written when absolute or when
+    /// the search spec has no file (standard input, a string).
+    pub fn base_path(&self, spec_file: Option<&std::path::Path>) -> std::path::PathBuf {
+        let base = std::path::Path::new(&self.base);
+        match spec_file.and_then(std::path::Path::parent) {
+            Some(dir) if base.is_relative() => dir.join(base),
+            _ => base.to_path_buf(),
+        }
+    }
+}

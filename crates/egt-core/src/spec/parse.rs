@@ -44,6 +44,19 @@ fn strip_bom(text: &str) -> &str {
 /// # Errors
 /// [`Error::Syntax`] with line, column and (when known) the field path.
 pub fn parse_spec(text: &str, format: Format, source_name: &str) -> Result<Spec> {
+    parse_document(text, format, source_name)
+}
+
+/// Parse any egt document (a train spec, a design-search spec) from text,
+/// with the same located errors as [`parse_spec`].
+///
+/// # Errors
+/// [`Error::Syntax`] with line, column and (when known) the field path.
+pub fn parse_document<T: serde::de::DeserializeOwned>(
+    text: &str,
+    format: Format,
+    source_name: &str,
+) -> Result<T> {
     // A byte-order mark is no part of the document, in either format (the
     // positions of errors are then counted from the first character after it).
     let text = strip_bom(text);

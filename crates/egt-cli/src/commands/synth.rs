@@ -1,0 +1,248 @@
+//! `egt synth SEARCH`: the design search of `egt_core::design`. Reads a search
+//! spec (the base transmission, tooth ranges per unknown set, constraints,
+//! target ratios; `docs/synth.md`), searches every admissible tooth count on
+//! all cores, and prints the best candidates with their exact ratios.
+//! `--part I/K` runs one of K disjoint partitions (for several machines);
+//! `--write-specs DIR` writes each candidate as a train spec that every egt
+//! command reads (e.g. `egt shift DIR/candidate-1.json`).
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context;
+use egt_core::design::{Candidate, Search, Stats, SynthSpec};
+use egt_core::{Format, parse_spec};
+use serde::Serialize;
+
+use crate::args::parse_part;
+use crate::cli::{OutputFormat, SpecFormat};
+use crate::input::{is_stdin, read_text};
+use crate::report::{self, Table};
+
+/// Arguments of `egt synth`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct Args {
+    /// The search spec (TOML or JSON; `docs/synth.md`), or `-` for standard input.
+    #[arg(value_name = "SEARCH")]
+    pub spec: PathBuf,
+    /// Search-spec format; by default from the extension, or sniffed on stdin.
+    #[arg(long, value_enum, value_name = "FORMAT")]
+    pub spec_format: Option<SpecFormat>,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = OutputFormat::Table)]
+    pub format: OutputFormat,
+    /// Keep this many of the best candidates (default: the spec's `top`, else 20).
+    #[arg(long, value_name = "N")]
+    pub top: Option<usize>,
+    /// Only partition I of K (`I/K`, 0-based): disjoint parts whose candidates,
+    /// merged and ranked, are the whole search's.
+    #[arg(long, value_name = "I/K")]
+    pub part: Option<String>,
+    /// Write each candidate's train spec to DIR/candidate-<rank>.json.
+    #[arg(long, value_name = "DIR")]
+    pub write_specs: Option<PathBuf>,
+}
+
+#[derive(Debug, Serialize)]
+struct SetTeeth {
+    set: String,
+    basic: String,
+    sun: i64,
+    ring: i64,
+    planet: i64,
+    alternatives: usize,
+}
+
+#[derive(Debug, Serialize)]
+struct RatioRow {
+    state: String,
+    ratio: f64,
+    exact: String,
+}
+
+#[derive(Debug, Serialize)]
+struct Row {
+    rank: usize,
+    score: f64,
+    spread: Option<f64>,
+    sets: Vec<SetTeeth>,
+    ratios: Vec<RatioRow>,
+    spec: Option<String>,
+}
+
+#[derive(Debug, Serialize)]
+struct Report {
+    source: String,
+    base: String,
+    part: Option<[usize; 2]>,
+    candidates: Vec<Row>,
+    stats: Stats,
+    seconds: f64,
+}
+
+/// Run `egt synth`.
+///
+/// # Errors
+/// Syntax and field errors of the search spec (exit 2), the base train's own
+/// errors, I/O.
+pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
+    let (text, source) = read_text(&args.spec)?;
+    let format = match args.spec_format {
+        Some(SpecFormat::Toml) => Format::Toml,
+        Some(SpecFormat::Json) => Format::Json,
+        None if is_stdin(&args.spec) => Format::sniff(&text),
+        None => Format::from_path(&source),
+    };
+    let mut spec = SynthSpec::from_str(&text, format, &source)?;
+    if let Some(top) = args.top {
+        spec.top = top;
+    }
+    let file = (!is_stdin(&args.spec)).then_some(args.spec.as_path());
+    let base_path = spec.base_path(file);
+    let base_text = std::fs::read_to_string(&base_path).with_context(|| {
+        format!(
+            "{source}: base = {:?}: reading {}",
+            spec.base,
+            base_path.display()
+        )
+    })?;
+    let base_name = base_path.display().to_string();
+    let base = parse_spec(&base_text, Format::from_path(&base_name), &base_name)?;
+    let search = Search::new(spec, base)
+        .map_err(egt_core::Error::from)
+        .with_context(|| source.clone())?;
+    let part = args.part.as_deref().map(parse_part).transpose()?;
+    let start = Instant::now();
+    let (found, stats) = match part {
+        Some((i, k)) => search.run_partition(i, k),
+        None => search.run(),
+    }
+    .map_err(egt_core::Error::from)?;
+    let seconds = start.elapsed().as_secs_f64();
+    let mut rows = Vec::with_capacity(found.len());
+    for (k, c) in found.iter().enumerate() {
+        let written = match &args.write_specs {
+            Some(dir) => Some(write_spec(&search, c, dir, k + 1)?),
+            None => None,
+        };
+        rows.push(row(&search, c, k + 1, written));
+    }
+    let report = Report {
+        source,
+        base: base_name,
+        part: part.map(|(i, k)| [i, k]),
+        candidates: rows,
+        stats,
+        seconds,
+    };
+    match args.format {
+        OutputFormat::Json => report::json(out, &report),
+        OutputFormat::Table => write_table(out, &report),
+    }
+}
+
+fn row(search: &Search, c: &Candidate, rank: usize, spec: Option<String>) -> Row {
+    Row {
+        rank,
+        score: c.score,
+        spread: c.spread,
+        sets: search
+            .set_names()
+            .iter()
+            .zip(&c.teeth)
+            .zip(&c.basic)
+            .zip(&c.alternatives)
+            .map(|(((set, t), basic), &alternatives)| SetTeeth {
+                set: set.clone(),
+                basic: basic.clone(),
+                sun: t.sun,
+                ring: t.ring,
+                planet: t.planet,
+                alternatives,
+            })
+            .collect(),
+        ratios: c
+            .ratios
+            .iter()
+            .map(|(state, ratio, exact)| RatioRow {
+                state: state.clone(),
+                ratio: *ratio,
+                exact: exact.clone(),
+            })
+            .collect(),
+        spec,
+    }
+}
+
+/// The candidate's train spec as JSON, for every other egt command.
+fn write_spec(
+    search: &Search,
+    c: &Candidate,
+    dir: &std::path::Path,
+    rank: usize,
+) -> anyhow::Result<String> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let path = dir.join(format!("candidate-{rank}.json"));
+    let text = serde_json::to_string_pretty(&search.candidate_spec(&c.teeth))?;
+    std::fs::write(&path, text + "\n").with_context(|| format!("writing {}", path.display()))?;
+    Ok(path.display().to_string())
+}
+
+fn write_table(out: &mut dyn Write, r: &Report) -> anyhow::Result<()> {
+    writeln!(
+        out,
+        "{}: design search over {} (base {})",
+        r.source,
+        match r.part {
+            Some([i, k]) => format!("partition {i} of {k}"),
+            None => "the whole space".into(),
+        },
+        r.base
+    )?;
+    writeln!(
+        out,
+        "{:.3e} tooth combinations, {:.3e} distinct ratio combinations, {} nodes, {} leaves, {:.2} s; {} candidates",
+        r.stats.tooth_space,
+        r.stats.ratio_space,
+        r.stats.nodes,
+        r.stats.leaves,
+        r.seconds,
+        r.candidates.len()
+    )?;
+    let Some(first) = r.candidates.first() else {
+        writeln!(out, "no tooth counts meet the targets within the tolerance")?;
+        return Ok(());
+    };
+    let mut headers: Vec<String> = vec!["rank".into(), "score".into()];
+    headers.extend(
+        first
+            .sets
+            .iter()
+            .map(|s| format!("{} sun/ring/planet (k)", s.set)),
+    );
+    headers.extend(first.ratios.iter().map(|x| format!("i{}", x.state)));
+    let refs: Vec<&str> = headers.iter().map(String::as_str).collect();
+    let mut t = Table::new(&refs).right(&[0, 1]);
+    for c in &r.candidates {
+        let mut cells = vec![c.rank.to_string(), format!("{:.2e}", c.score)];
+        cells.extend(c.sets.iter().map(|s| {
+            let alt = if s.alternatives > 1 {
+                format!(" +{}", s.alternatives - 1)
+            } else {
+                String::new()
+            };
+            format!("{}/{}/{} ({}){alt}", s.sun, s.ring, s.planet, s.basic)
+        }));
+        cells.extend(c.ratios.iter().map(|x| format!("{:.4}", x.ratio)));
+        t.row(cells);
+    }
+    t.write(out, 2)?;
+    writeln!(
+        out,
+        "(k = ring/sun; +N: N other tooth triples with the same k; ratios are exact, e.g. {} = {})",
+        first.ratios.first().map_or("", |x| x.state.as_str()),
+        first.ratios.first().map_or("", |x| x.exact.as_str()),
+    )?;
+    Ok(())
+}

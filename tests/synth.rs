@@ -1,0 +1,158 @@
+//! `egt synth` as a user runs it (issue 16): the 8HP70's tooth counts
+//! rediscovered from its published ratios, every candidate re-run through
+//! `egt shift` giving exactly the ratios the search reported, the Ford C4's
+//! real sets among the candidates, partitions that merge to the whole
+//! search, and bad search specs refused by field with exit 2.
+
+// A failed unwrap is a failed test, with its location.
+#![allow(clippy::unwrap_used)]
+
+use serde_json::Value;
+
+use crate::util::{egt, stdout};
+
+fn synth(args: &[&str]) -> Value {
+    serde_json::from_str(&stdout(args)).unwrap()
+}
+
+/// (sun, ring) pairs of one candidate, by set.
+fn teeth(c: &Value) -> Vec<(i64, i64)> {
+    c["sets"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| (s["sun"].as_i64().unwrap(), s["ring"].as_i64().unwrap()))
+        .collect()
+}
+
+#[test]
+fn rediscovers_the_8hp_and_every_candidate_passes_egt_shift() {
+    let dir = std::env::temp_dir().join(format!("egt-synth-{}", std::process::id()));
+    let dir_s = dir.display().to_string();
+    let v = synth(&[
+        "synth",
+        "examples/synth_8hp70.toml",
+        "--format",
+        "json",
+        "--write-specs",
+        &dir_s,
+    ]);
+    let cands = v["candidates"].as_array().unwrap();
+    assert!(!cands.is_empty());
+    // The real sets (48/96, 48/96, 69/111, 23/85), or sets with the same ring/sun.
+    let real = [(48, 96), (48, 96), (69, 111), (23, 85)];
+    let best = teeth(&cands[0]);
+    assert!(
+        best.iter()
+            .zip(real)
+            .all(|(&(zs, zr), (s, r))| zr * s == r * zs),
+        "{best:?}"
+    );
+    assert!(v["stats"]["tooth_space"].as_f64().unwrap() > 1e10);
+    for c in cands {
+        let spec = c["spec"].as_str().unwrap();
+        let shift: Value =
+            serde_json::from_str(&stdout(&["shift", spec, "--format", "json"])).unwrap();
+        for r in c["ratios"].as_array().unwrap() {
+            let g = shift["gears"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|g| g["state"] == r["state"])
+                .unwrap();
+            assert_eq!(g["ratio_exact"], r["exact"], "{spec} state {}", r["state"]);
+            assert_eq!(g["ratio"], r["ratio"]);
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn finds_the_c4_simpson_sets() {
+    let v = synth(&[
+        "synth",
+        "examples/synth_c4_simpson.toml",
+        "--format",
+        "json",
+    ]);
+    let cands = v["candidates"].as_array().unwrap();
+    assert!(
+        cands.iter().any(|c| teeth(c) == [(33, 72), (33, 72)]),
+        "the real 33/72 sets are not among {} candidates",
+        cands.len()
+    );
+    for c in cands {
+        for r in c["ratios"].as_array().unwrap() {
+            let target = match r["state"].as_str().unwrap() {
+                "1" => 2.46,
+                "2" => 1.46,
+                "3" => 1.00,
+                _ => -2.18,
+            };
+            assert!((r["ratio"].as_f64().unwrap() - target).abs() <= 0.005);
+        }
+    }
+}
+
+#[test]
+fn partitions_merge_to_the_whole_search() {
+    let whole = synth(&[
+        "synth",
+        "examples/synth_c4_simpson.toml",
+        "--format",
+        "json",
+        "--top",
+        "50",
+    ]);
+    let mut merged: Vec<(f64, Vec<(i64, i64)>)> = Vec::new();
+    for i in 0..3 {
+        let part = format!("{i}/3");
+        let v = synth(&[
+            "synth",
+            "examples/synth_c4_simpson.toml",
+            "--format",
+            "json",
+            "--top",
+            "50",
+            "--part",
+            &part,
+        ]);
+        assert_eq!(v["part"], serde_json::json!([i, 3]));
+        for c in v["candidates"].as_array().unwrap() {
+            merged.push((c["score"].as_f64().unwrap(), teeth(c)));
+        }
+    }
+    merged.sort_by(|a, b| a.0.total_cmp(&b.0).then_with(|| a.1.cmp(&b.1)));
+    let whole: Vec<Vec<(i64, i64)>> = whole["candidates"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(teeth)
+        .collect();
+    let merged: Vec<Vec<(i64, i64)>> = merged.into_iter().map(|x| x.1).take(whole.len()).collect();
+    assert_eq!(whole, merged);
+    assert!(!whole.is_empty());
+}
+
+#[test]
+fn bad_search_specs_are_refused_by_field() {
+    let spec = "base = \"examples/zf_8hp70.toml\"\n[sets]\nP9 = { sun = [20, 30], ring = [60, 80] }\n[targets]\nratios = { \"1\" = 4.7 }\n";
+    let r = egt(&["synth", "-", "--spec-format", "toml"], Some(spec));
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("sets.P9"), "{}", r.stderr);
+    let r = egt(&["synth", "-", "--spec-format", "toml"], Some("base = 3\n"));
+    assert_eq!(r.code, 2);
+    assert!(r.stderr.contains("<stdin>:1:"), "{}", r.stderr);
+    let r = egt(
+        &["synth", "-", "--spec-format", "toml"],
+        Some(&spec.replace("P9", "P1").replace("\"1\"", "\"9\"")),
+    );
+    assert_eq!(r.code, 2);
+    assert!(r.stderr.contains("targets.ratios.9"), "{}", r.stderr);
+    let r = egt(
+        &["synth", "examples/synth_c4_simpson.toml", "--part", "3/3"],
+        None,
+    );
+    assert_ne!(r.code, 0);
+    assert!(r.stderr.contains("partition"), "{}", r.stderr);
+}
