@@ -31,7 +31,7 @@ fn rediscovers_the_8hp_and_every_candidate_passes_egt_shift() {
     let dir_s = dir.display().to_string();
     let v = synth(&[
         "synth",
-        "examples/synth_8hp70.toml",
+        "examples/synth/zf_8hp70.toml",
         "--format",
         "json",
         "--write-specs",
@@ -71,7 +71,7 @@ fn rediscovers_the_8hp_and_every_candidate_passes_egt_shift() {
 fn finds_the_c4_simpson_sets() {
     let v = synth(&[
         "synth",
-        "examples/synth_c4_simpson.toml",
+        "examples/synth/ford_c4_simpson.toml",
         "--format",
         "json",
     ]);
@@ -98,7 +98,7 @@ fn finds_the_c4_simpson_sets() {
 fn partitions_merge_to_the_whole_search() {
     let whole = synth(&[
         "synth",
-        "examples/synth_c4_simpson.toml",
+        "examples/synth/ford_c4_simpson.toml",
         "--format",
         "json",
         "--top",
@@ -109,7 +109,7 @@ fn partitions_merge_to_the_whole_search() {
         let part = format!("{i}/3");
         let v = synth(&[
             "synth",
-            "examples/synth_c4_simpson.toml",
+            "examples/synth/ford_c4_simpson.toml",
             "--format",
             "json",
             "--top",
@@ -150,7 +150,12 @@ fn bad_search_specs_are_refused_by_field() {
     assert_eq!(r.code, 2);
     assert!(r.stderr.contains("targets.ratios.9"), "{}", r.stderr);
     let r = egt(
-        &["synth", "examples/synth_c4_simpson.toml", "--part", "3/3"],
+        &[
+            "synth",
+            "examples/synth/ford_c4_simpson.toml",
+            "--part",
+            "3/3",
+        ],
         None,
     );
     assert_ne!(r.code, 0);

@@ -23,7 +23,7 @@ pub struct TrainCore {
 /// One prescribed input speed as the Python side passes it: link, float, exact text.
 type InputArg = (String, f64, Option<String>);
 
-fn format_of(format: &str) -> Result<Format> {
+pub(crate) fn format_of(format: &str) -> Result<Format> {
     match format.to_ascii_lowercase().as_str() {
         "toml" => Ok(Format::Toml),
         "json" => Ok(Format::Json),

@@ -388,6 +388,11 @@ impl Search {
         })
     }
 
+    /// How many of the best candidates a run keeps (the spec's `top`).
+    pub fn top(&self) -> usize {
+        self.spec.top
+    }
+
     /// The unknown sets, in the order of each candidate's lists.
     pub fn set_names(&self) -> &[String] {
         &self.set_names

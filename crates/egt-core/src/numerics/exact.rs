@@ -490,8 +490,14 @@ mod tests {
         // The limits themselves are accepted, and leading zeros do not count.
         assert!(parse_rational("1e1000").is_ok() && parse_rational("1e-1000").is_ok());
         // The most negative i64 exponent is refused, not wrapped (a fuzz timeout).
-        assert_eq!(parse_rational("1e-9223372036854775808"), Err(RationalError::TooLarge));
-        assert_eq!(parse_rational("5e-0009223372036854775808"), Err(RationalError::TooLarge));
+        assert_eq!(
+            parse_rational("1e-9223372036854775808"),
+            Err(RationalError::TooLarge)
+        );
+        assert_eq!(
+            parse_rational("5e-0009223372036854775808"),
+            Err(RationalError::TooLarge)
+        );
         // The value's size counts too, so that what is accepted prints back
         // as text that is accepted (a fuzz finding: 1e1000 printed 1001 digits).
         for text in [

@@ -55,6 +55,7 @@ from ._results import (
     RelativeSpeed,
 )
 from ._motion import Curve, MasslessDirection, Mode, OperatingPoint, Simulation, StabilityReport
+from ._synth import SynthResult, synth, synth_distributed
 from ._train import CurveLike, Speed, Train, load, loads
 from ._transmission import (
     ElementLoad,
@@ -70,6 +71,9 @@ from ._transmission import (
 __all__ = [
     "__version__",
     "atlas",
+    "synth",
+    "synth_distributed",
+    "SynthResult",
     "Train",
     "load",
     "loads",

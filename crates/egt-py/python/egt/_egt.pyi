@@ -11,6 +11,8 @@ __all__ = [
     "TrainCore",
     "structure",
     "BatchPlanCore",
+    "SearchCore",
+    "search_inputs",
     "batch_plan",
     "ratios_from_teeth",
     "stability",
@@ -138,6 +140,30 @@ def simulate(
 def ratios_from_teeth(
     core: TrainCore, teeth: npt.NDArray[np.int64]
 ) -> Tuple[npt.NDArray[np.float64], List[Tuple[int, str, str]]]: ...
+@final
+class SearchCore:
+    def __new__(
+        cls,
+        text: str,
+        base_text: str,
+        format: str = ...,
+        base_format: str = ...,
+        source: str = ...,
+        base_source: str = ...,
+        top: Optional[int] = ...,
+    ) -> SearchCore: ...
+    @property
+    def sets(self) -> List[str]: ...
+    @property
+    def top(self) -> int: ...
+    @property
+    def max_partitions(self) -> int: ...
+    def run(self, part: int = ..., parts: int = ...) -> Dict[str, Any]: ...
+    def candidate_spec(self, teeth: List[Tuple[int, int, int]]) -> str: ...
+
+def search_inputs(
+    path: Optional[str] = ..., text: Optional[str] = ..., format: Optional[str] = ...
+) -> Tuple[str, str, str, str, str, str]: ...
 def gear(core: TrainCore, state: str) -> Dict[str, Any]: ...
 def shift_table(core: TrainCore) -> Dict[str, Any]: ...
 def cli(args: List[str]) -> int: ...

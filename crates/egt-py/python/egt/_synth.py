@@ -1,0 +1,210 @@
+"""Design search from Python: :func:`synth` (one process, every core) and
+:func:`synth_distributed` (partitions as tasks on a Dask cluster, an embedded
+``LocalCluster`` by default). The search itself is egt-core's
+(``egt_core::design``); see ``docs/synth.md``."""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass
+from fractions import Fraction
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+
+from ._args import ArgumentError, count
+from ._egt import SearchCore, search_inputs
+from ._results import _html_table, _pandas
+
+if TYPE_CHECKING:  # pragma: no cover
+    import pandas
+
+__all__ = ["SetTeeth", "Candidate", "SynthResult", "synth", "synth_distributed"]
+
+Job = Tuple[str, str, str, str, str, str, Optional[int]]
+"""What a search is built from, as strings (so that it pickles to workers):
+search text, its format and name, base text, its format and name, top."""
+
+
+@dataclass(frozen=True)
+class SetTeeth:
+    """One unknown set of a candidate: the smallest-sun tooth triple of its
+    basic ratio k = ring / sun, and how many other triples give the same k."""
+
+    sun: int
+    ring: int
+    planet: int
+    basic: Fraction
+    alternatives: int
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A candidate train: teeth per unknown set and its exact ratios."""
+
+    rank: int
+    score: float
+    """Root mean square of (ratio - target) / target over the targeted states."""
+    spread: Optional[float]
+    sets: Dict[str, SetTeeth]
+    ratios: Dict[str, Fraction]
+    """Every gear state's ratio, exactly (float(x) for the float)."""
+
+
+@dataclass(frozen=True)
+class SynthResult:
+    """The best candidates of a search and what it cost."""
+
+    candidates: Tuple[Candidate, ...]
+    stats: Dict[str, float]
+    seconds: float
+    partitions: int
+
+    def to_pandas(self) -> "pandas.DataFrame":
+        """One row per candidate: score, spread, each set's sun/ring/planet, each ratio."""
+        pd = _pandas()
+        rows: List[Dict[str, Any]] = []
+        for c in self.candidates:
+            row: Dict[str, Any] = {"rank": c.rank, "score": c.score, "spread": c.spread}
+            for name, t in c.sets.items():
+                row.update({f"{name}.sun": t.sun, f"{name}.ring": t.ring, f"{name}.planet": t.planet})
+            row.update({f"ratio.{s}": float(x) for s, x in c.ratios.items()})
+            rows.append(row)
+        return pd.DataFrame(rows).set_index("rank") if rows else pd.DataFrame()
+
+    def _repr_html_(self) -> str:
+        return _html_table(
+            f"design search: {len(self.candidates)} candidates, {self.stats.get('tooth_space', 0):.3g} tooth combinations, {self.seconds:.3g} s",
+            ["rank", "score", "sets (sun/ring/planet)", "ratios"],
+            (
+                (c.rank, c.score, "  ".join(f"{n} {t.sun}/{t.ring}/{t.planet}" for n, t in c.sets.items()),
+                 "  ".join(f"{s} {float(x):.4g}" for s, x in c.ratios.items()))
+                for c in self.candidates
+            ),
+        )
+
+
+def _job(search: Union[str, "os.PathLike[str]"], top: Optional[int], format: Optional[str]) -> Job:
+    """The strings a search is built from: ``search`` is a file or the text of a search spec."""
+    if top is not None:
+        top = count(top, "top", 1_000_000)
+    text = os.fspath(search)
+    if "\n" not in text and Path(text).is_file():
+        ins = search_inputs(path=text, format=format)
+    else:
+        ins = search_inputs(text=text, format=format)
+    return (*ins, top)
+
+
+# Worker-local state: each process prepares a search once and keeps it.
+_PREPARED: Dict[Job, SearchCore] = {}
+
+
+def _prepared(job: Job) -> SearchCore:
+    core = _PREPARED.get(job)
+    if core is None:
+        text, fmt, source, base_text, base_fmt, base_source, top = job
+        core = SearchCore(text, base_text, fmt, base_fmt, source, base_source, top)
+        _PREPARED[job] = core
+    return core
+
+
+def _run_part(job: Job, part: int, parts: int, fail_once: Optional[str] = None) -> Dict[str, Any]:
+    """One partition (a Dask task). ``fail_once``: a path; the first task
+    that finds it missing creates it and kills its worker process (the test
+    of a lost worker)."""
+    if fail_once is not None and not os.path.exists(fail_once):
+        open(fail_once, "w").close()
+        os._exit(1)
+    out: Dict[str, Any] = _prepared(job).run(part, parts)
+    return out
+
+
+def _candidate(rank: int, sets: Sequence[str], c: Mapping[str, Any]) -> Candidate:
+    return Candidate(
+        rank=rank,
+        score=c["score"],
+        spread=c["spread"],
+        sets={
+            name: SetTeeth(t["sun"], t["ring"], t["planet"], Fraction(b), alt)
+            for name, t, b, alt in zip(sets, c["teeth"], c["basic"], c["alternatives"])
+        },
+        ratios={state: Fraction(exact) for state, _, exact in c["ratios"]},
+    )
+
+
+def _merge(core: SearchCore, results: Sequence[Mapping[str, Any]], top: int, seconds: float) -> SynthResult:
+    """Partitions' candidates ranked together, by the core's order
+    (``design::rank``: score, then the sets' (sun, ring))."""
+    found = [c for r in results for c in r["candidates"]]
+    found.sort(key=lambda c: (c["score"], [(t["sun"], t["ring"]) for t in c["teeth"]]))
+    stats: Dict[str, float] = dict(results[0]["stats"]) if results else {}
+    for key in ("nodes", "leaves"):
+        stats[key] = sum(r["stats"][key] for r in results)
+    sets = core.sets
+    return SynthResult(
+        candidates=tuple(_candidate(k + 1, sets, c) for k, c in enumerate(found[:top])),
+        stats=stats,
+        seconds=seconds,
+        partitions=len(results),
+    )
+
+
+def synth(
+    search: Union[str, "os.PathLike[str]"],
+    *,
+    top: Optional[int] = None,
+    part: Optional[Tuple[int, int]] = None,
+    format: Optional[str] = None,
+) -> SynthResult:
+    """Run a design search on this machine (every core): ``search`` is a
+    search-spec file (its ``base`` relative to it) or the spec's text (its
+    ``base`` relative to the working directory). ``part=(i, k)`` runs one of
+    k disjoint partitions, as ``egt synth --part i/k`` does."""
+    job = _job(search, top, format)
+    core = _prepared(job)
+    i, k = part if part is not None else (0, 1)
+    start = time.perf_counter()
+    result = core.run(i, k)
+    return _merge(core, [result], len(result["candidates"]), time.perf_counter() - start)
+
+
+def synth_distributed(
+    search: Union[str, "os.PathLike[str]"],
+    *,
+    client: Any = None,
+    partitions: Optional[int] = None,
+    top: Optional[int] = None,
+    format: Optional[str] = None,
+    _fail_once: Optional[str] = None,
+) -> SynthResult:
+    """The same search as :func:`synth`, split into ``partitions`` tasks on a
+    Dask cluster: ``client`` (a ``dask.distributed.Client``), else an embedded
+    ``LocalCluster`` (one single-threaded worker process per core) for the
+    call. Each worker prepares the search once and keeps it; a task whose
+    worker is lost is run again elsewhere, and each partition is counted
+    once, so the result equals :func:`synth`'s. Needs
+    ``pip install 'egt-gears[dask]'``."""
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError as e:  # pragma: no cover - depends on the environment
+        raise ImportError("synth_distributed needs Dask: pip install 'egt-gears[dask]'") from e
+    job = _job(search, top, format)
+    core = _prepared(job)
+    n = partitions if partitions is not None else min(core.max_partitions, 4 * (os.cpu_count() or 1))
+    n = count(n, "partitions", 1_000_000)
+    if n < 1:
+        raise ArgumentError("partitions must be at least 1")
+
+    def run(c: Any) -> SynthResult:
+        start = time.perf_counter()
+        futures = c.map(_run_part, [job] * n, range(n), [n] * n, [_fail_once] * n, retries=2, pure=False)
+        results = c.gather(futures)
+        return _merge(core, results, core.top, time.perf_counter() - start)
+
+    if client is not None:
+        return run(client)
+    with LocalCluster(  # type: ignore[no-untyped-call]
+        n_workers=os.cpu_count() or 1, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster, Client(cluster) as c:  # type: ignore[no-untyped-call]
+        return run(c)
