@@ -10,10 +10,16 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
+use std::io::IsTerminal;
+
 use anyhow::Context;
 use egt_core::design::{Candidate, Search, Stats, SynthSpec};
 use egt_core::{Format, parse_spec};
+use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
+
+/// Parts of a search run one after another to show progress on a terminal.
+const PROGRESS_PARTS: usize = 32;
 
 use crate::args::parse_part;
 use crate::cli::{OutputFormat, SpecFormat};
@@ -116,6 +122,21 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
     let start = Instant::now();
     let (found, stats) = match part {
         Some((i, k)) => search.run_partition(i, k),
+        // On a terminal: the space in parts one after another, with a bar and
+        // an ETA on stderr (the result is the same; elsewhere one run).
+        None if std::io::stderr().is_terminal() => {
+            let bar = ProgressBar::new(0);
+            if let Ok(style) = ProgressStyle::with_template("{bar:30} {pos}/{len} parts, ETA {eta}")
+            {
+                bar.set_style(style);
+            }
+            let r = search.run_in_parts(PROGRESS_PARTS, |done, of| {
+                bar.set_length(of as u64);
+                bar.set_position(done as u64);
+            });
+            bar.finish_and_clear();
+            r
+        }
         None => search.run(),
     }
     .map_err(egt_core::Error::from)?;
