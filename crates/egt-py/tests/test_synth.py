@@ -60,22 +60,3 @@ def test_bad_search_specs_are_spec_errors(tmp_path: Path) -> None:
         egt.synth(bad)
     with pytest.raises(egt.SpecSyntaxError):
         egt.synth("base = 3\n")
-
-
-def test_distributed_equals_single_process_even_when_a_worker_dies(tmp_path: Path) -> None:
-    pytest.importorskip("dask.distributed")
-    from dask.distributed import Client, LocalCluster
-
-    single = egt.synth(C4, top=50)
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, Client(cluster) as client:
-        dist = egt.synth_distributed(C4, client=client, partitions=8, top=50)
-        assert dist.partitions == 8
-        assert key(dist) == key(single)
-        assert dist.stats["leaves"] == single.stats["leaves"]
-        # One task kills its worker on the way; the partition runs again and
-        # nothing is lost or counted twice.
-        marker = str(tmp_path / "died")
-        again = egt.synth_distributed(C4, client=client, partitions=8, top=50, _fail_once=marker)
-        assert os.path.exists(marker)
-        assert key(again) == key(single)
-        assert again.stats["leaves"] == single.stats["leaves"]

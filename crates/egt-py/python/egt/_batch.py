@@ -11,6 +11,7 @@ reported in ``ok`` / ``errors``; failed rows hold 0.0, never NaN.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
@@ -195,7 +196,7 @@ class BatchPlan:
     :meth:`run` solves it in parallel with the GIL released.
     """
 
-    __slots__ = ("_core", "compute", "parameters", "outputs", "_gears", "_train")
+    __slots__ = ("_core", "compute", "parameters", "outputs", "_gears", "_train", "_recipe")
 
     def __init__(
         self,
@@ -203,6 +204,7 @@ class BatchPlan:
         compute: str,
         gears: Sequence[str],
         train: TrainCore,
+        recipe: Optional[Tuple[Any, Tuple[Any, ...]]] = None,
     ) -> None:
         self._core = core
         self.compute = compute
@@ -210,6 +212,7 @@ class BatchPlan:
         self.outputs: Tuple[str, ...] = tuple(core.outputs)
         self._gears = tuple(gears)
         self._train = train
+        self._recipe = recipe
 
     @property
     def base(self) -> np.ndarray:
@@ -218,6 +221,12 @@ class BatchPlan:
 
     def __repr__(self) -> str:
         return f"<egt.BatchPlan {self.compute}: {len(self.parameters)} parameters -> {len(self.outputs)} outputs>"
+
+    def __reduce__(self) -> Tuple[Any, Tuple[Any, ...]]:
+        if self._recipe is None:
+            raise ArgumentTypeError("this plan was not made by Train.batch and cannot be pickled")
+        train, args = self._recipe
+        return (_rebuild_plan, (train, args))
 
     def column(self, name: str) -> int:
         try:
@@ -304,6 +313,17 @@ class BatchPlan:
         ok[list(errors)] = False
         return BatchResult(self.outputs, values, ok, errors)
 
+    def run_distributed(
+        self,
+        params: Union[ArrayLike, Tuple[np.ndarray, Dict[int, RowError]]],
+        *,
+        client: Any = None,
+        chunks: Optional[int] = None,
+        threads: Optional[int] = 1,
+    ) -> BatchResult:
+        """:meth:`run` over a Dask cluster (see :func:`egt._batch.run_distributed`)."""
+        return run_distributed(self, params, client=client, chunks=chunks, threads=threads)
+
     def evaluate(
         self,
         values: Optional[Mapping[str, ArrayLike]] = None,
@@ -315,6 +335,77 @@ class BatchPlan:
     ) -> BatchResult:
         """:meth:`params` then :meth:`run`; rows with invalid teeth are failed rows."""
         return self.run(self.params(values, ratios=ratios, teeth=teeth, rows=rows), threads=threads)
+
+
+def _rebuild_plan(train: Any, args: Tuple[Any, ...]) -> "BatchPlan":
+    """A plan from its recipe; a worker process keeps the plans it rebuilt."""
+    key = (train._spec, tuple(tuple(a) if isinstance(a, list) else a for a in args))
+    plan = _PLANS.get(key)
+    if plan is None:
+        plan = train.batch(args[0], inputs=args[1], accelerated=args[2], driving=args[3],
+                           engaged=args[4], gear_state=args[5])
+        _PLANS[key] = plan
+    return plan
+
+
+# Worker-local state: plans rebuilt in this process, by recipe.
+_PLANS: Dict[Any, "BatchPlan"] = {}
+
+
+def _run_chunk(plan: "BatchPlan", rows: np.ndarray, threads: Optional[int]) -> BatchResult:
+    # A deserialised block may be unaligned or read-only: the native side
+    # wants an owned, aligned, C-contiguous float64 array.
+    return plan.run(np.array(rows, dtype=np.float64, order="C", copy=True), threads=threads)
+
+
+def run_distributed(
+    plan: "BatchPlan",
+    params: Union[ArrayLike, Tuple[np.ndarray, Dict[int, RowError]]],
+    *,
+    client: Any = None,
+    chunks: Optional[int] = None,
+    threads: Optional[int] = 1,
+) -> BatchResult:
+    """:meth:`BatchPlan.run` for batches that outgrow one machine: the rows in
+    ``chunks`` contiguous blocks, each a Dask task on ``client`` (an embedded
+    ``LocalCluster`` by default), the plan rebuilt once per worker from its
+    spec; the results are concatenated in row order, failed rows and their
+    errors kept with their global row numbers. Needs ``egt-gears[dask]``."""
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError as e:  # pragma: no cover - depends on the environment
+        raise ImportError("run_distributed needs Dask: pip install 'egt-gears[dask]'") from e
+    refused: Dict[int, RowError] = {}
+    if isinstance(params, tuple) and len(params) == 2 and isinstance(params[1], dict):
+        params, refused = params
+    a = np.ascontiguousarray(_numeric(params, "params"), dtype=np.float64)
+    if a.ndim == 1:
+        a = a.reshape(1, -1)
+    n = a.shape[0]
+    k = count(chunks if chunks is not None else 4 * (os.cpu_count() or 1), "chunks", 1_000_000)
+    k = max(1, min(k, n))
+    bounds = [(n * i // k, n * (i + 1) // k) for i in range(k)]
+
+    def run(c: Any) -> BatchResult:
+        futures = [c.submit(_run_chunk, plan, a[lo:hi], threads, pure=False, retries=2) for lo, hi in bounds]
+        parts = c.gather(futures)
+        values = np.concatenate([p.values for p in parts], axis=0)
+        ok = np.concatenate([p.ok for p in parts])
+        errors: Dict[int, RowError] = {}
+        for (lo, _), p in zip(bounds, parts):
+            for r, e in p.errors.items():
+                errors[lo + r] = RowError(lo + r, e.kind, e.message)
+        errors.update(refused)
+        values[list(refused), :] = 0.0
+        ok[list(refused)] = False
+        return BatchResult(plan.outputs, values, ok, errors)
+
+    if client is not None:
+        return run(client)
+    with LocalCluster(  # type: ignore[no-untyped-call]
+        n_workers=os.cpu_count() or 1, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster, Client(cluster) as c:  # type: ignore[no-untyped-call]
+        return run(c)
 
 
 def _known_columns(

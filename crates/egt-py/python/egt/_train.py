@@ -455,8 +455,7 @@ class Train:
         transmission (its input speed prescribed, the output's torque solved,
         its engaged elements adding ``lambda.<element>`` reaction columns). See :class:`egt.BatchPlan`.
         """
-        core = batch_plan(
-            self._core,
+        args = (
             compute,
             None if inputs is None else _names(inputs, "inputs"),
             None if accelerated is None else _names(accelerated, "accelerated"),
@@ -464,7 +463,10 @@ class Train:
             _names(engaged, "engaged"),
             None if gear_state is None else str(gear_state),
         )
-        return BatchPlan(core, compute, list(self._gears), self._core)
+        core = batch_plan(self._core, *args)
+        # The recipe (this train and the arguments) makes the plan pickle, so
+        # that it travels to worker processes (egt.BatchPlan.run_distributed).
+        return BatchPlan(core, compute, list(self._gears), self._core, recipe=(self, args))
 
     def batch_kinematics(
         self,
