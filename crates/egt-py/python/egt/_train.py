@@ -559,21 +559,22 @@ class Train:
         coordinates: Optional[Sequence[str]] = None,
         *,
         curves: Optional[Sequence[CurveLike]] = None,
-        speeds: Optional[Mapping[str, float]] = None,
+        inputs: Optional[Mapping[str, float]] = None,
     ) -> StabilityReport:
         """Stability about an operating point, for any number of DOF.
 
         ``coordinates``: the F driving links (default: the spec's input links,
         else chosen for conditioning); ``curves``: linearised torque-speed
-        curves (default: the spec's ``[[analysis.curves]]``); ``speeds``: the
-        operating point (default: the spec's speeds, else the equilibrium).
-        See :mod:`egt._motion` for the sign convention.
+        curves (default: the spec's ``[[analysis.curves]]``); ``inputs``: the
+        operating point, F link speeds as for :meth:`kinematics` (default: the
+        spec's speeds, else the equilibrium). See :mod:`egt._motion` for the
+        sign convention.
         """
         raw = _stability(
             self._core,
             None if coordinates is None else _names(coordinates, "coordinates"),
             None if curves is None else _curves(curves),
-            None if speeds is None else _pairs(speeds, "speeds"),
+            None if inputs is None else _pairs(inputs, "inputs"),
         )
         return StabilityReport._from_core(self._links, raw)
 

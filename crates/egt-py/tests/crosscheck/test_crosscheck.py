@@ -225,7 +225,7 @@ def test_stability_verdicts_agree_with_scipy_integration(checked: Counter[str]) 
         out = next(n for n in reversed(t.moving) if n not in t.inputs and ".planet" not in n)
         slopes = {t.inputs[0]: -rng.uniform(0.01, 1), t.inputs[1]: -rng.uniform(0.01, 1), out: rng.uniform(-2, 2)}
         curves = [{"link": n, "torque": 0.0, "slope": s, "speed": 0.0} for n, s in slopes.items()]
-        rep = train.stability(list(t.inputs), curves=curves, speeds={t.inputs[0]: 10.0, t.inputs[1]: 5.0})
+        rep = train.stability(list(t.inputs), curves=curves, inputs={t.inputs[0]: 10.0, t.inputs[1]: 5.0})
         # The reduced model on the reference kinematics, in floats.
         cols = [reference_speeds(t, {i: Fraction(int(i == j)) for i in t.inputs}) for j in t.inputs]
         vm = np.array([[float(c[n]) for c in cols] for n in t.moving])
