@@ -420,9 +420,11 @@ impl Search {
                 message: format!("{part} of {parts}"),
             });
         }
-        let len = self.basics[0].len();
-        let lo = len * part / parts;
-        let hi = len * (part + 1) / parts;
+        // In u128: part and parts come from the command line and may be huge.
+        let len = self.basics[0].len() as u128;
+        let slice =
+            |p: usize| usize::try_from(len * p as u128 / parts as u128).unwrap_or(usize::MAX);
+        let (lo, hi) = (slice(part), slice(part + 1));
         let mut stats = Stats {
             tooth_space: self
                 .basics
