@@ -37,9 +37,10 @@ def is_quantity(v: Any) -> bool:
 
 
 def quantity_in(v: Any, unit: str, what: str) -> float:
-    """A pint Quantity's magnitude in ``unit`` (rad/s, rpm, ...)."""
-    target = {"rad/s": "rad/s", "rpm": "revolution/minute", "rev/s": "revolution/second", "deg/s": "degree/second"}[unit]
+    """A pint Quantity's magnitude in ``unit`` (rad/s, rpm, ...), through
+    rad/s and the one table of factors above."""
+    k = factor(unit)
     try:
-        return float(v.to(target).magnitude)
+        return float(v.to("rad/s").magnitude) / k
     except Exception as e:  # pint's DimensionalityError and friends
         raise ArgumentError(f"{what}: {v!s} is not an angular speed ({e})") from None
