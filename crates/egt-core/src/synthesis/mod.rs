@@ -18,16 +18,16 @@ pub mod graph;
 pub mod levels;
 pub mod trees;
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap, HashSet};
 
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, TopologyError};
 use crate::{Format, Train};
 use canon::{Code, Extra, canonical};
 use graph::{ChainGraph, Joint, MAX_LINKS};
-use levels::Circuits;
+use levels::{Candidate, Tree, bfs_tree, rotation_graph};
 
 /// Which graphs are counted as distinct.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -149,6 +149,287 @@ pub fn enumerate_with(
     Ok(())
 }
 
+/// Calls `f` with every choice of `k` candidates whose legs cover all the
+/// tree's turning pairs (`full`): a turning pair that is no gear pair's leg
+/// would be a bridge of the rotation graph, not a bearing of this tree form.
+fn for_each_cover(
+    cands: &[Candidate],
+    k: usize,
+    full: u32,
+    f: &mut dyn FnMut(&[Candidate]),
+) {
+    fn rec(
+        cands: &[Candidate],
+        k: usize,
+        full: u32,
+        covered: u32,
+        picked: &mut Vec<Candidate>,
+        f: &mut dyn FnMut(&[Candidate]),
+    ) {
+        if picked.len() == k {
+            if covered == full {
+                f(picked);
+            }
+            return;
+        }
+        let left = k - picked.len();
+        // each gear pair covers at most two turning pairs
+        if (full & !covered).count_ones() as usize > 2 * left || cands.len() < left {
+            return;
+        }
+        let (first, rest) = cands.split_first().expect("cands.len() >= left >= 1");
+        picked.push(*first);
+        rec(rest, k, full, covered | first.covers, picked, f);
+        picked.pop();
+        rec(rest, k, full, covered, picked, f);
+    }
+    rec(cands, k, full, 0, &mut Vec::with_capacity(k), f);
+}
+
+/// One displacement graph found from a tree: its rotation graph in canonical
+/// labelling and the turning edges' levels in that labelling.
+#[derive(Debug, Clone)]
+struct Found {
+    rcode: Code,
+    graph: ChainGraph,
+    levels: Vec<usize>,
+}
+
+/// The displacement graphs this tree owns: every valid level partition and
+/// choice of gear pairs on `tree`, as rotation graphs (the union of the gear
+/// pairs' rotation triangles) with levels, kept when the canonical rotation
+/// graph's breadth-first spanning tree has the shape of `tree`. Every
+/// displacement graph is owned by exactly one tree, so trees partition the
+/// search with no de-duplication across them.
+fn found_in_tree(tree_graph: &ChainGraph, req: &AtlasRequest) -> BTreeMap<Code, Found> {
+    let n = req.links;
+    let gears = n - 1 - req.dof;
+    let tree = Tree::new(tree_graph);
+    let tcode = canonical(tree_graph, Extra::None).0;
+    let full: u32 = (1u32 << tree.turning.len()) - 1;
+    let mut owner: HashMap<Code, bool> = HashMap::new();
+    let mut seen: HashSet<(Code, Vec<usize>)> = HashSet::new();
+    let mut out: BTreeMap<Code, Found> = BTreeMap::new();
+    tree.for_each_level_partition(|levels| {
+        let cands = tree.candidates(levels);
+        for_each_cover(&cands, gears, full, &mut |picked| {
+            let (g, lv) = rotation_graph(n, picked);
+            let (rcode, perm) = canonical(&g, Extra::None);
+            let owned = *owner.entry(rcode.clone()).or_insert_with(|| {
+                let gc = g.permuted(&perm);
+                let mut t = ChainGraph::empty(n);
+                for (a, b) in bfs_tree(&gc) {
+                    t.set(a, b, Joint::Turning);
+                }
+                canonical(&t, Extra::None).0 == tcode
+            });
+            if !owned {
+                return;
+            }
+            let gc = g.permuted(&perm);
+            let lc = permuted_levels(&g, &lv, &gc, &perm);
+            if !seen.insert((rcode.clone(), lc.clone())) {
+                return;
+            }
+            let (dcode, _) = canonical(&gc, Extra::Levels(&lc));
+            out.entry(dcode).or_insert(Found {
+                rcode,
+                graph: gc,
+                levels: lc,
+            });
+        });
+    });
+    out
+}
+
+/// `levels` (of `g`'s turning pairs) re-indexed for `gc = g.permuted(perm)`
+/// and renamed in order of first appearance.
+fn permuted_levels(g: &ChainGraph, levels: &[usize], gc: &ChainGraph, perm: &[usize]) -> Vec<usize> {
+    let old = g.pairs(Joint::Turning);
+    let raw: Vec<usize> = gc
+        .pairs(Joint::Turning)
+        .iter()
+        .map(|&(a, b)| {
+            let k = old
+                .iter()
+                .position(|&(x, y)| {
+                    let (p, q) = (perm[x], perm[y]);
+                    (p.min(q), p.max(q)) == (a, b)
+                })
+                .expect("same edges");
+            levels[k]
+        })
+        .collect();
+    renamed(&raw)
+}
+
+/// Level names renamed 0, 1, .. in order of first appearance.
+fn renamed(levels: &[usize]) -> Vec<usize> {
+    let mut map: Vec<(usize, usize)> = Vec::new();
+    levels
+        .iter()
+        .map(|&l| {
+            if let Some(&(_, r)) = map.iter().find(|(x, _)| *x == l) {
+                r
+            } else {
+                map.push((l, map.len()));
+                map.len() - 1
+            }
+        })
+        .collect()
+}
+
+/// All atlas members this tree owns.
+fn members_of_tree(tree: &ChainGraph, req: &AtlasRequest) -> Vec<AtlasMember> {
+    let n = req.links;
+    let gears = n - 1 - req.dof;
+    // r-code -> its valid displacement graphs (d-code, emitted form)
+    let mut by_rotation: BTreeMap<Code, Vec<(Code, Emitted)>> = BTreeMap::new();
+    for (dcode, f) in found_in_tree(tree, req) {
+        if let Some(emitted) = checked_form(&f.graph, &f.levels) {
+            by_rotation.entry(f.rcode).or_default().push((dcode, emitted));
+        }
+    }
+    let mut out = Vec::new();
+    for (rcode, ds) in by_rotation {
+        let count = ds.len();
+        let member = |code: &Code, e: &Emitted| AtlasMember {
+            adjacency: e.adjacency.clone(),
+            links: n,
+            dof: req.dof,
+            level: req.level,
+            gears,
+            carriers: e.carriers,
+            axes: e.axes,
+            coaxial: e.coaxial.clone(),
+            displacement_graphs: count,
+            code: code.iter().map(|b| format!("{b:02x}")).collect(),
+        };
+        match req.level {
+            GraphLevel::Rotation => {
+                let (_, e) = &ds[0];
+                out.push(member(&rcode, e));
+            }
+            GraphLevel::Displacement => {
+                for (dcode, e) in &ds {
+                    out.push(member(dcode, e));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// A displacement graph as egt prints it.
+#[derive(Debug, Clone)]
+struct Emitted {
+    adjacency: String,
+    carriers: usize,
+    axes: usize,
+    coaxial: Vec<String>,
+}
+
+impl Emitted {
+    /// The bearing tree `tree` (turning edges of the rotation graph `g`)
+    /// with its levels, then the gear pairs.
+    fn new(g: &ChainGraph, levels: &[usize], tree: &[(usize, usize)]) -> Self {
+        let turning = g.pairs(Joint::Turning);
+        let level_of = |e: (usize, usize)| levels[turning.iter().position(|&x| x == e).expect("edge")];
+        let tree_levels = renamed(&tree.iter().map(|&e| level_of(e)).collect::<Vec<_>>());
+        let mut parts: Vec<String> = tree
+            .iter()
+            .zip(&tree_levels)
+            .map(|(&(a, b), &l)| format!("{}-{}:{}", a + 1, b + 1, level_name(l)))
+            .collect();
+        let gear_pairs = g.pairs(Joint::Gear);
+        parts.extend(gear_pairs.iter().map(|&(a, b)| format!("{}-{}:G", a + 1, b + 1)));
+        // carriers: the common turning neighbour of each gear pair
+        let mut carriers: Vec<usize> = gear_pairs
+            .iter()
+            .filter_map(|&(a, b)| {
+                (0..g.links()).find(|&k| g.joint(a, k) == Joint::Turning && g.joint(b, k) == Joint::Turning)
+            })
+            .collect();
+        carriers.sort_unstable();
+        carriers.dedup();
+        let axes = tree_levels.iter().max().map_or(0, |m| m + 1);
+        Emitted {
+            adjacency: parts.join(" "),
+            carriers: carriers.len(),
+            axes,
+            coaxial: coaxial(tree, &tree_levels),
+        }
+    }
+}
+
+fn level_name(l: usize) -> String {
+    let letters = b"abcdefghijklmnopqrstuvwxyz";
+    (letters[l % 26] as char).to_string() + &"'".repeat(l / 26)
+}
+
+/// Links on the most populated axis: those joined by turning pairs of the level used most.
+fn coaxial(turning: &[(usize, usize)], levels: &[usize]) -> Vec<String> {
+    let axes = levels.iter().max().map_or(0, |m| m + 1);
+    let mut best: Vec<usize> = Vec::new();
+    for l in 0..axes {
+        let mut links: Vec<usize> = turning
+            .iter()
+            .zip(levels)
+            .filter(|&(_, &x)| x == l)
+            .flat_map(|(&(a, b), _)| [a, b])
+            .collect();
+        links.sort_unstable();
+        links.dedup();
+        if links.len() > best.len() {
+            best = links;
+        }
+    }
+    best.iter().map(|l| (l + 1).to_string()).collect()
+}
+
+/// egt's own topology checks, exactly as `egt check` applies them.
+fn egt_check(adjacency: &str) -> Result<Train> {
+    let text = format!("frame = \"1\"\nadjacency = \"{adjacency}\"\n");
+    Train::from_str(&text, Format::Toml, "atlas")
+}
+
+/// The displacement graph `(g, levels)` in the first bearing layout that
+/// passes egt's checks, or `None` when none does. Kinematically every
+/// spanning tree of the rotation graph's turning edges is the same train (the
+/// levels make each cycle of turning edges coaxial), so only planarity can
+/// depend on the layout: the breadth-first tree is tried first, and when it is
+/// not planar, the other spanning trees in a fixed order.
+fn checked_form(g: &ChainGraph, levels: &[usize]) -> Option<Emitted> {
+    let bfs = bfs_tree(g);
+    let first = Emitted::new(g, levels, &bfs);
+    match egt_check(&first.adjacency) {
+        Ok(_) => return Some(first),
+        Err(Error::Topology(TopologyError::NonPlanar { .. })) => {}
+        Err(_) => return None,
+    }
+    let n = g.links();
+    let turning = g.pairs(Joint::Turning);
+    let mut found = None;
+    for_each_subset(turning.len(), n - 1, |pick| {
+        if found.is_some() {
+            return;
+        }
+        let mut t = ChainGraph::empty(n);
+        for &p in pick {
+            t.set(turning[p].0, turning[p].1, Joint::Turning);
+        }
+        let tree = bfs_tree(&t);
+        if tree.len() != n - 1 {
+            return; // not spanning
+        }
+        let form = Emitted::new(g, levels, &tree);
+        if egt_check(&form.adjacency).is_ok() {
+            found = Some(form);
+        }
+    });
+    found
+}
+
 /// Calls `f` with every `k`-subset of `0..m` (as sorted indices).
 fn for_each_subset(m: usize, k: usize, mut f: impl FnMut(&[usize])) {
     if k > m {
@@ -165,119 +446,6 @@ fn for_each_subset(m: usize, k: usize, mut f: impl FnMut(&[usize])) {
             idx[j] = idx[j - 1] + 1;
         }
     }
-}
-
-/// All atlas members whose turning pairs form `tree`.
-fn members_of_tree(tree: &ChainGraph, req: &AtlasRequest) -> Vec<AtlasMember> {
-    let n = req.links;
-    let gears = n - 1 - req.dof;
-    // Gear pairs can only join links not already joined by a turning pair.
-    let free = tree.pairs(Joint::None);
-    // r-code -> (graph, list of its d-graph candidates by d-code)
-    let mut classes: BTreeMap<Code, ChainGraph> = BTreeMap::new();
-    for_each_subset(free.len(), gears, |pick| {
-        let mut g = tree.clone();
-        for &i in pick {
-            g.set(free[i].0, free[i].1, Joint::Gear);
-        }
-        if Circuits::new(&g).triangular() {
-            let (code, perm) = canonical(&g, Extra::None);
-            classes.entry(code).or_insert_with(|| g.permuted(&perm));
-        }
-    });
-    let mut out = Vec::new();
-    for (rcode, g) in classes {
-        let circuits = Circuits::new(&g);
-        // d-code -> (carriers, levels), valid by egt's checks
-        let mut ds: BTreeMap<Code, (Vec<usize>, Vec<usize>)> = BTreeMap::new();
-        circuits.for_each_level_partition(|carriers, levels| {
-            let (code, _) = canonical(&g, Extra::Levels(levels));
-            ds.entry(code)
-                .or_insert_with(|| (carriers.to_vec(), levels.to_vec()));
-        });
-        ds.retain(|_, (_, levels)| passes_egt_check(&adjacency(&circuits, levels)));
-        if ds.is_empty() {
-            continue;
-        }
-        let count = ds.len();
-        let member = |code: &Code, carriers: &[usize], levels: &[usize]| AtlasMember {
-            adjacency: adjacency(&circuits, levels),
-            links: n,
-            dof: req.dof,
-            level: req.level,
-            gears,
-            carriers: {
-                let mut c = carriers.to_vec();
-                c.sort_unstable();
-                c.dedup();
-                c.len()
-            },
-            axes: levels.iter().max().map_or(0, |m| m + 1),
-            coaxial: coaxial(&circuits, levels),
-            displacement_graphs: count,
-            code: code.iter().map(|b| format!("{b:02x}")).collect(),
-        };
-        match req.level {
-            GraphLevel::Rotation => {
-                let (carriers, levels) = ds.values().next().expect("non-empty");
-                out.push(member(&rcode, carriers, levels));
-            }
-            GraphLevel::Displacement => {
-                for (dcode, (carriers, levels)) in &ds {
-                    out.push(member(dcode, carriers, levels));
-                }
-            }
-        }
-    }
-    out
-}
-
-fn level_name(l: usize) -> String {
-    let letters = b"abcdefghijklmnopqrstuvwxyz";
-    (letters[l % 26] as char).to_string() + &"'".repeat(l / 26)
-}
-
-/// The compact adjacency form: turning pairs with their level, then gear pairs.
-fn adjacency(c: &Circuits, levels: &[usize]) -> String {
-    let mut parts: Vec<String> = c
-        .turning
-        .iter()
-        .zip(levels)
-        .map(|(&(a, b), &l)| format!("{}-{}:{}", a + 1, b + 1, level_name(l)))
-        .collect();
-    parts.extend(
-        c.gears
-            .iter()
-            .map(|&(a, b)| format!("{}-{}:G", a + 1, b + 1)),
-    );
-    parts.join(" ")
-}
-
-/// Links on the most populated axis: those joined by turning pairs of the level used most.
-fn coaxial(c: &Circuits, levels: &[usize]) -> Vec<String> {
-    let axes = levels.iter().max().map_or(0, |m| m + 1);
-    let mut best: Vec<usize> = Vec::new();
-    for l in 0..axes {
-        let mut links: Vec<usize> = c
-            .turning
-            .iter()
-            .zip(levels)
-            .filter(|&(_, &x)| x == l)
-            .flat_map(|(&(a, b), _)| [a, b])
-            .collect();
-        links.sort_unstable();
-        links.dedup();
-        if links.len() > best.len() {
-            best = links;
-        }
-    }
-    best.iter().map(|l| (l + 1).to_string()).collect()
-}
-
-/// egt's own topology checks, exactly as `egt check` applies them.
-fn passes_egt_check(adjacency: &str) -> bool {
-    let text = format!("frame = \"1\"\nadjacency = \"{adjacency}\"\n");
-    Train::from_str(&text, Format::Toml, "atlas").is_ok()
 }
 
 #[cfg(test)]
