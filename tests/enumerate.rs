@@ -73,3 +73,64 @@ fn bad_requests_exit_non_zero_naming_the_field() {
         assert!(err.contains(field), "{args:?}: {err}");
     }
 }
+
+#[test]
+fn seven_link_counts_equal_the_published_atlas() {
+    // Yang & Ding, ASME J. Mech. Des. 141(4):043301 (2019): 152 r-graphs, 647 d-graphs.
+    for (level, want) in [("rotation", 152), ("displacement", 647)] {
+        let (code, out, err) = egt(
+            &["enumerate", "--links", "7", "--level", level, "--count"],
+            None,
+        );
+        assert_eq!(code, 0, "{err}");
+        assert_eq!(out.trim(), want.to_string(), "{level}");
+    }
+}
+
+#[test]
+fn identify_prints_the_member_a_train_is() {
+    // The paper's Fig. 5 drive is a six-link two-DOF member; its printed line
+    // is in the listing of that atlas.
+    let (code, line, err) = egt(
+        &[
+            "enumerate",
+            "--identify",
+            crate::util::example_path("fig5_example62.toml")
+                .to_str()
+                .expect("utf-8 path"),
+            "--level",
+            "displacement",
+        ],
+        None,
+    );
+    assert_eq!(code, 0, "{err}");
+    let (_, all, _) = egt(
+        &[
+            "enumerate",
+            "--links",
+            "6",
+            "--dof",
+            "2",
+            "--level",
+            "displacement",
+        ],
+        None,
+    );
+    assert!(
+        all.lines().any(|l| l == line.trim()),
+        "{line} not in\n{all}"
+    );
+    // A housing on a bearing only has no place in the atlas: exit 2, named.
+    let (code, _, err) = egt(
+        &[
+            "enumerate",
+            "--identify",
+            crate::util::example_path("ford_c4_simpson.toml")
+                .to_str()
+                .expect("utf-8 path"),
+        ],
+        None,
+    );
+    assert_eq!(code, 2);
+    assert!(err.contains("case"), "{err}");
+}

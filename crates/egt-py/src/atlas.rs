@@ -46,6 +46,7 @@ pub fn atlas<'py>(
         d.set_item("carriers", m.carriers)?;
         d.set_item("axes", m.axes)?;
         d.set_item("coaxial", m.coaxial)?;
+        d.set_item("coaxial_triples", m.coaxial_triples)?;
         d.set_item("displacement_graphs", m.displacement_graphs)?;
         d.set_item("code", m.code)?;
         out.push(d);

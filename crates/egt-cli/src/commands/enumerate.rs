@@ -3,20 +3,29 @@
 //! adjacency form (readable back by every egt command as `adjacency = "..."`
 //! with any frame), or JSON Lines with the classification. Streamed unit by
 //! unit; `--part I/K` runs one of K disjoint partitions of the search.
+//! `--identify SPEC` prints the member a given train is instead.
 
 use std::io::Write;
 
-use egt_core::synthesis::{AtlasRequest, GraphLevel, enumerate_with, units};
+use std::path::PathBuf;
+
+use egt_core::synthesis::{AtlasRequest, GraphLevel, enumerate_with, member, units};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::args::parse_part;
+use crate::cli::{OutputFormat, SpecArgs};
+use crate::input;
 
 /// Arguments of `egt enumerate`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
     /// Number of links (frame included).
-    #[arg(long)]
-    pub links: usize,
+    #[arg(long, required_unless_present = "identify")]
+    pub links: Option<usize>,
+    /// Print the member this train (a spec file) is, instead of the atlas;
+    /// its links and DOF come from the spec.
+    #[arg(long, value_name = "SPEC", conflicts_with_all = ["links", "part", "count"])]
+    pub identify: Option<PathBuf>,
     /// Degree of freedom (Gruebler-Kutzbach).
     #[arg(long, default_value_t = 1)]
     pub dof: usize,
@@ -48,17 +57,35 @@ pub enum Level {
 /// # Errors
 /// A bad request (links, dof, part) or a failed write.
 pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
+    let level = match args.level {
+        Level::Rotation => GraphLevel::Rotation,
+        Level::Displacement => GraphLevel::Displacement,
+    };
+    if let Some(path) = &args.identify {
+        let loaded = input::load(&SpecArgs {
+            spec: path.clone(),
+            spec_format: None,
+            format: OutputFormat::Table,
+        })?;
+        let m = member(&loaded.train, level)
+            .map_err(|e| anyhow::Error::new(e).context(loaded.source))?;
+        let line = if args.jsonl {
+            serde_json::to_string(&m)?
+        } else {
+            m.adjacency
+        };
+        writeln!(out, "{line}")?;
+        return Ok(());
+    }
+    let links = args.links.unwrap_or_default();
     let req = AtlasRequest {
-        links: args.links,
+        links,
         dof: args.dof,
-        level: match args.level {
-            Level::Rotation => GraphLevel::Rotation,
-            Level::Displacement => GraphLevel::Displacement,
-        },
+        level,
         part: args.part.as_deref().map(parse_part).transpose()?,
     };
     // Drawn on stderr only when it is a terminal (indicatif hides it otherwise).
-    let bar = ProgressBar::new(units(args.links.clamp(1, 12)) as u64);
+    let bar = ProgressBar::new(units(links.clamp(1, 12)) as u64);
     if let Ok(style) = ProgressStyle::with_template("{bar:30} {pos}/{len} trees, {msg} members") {
         bar.set_style(style);
     }

@@ -4,7 +4,8 @@
 //! gear pairs bold coloured edges labelled with their name and Willis ratio,
 //! and shift elements dashed edges (a brake to the frame, a clutch between its
 //! two links). `--format json` gives the same nodes and edges as JSON. Render
-//! with e.g. `egt graph spec.toml | dot -Tsvg -o graph.svg`.
+//! with e.g. `egt graph spec.toml | dot -Tsvg -o graph.svg`, or `--svg` for a
+//! self-contained drawing (links on a circle) where Graphviz is not installed.
 
 use std::io::Write;
 
@@ -21,6 +22,9 @@ use crate::report;
 pub struct Args {
     #[command(flatten)]
     pub spec: SpecArgs,
+    /// Write an SVG drawing (links on a circle) instead of DOT; needs no Graphviz.
+    #[arg(long)]
+    pub svg: bool,
 }
 
 #[derive(Debug, Serialize)]
@@ -53,6 +57,9 @@ struct GraphEdge {
 pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
     let loaded = input::load(&args.spec)?;
     let g = build(&loaded.train);
+    if args.svg {
+        return write_svg(out, &g);
+    }
     match args.spec.format {
         OutputFormat::Json => report::json(out, &g),
         OutputFormat::Table => write_dot(out, &g),
@@ -192,5 +199,88 @@ fn write_dot(out: &mut dyn Write, g: &Graph) -> anyhow::Result<()> {
         )?;
     }
     writeln!(out, "}}")?;
+    Ok(())
+}
+
+/// A self-contained SVG: links evenly on a circle (the frame at the top),
+/// turning pairs thin grey lines with their level, gear pairs bold blue lines,
+/// shift elements dashed.
+fn write_svg(out: &mut dyn Write, g: &Graph) -> anyhow::Result<()> {
+    use crate::svg::esc;
+    let (w, h, r) = (420.0, 420.0, 150.0);
+    let (cx, cy) = (w / 2.0, h / 2.0 + 10.0);
+    let n = g.nodes.len().max(1) as f64;
+    let at = |link: &str| {
+        let i = g.nodes.iter().position(|x| x.link == link).unwrap_or(0) as f64;
+        let t = std::f64::consts::TAU * i / n - std::f64::consts::FRAC_PI_2;
+        (cx + r * t.cos(), cy + r * t.sin())
+    };
+    writeln!(
+        out,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="Helvetica, Arial, sans-serif">"#
+    )?;
+    writeln!(
+        out,
+        r##"<rect width="100%" height="100%" fill="#ffffff"/>"##
+    )?;
+    if let Some(name) = &g.name {
+        writeln!(
+            out,
+            r#"<text x="{cx}" y="18" text-anchor="middle" font-size="13">{}</text>"#,
+            esc(name)
+        )?;
+    }
+    for e in &g.edges {
+        let ((x1, y1), (x2, y2)) = (at(&e.links[0]), at(&e.links[1]));
+        let style = match e.kind {
+            "revolute" => r##"stroke="#555555" stroke-width="1.2""##,
+            "gear" => r##"stroke="#0072B2" stroke-width="4""##,
+            "brake" | "one_way_brake" => {
+                r##"stroke="#D55E00" stroke-width="1.5" stroke-dasharray="5,4""##
+            }
+            _ => r##"stroke="#009E73" stroke-width="1.5" stroke-dasharray="5,4""##,
+        };
+        writeln!(
+            out,
+            r#"<line x1="{x1:.1}" y1="{y1:.1}" x2="{x2:.1}" y2="{y2:.1}" {style}/>"#
+        )?;
+        let label = if e.kind == "gear" {
+            "G".to_string()
+        } else {
+            e.label.clone()
+        };
+        let colour = if e.kind == "gear" {
+            "#0072B2"
+        } else {
+            "#333333"
+        };
+        writeln!(
+            out,
+            r#"<text x="{:.1}" y="{:.1}" font-size="11" fill="{colour}" text-anchor="middle">{}</text>"#,
+            0.5 * (x1 + x2),
+            0.5 * (y1 + y2) - 3.0,
+            esc(&label)
+        )?;
+    }
+    for node in &g.nodes {
+        let (x, y) = at(&node.link);
+        let fill = match node.role {
+            "frame" => "#cccccc",
+            "input" => "#cfe8ff",
+            "output" => "#ffe0c2",
+            _ => "#f4f4f4",
+        };
+        writeln!(
+            out,
+            r##"<circle cx="{x:.1}" cy="{y:.1}" r="15" fill="{fill}" stroke="#333333"/>"##
+        )?;
+        writeln!(
+            out,
+            r#"<text x="{x:.1}" y="{:.1}" font-size="12" text-anchor="middle">{}</text>"#,
+            y + 4.0,
+            esc(&node.link)
+        )?;
+    }
+    writeln!(out, "</svg>")?;
     Ok(())
 }

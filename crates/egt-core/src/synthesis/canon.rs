@@ -5,10 +5,12 @@
 //! petgraph only tests isomorphism pairwise, which does not give a hashable
 //! form for de-duplicating a stream). The graphs here have at most a dozen
 //! links, so the form is the least code over all relabellings that keep an
-//! iso-invariant vertex colouring (turning degree, gear degree, refined once by
-//! the neighbours' colours) in order. That is exact (every relabelling an
-//! isomorphism could induce is tried) and is tested against the plain
-//! minimum over all `n!` permutations in this module's tests.
+//! iso-invariant vertex colouring (turning degree, gear degree, refined by the
+//! neighbours' colours to a fixed point) in order, found by branch and bound
+//! (a partial relabelling is dropped as soon as its code prefix exceeds the
+//! best). That is exact (every relabelling an isomorphism could induce is
+//! considered) and is tested against the plain minimum over all `n!`
+//! permutations in this module's tests.
 
 use super::graph::{ChainGraph, Joint};
 
@@ -26,133 +28,196 @@ pub enum Extra<'a> {
     Levels(&'a [usize]),
 }
 
+/// The pairs of `g` as a matrix of small codes: 0 none, 1 gear pair, 2 + level
+/// (levels renamed in order of first appearance among the turning pairs; every
+/// turning pair is level 0 without `Extra::Levels`).
+fn matrix(g: &ChainGraph, extra: Extra<'_>) -> Vec<u8> {
+    let n = g.links();
+    let mut m = vec![0u8; n * n];
+    let mut names: Vec<usize> = Vec::new();
+    for (k, (a, b)) in g.pairs(Joint::Turning).into_iter().enumerate() {
+        let level = match extra {
+            Extra::None => 0,
+            Extra::Levels(levels) => {
+                let l = levels[k];
+                names.iter().position(|&x| x == l).unwrap_or_else(|| {
+                    names.push(l);
+                    names.len() - 1
+                })
+            }
+        };
+        let code = 2 + u8::try_from(level).expect("fewer levels than links");
+        m[a * n + b] = code;
+        m[b * n + a] = code;
+    }
+    for (a, b) in g.pairs(Joint::Gear) {
+        m[a * n + b] = 1;
+        m[b * n + a] = 1;
+    }
+    m
+}
+
+#[cfg(test)]
+/// The code of `g` relabelled by `perm` (old -> new): column by column, the
+/// pairs `(p, q)`, `p < q`, of the new labels, with levels renamed in order of
+/// first appearance. The reference definition the search below must match.
 fn code_of(g: &ChainGraph, extra: Extra<'_>, perm: &[usize]) -> Code {
     let n = g.links();
-    // new label -> old label
+    let m = matrix(g, extra);
     let mut inv = vec![0; n];
     for (old, &new) in perm.iter().enumerate() {
         inv[new] = old;
     }
-    let turning = g.pairs(Joint::Turning);
-    let mut rename = vec![u8::MAX; n];
+    let mut rename = [u8::MAX; 16];
     let mut next = 0u8;
-    let mut code = Vec::with_capacity(n * (n - 1) / 2);
-    for p in 0..n {
-        for q in p + 1..n {
-            let (a, b) = (inv[p], inv[q]);
-            code.push(match g.joint(a, b) {
-                Joint::None => 0,
-                Joint::Gear => 1,
-                Joint::Turning => match extra {
-                    Extra::None => 2,
-                    Extra::Levels(levels) => {
-                        let k = turning
-                            .iter()
-                            .position(|&(x, y)| (x, y) == (a.min(b), a.max(b)))
-                            .expect("turning pair listed");
-                        if rename[levels[k]] == u8::MAX {
-                            rename[levels[k]] = next;
-                            next += 1;
-                        }
-                        2 + rename[levels[k]]
-                    }
-                },
-            });
+    let mut code = Vec::with_capacity(n * n.saturating_sub(1) / 2);
+    for q in 1..n {
+        for p in 0..q {
+            code.push(renamed(m[inv[p] * n + inv[q]], &mut rename, &mut next));
         }
     }
     code
 }
 
-/// Iso-invariant vertex colours: degrees, refined once by neighbour colours.
-fn colours(g: &ChainGraph) -> Vec<Vec<usize>> {
-    let n = g.links();
-    let base: Vec<(usize, usize)> = (0..n)
-        .map(|a| (g.degree(a, Joint::Turning), g.degree(a, Joint::Gear)))
-        .collect();
-    (0..n)
-        .map(|a| {
-            let mut c = vec![base[a].0, base[a].1];
-            for j in [Joint::Turning, Joint::Gear] {
-                let mut nb: Vec<(usize, usize)> = (0..n)
-                    .filter(|&b| g.joint(a, b) == j)
-                    .map(|b| base[b])
-                    .collect();
-                nb.sort_unstable();
-                c.push(usize::MAX);
-                for (x, y) in nb {
-                    c.push(x);
-                    c.push(y);
-                }
-            }
-            c
-        })
-        .collect()
+/// A pair code with its level renamed in order of first appearance.
+fn renamed(x: u8, rename: &mut [u8; 16], next: &mut u8) -> u8 {
+    if x < 2 {
+        return x;
+    }
+    let l = usize::from(x - 2);
+    if rename[l] == u8::MAX {
+        rename[l] = *next;
+        *next += 1;
+    }
+    2 + rename[l]
 }
 
-/// Calls `f` with every permutation (old -> new) that keeps the colour classes in order.
-fn for_each_class_perm(g: &ChainGraph, mut f: impl FnMut(&[usize])) {
+/// Iso-invariant vertex colours: (turning degree, gear degree), refined by
+/// the multiset of (pair kind, neighbour colour) until stable (1-WL). Colours
+/// are ranks of sorted signatures, so relabelling the graph permutes them.
+fn colours(g: &ChainGraph) -> Vec<usize> {
     let n = g.links();
-    let col = colours(g);
-    let mut order: Vec<usize> = (0..n).collect();
-    order.sort_by(|&a, &b| col[a].cmp(&col[b]));
-    // classes as ranges of `order`
-    let mut classes = Vec::new();
-    let mut s = 0;
-    for i in 1..=n {
-        if i == n || col[order[i]] != col[order[s]] {
-            classes.push((s, i));
-            s = i;
+    let kind = |a: usize, b: usize| match g.joint(a, b) {
+        Joint::None => 0usize,
+        Joint::Turning => 1,
+        Joint::Gear => 2,
+    };
+    let rank = |sigs: &[Vec<usize>]| -> Vec<usize> {
+        let mut sorted: Vec<&Vec<usize>> = sigs.iter().collect();
+        sorted.sort();
+        sorted.dedup();
+        sigs.iter()
+            .map(|s| sorted.binary_search(&s).expect("present"))
+            .collect()
+    };
+    let base: Vec<Vec<usize>> = (0..n)
+        .map(|a| vec![g.degree(a, Joint::Turning), g.degree(a, Joint::Gear)])
+        .collect();
+    let mut col = rank(&base);
+    loop {
+        let sigs: Vec<Vec<usize>> = (0..n)
+            .map(|a| {
+                let mut nb: Vec<usize> = (0..n)
+                    .filter(|&b| kind(a, b) != 0)
+                    .map(|b| kind(a, b) * n + col[b])
+                    .collect();
+                nb.sort_unstable();
+                let mut s = vec![col[a]];
+                s.extend(nb);
+                s
+            })
+            .collect();
+        let next = rank(&sigs);
+        let classes = |c: &[usize]| c.iter().max().map_or(0, |m| m + 1);
+        if classes(&next) == classes(&col) {
+            return next;
         }
+        col = next;
     }
-    let mut perm = vec![0; n];
-    fn rec(
-        classes: &[(usize, usize)],
-        order: &mut Vec<usize>,
-        perm: &mut Vec<usize>,
-        f: &mut dyn FnMut(&[usize]),
-    ) {
-        let Some((&(s, e), rest)) = classes.split_first() else {
-            f(perm);
-            return;
-        };
-        // Heap-free: iterate permutations of order[s..e] by swapping.
-        permute(s, s, e, order, perm, rest, f);
-    }
-    fn permute(
-        k: usize,
-        s: usize,
-        e: usize,
-        order: &mut Vec<usize>,
-        perm: &mut Vec<usize>,
-        rest: &[(usize, usize)],
-        f: &mut dyn FnMut(&[usize]),
-    ) {
-        if k == e {
-            for (pos, &old) in order.iter().enumerate().take(e).skip(s) {
-                perm[old] = pos;
+}
+
+/// Branch and bound over the relabellings that keep the colour classes in
+/// order: positions are filled one by one, each from its colour class, and a
+/// branch stops as soon as its code prefix (the columns filled so far)
+/// exceeds the best complete code.
+struct Search<'a> {
+    n: usize,
+    m: &'a [u8],
+    /// Colour class of each position.
+    class_at: Vec<usize>,
+    /// Links of each colour class.
+    members: Vec<Vec<usize>>,
+    used: Vec<bool>,
+    /// Link at each filled position.
+    placed: Vec<usize>,
+    cur: Vec<u8>,
+    best: Option<(Code, Vec<usize>)>,
+}
+
+impl Search<'_> {
+    fn fill(&mut self, q: usize, rename: [u8; 16], next: u8) {
+        let n = self.n;
+        if q == n {
+            if self.best.as_ref().is_none_or(|(b, _)| self.cur < *b) {
+                let mut perm = vec![0; n];
+                for (pos, &old) in self.placed.iter().enumerate() {
+                    perm[old] = pos;
+                }
+                self.best = Some((self.cur.clone(), perm));
             }
-            rec(rest, order, perm, f);
             return;
         }
-        for i in k..e {
-            order.swap(k, i);
-            permute(k + 1, s, e, order, perm, rest, f);
-            order.swap(k, i);
+        let start = q * q.saturating_sub(1) / 2;
+        let end = start + q;
+        let class = self.class_at[q];
+        for i in 0..self.members[class].len() {
+            let v = self.members[class][i];
+            if self.used[v] {
+                continue;
+            }
+            let (mut r, mut nx) = (rename, next);
+            for p in 0..q {
+                self.cur[start + p] = renamed(self.m[self.placed[p] * n + v], &mut r, &mut nx);
+            }
+            if self
+                .best
+                .as_ref()
+                .is_some_and(|(b, _)| self.cur[..end] > b[..end])
+            {
+                continue;
+            }
+            self.used[v] = true;
+            self.placed[q] = v;
+            self.fill(q + 1, r, nx);
+            self.used[v] = false;
         }
     }
-    rec(&classes, &mut order, &mut perm, &mut f);
 }
 
 /// The canonical code and one relabelling (old -> new) that attains it.
 pub fn canonical(g: &ChainGraph, extra: Extra<'_>) -> (Code, Vec<usize>) {
-    let mut best: Option<(Code, Vec<usize>)> = None;
-    for_each_class_perm(g, |perm| {
-        let c = code_of(g, extra, perm);
-        if best.as_ref().is_none_or(|(b, _)| c < *b) {
-            best = Some((c, perm.to_vec()));
-        }
-    });
-    best.expect("at least the identity-ordered permutation")
+    let n = g.links();
+    let m = matrix(g, extra);
+    let col = colours(g);
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by_key(|&a| col[a]);
+    let classes = col.iter().max().map_or(0, |m| m + 1);
+    let mut members = vec![Vec::new(); classes];
+    for &a in &order {
+        members[col[a]].push(a);
+    }
+    let mut search = Search {
+        n,
+        m: &m,
+        class_at: order.iter().map(|&a| col[a]).collect(),
+        members,
+        used: vec![false; n],
+        placed: vec![0; n],
+        cur: vec![0; n * n.saturating_sub(1) / 2],
+        best: None,
+    };
+    search.fill(0, [u8::MAX; 16], 0);
+    search.best.expect("at least one relabelling")
 }
 
 #[cfg(test)]
@@ -190,8 +255,8 @@ mod tests {
     fn canonical_codes_separate_exactly_like_brute_force_minima() {
         let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
         let mut seen = Vec::new();
-        for trial in 0..300 {
-            let n = 3 + trial % 4;
+        for trial in 0..400 {
+            let n = 3 + trial % 5;
             let mut g = ChainGraph::empty(n);
             for v in 1..n {
                 let p = (rng(&mut seed) as usize) % v;
@@ -199,8 +264,13 @@ mod tests {
             }
             for a in 0..n {
                 for b in a + 1..n {
-                    if g.joint(a, b) == Joint::None && rng(&mut seed).is_multiple_of(3) {
-                        g.set(a, b, Joint::Gear);
+                    if g.joint(a, b) == Joint::None {
+                        match rng(&mut seed) % 6 {
+                            0 | 1 => g.set(a, b, Joint::Gear),
+                            // rotation graphs have cycles of turning pairs
+                            2 => g.set(a, b, Joint::Turning),
+                            _ => {}
+                        }
                     }
                 }
             }

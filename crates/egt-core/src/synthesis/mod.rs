@@ -73,10 +73,117 @@ pub struct AtlasMember {
     pub axes: usize,
     /// Links on the main axis shared by the most links (coaxial shafts: candidate input/output/fixed links).
     pub coaxial: Vec<String>,
+    /// Number of sets of three links on one axis: the candidate
+    /// (input, output, fixed) triples of a one-DOF reducer, unordered.
+    pub coaxial_triples: usize,
     /// For a rotation graph, how many displacement graphs it has.
     pub displacement_graphs: usize,
     /// The canonical code (hex), the key of the isomorphism class.
     pub code: String,
+}
+
+/// The atlas member a train is, at `level`: the same code, adjacency form
+/// and classification `enumerate` gives it. The train's rotation graph is the
+/// union of its gear pairs' rotation triangles (gear `i`, gear `j`, carrier
+/// `k`: turning edges `i-k` and `j-k`), each edge on the axis of its side of
+/// the fundamental circuit; which bearings join coaxial links does not matter.
+/// Only the one tree that owns the train is searched (to count its rotation
+/// graph's displacement graphs), not the whole atlas.
+///
+/// # Errors
+/// More than `MAX_LINKS` links, or a link in no gear pair's triangle (a link
+/// the atlas has no place for, e.g. a housing joined by a bearing only).
+pub fn member(train: &Train, level: GraphLevel) -> Result<AtlasMember> {
+    let n = train.links().len();
+    if n > MAX_LINKS {
+        return Err(Error::invalid(
+            "links",
+            format!("the atlas handles at most {MAX_LINKS} links, the train has {n}"),
+        ));
+    }
+    let mut g = ChainGraph::empty(n);
+    let mut legs: Vec<((usize, usize), usize)> = Vec::new();
+    for c in train.circuits() {
+        let (i, j, k) = (c.gear_i.index(), c.gear_j.index(), c.carrier.index());
+        g.set(i, j, Joint::Gear);
+        for (x, level) in [(i, c.level_i.index()), (j, c.level_j.index())] {
+            g.set(x, k, Joint::Turning);
+            legs.push(((x.min(k), x.max(k)), level));
+        }
+    }
+    let turning = g.pairs(Joint::Turning);
+    let mut touched = vec![false; n];
+    for &(a, b) in &turning {
+        touched[a] = true;
+        touched[b] = true;
+    }
+    if let Some(free) = (0..n).find(|&a| !touched[a]) {
+        return Err(Error::invalid(
+            "links",
+            format!(
+                "link `{}` is in no gear pair's circuit as gear or carrier; the atlas has chains of gear pairs only",
+                train.links()[free].name
+            ),
+        ));
+    }
+    // Axes: edges of one level name joined through a shared link (the same
+    // letter on two separate carriers is two axes).
+    let named: Vec<usize> = turning
+        .iter()
+        .map(|e| legs.iter().find(|(p, _)| p == e).expect("a leg").1)
+        .collect();
+    let mut axis: Vec<usize> = (0..turning.len()).collect();
+    fn root(axis: &mut [usize], mut x: usize) -> usize {
+        while axis[x] != x {
+            axis[x] = axis[axis[x]];
+            x = axis[x];
+        }
+        x
+    }
+    for e in 0..turning.len() {
+        for f in e + 1..turning.len() {
+            let ((a, b), (c, d)) = (turning[e], turning[f]);
+            if named[e] == named[f] && (a == c || a == d || b == c || b == d) {
+                let (re, rf) = (root(&mut axis, e), root(&mut axis, f));
+                axis[re] = rf;
+            }
+        }
+    }
+    let levels = renamed(
+        &(0..turning.len())
+            .map(|e| root(&mut axis, e))
+            .collect::<Vec<_>>(),
+    );
+    // The canonical labelling, and the tree that owns the rotation graph.
+    let (rcode, perm) = canonical(&g, Extra::None);
+    let gc = g.permuted(&perm);
+    let lc = permuted_levels(&g, &levels, &gc, &perm);
+    let (dcode, _) = canonical(&gc, Extra::Levels(&lc));
+    let mut owner = ChainGraph::empty(n);
+    for (a, b) in bfs_tree(&gc) {
+        owner.set(a, b, Joint::Turning);
+    }
+    let req = AtlasRequest {
+        links: n,
+        dof: train.dof(),
+        level,
+        part: None,
+    };
+    let (_, p) = canonical(&owner, Extra::None);
+    let members = members_of_tree(&owner.permuted(&p), &req);
+    let code: String = match level {
+        GraphLevel::Rotation => &rcode,
+        GraphLevel::Displacement => &dcode,
+    }
+    .iter()
+    .map(|b| format!("{b:02x}"))
+    .collect();
+    members.into_iter().find(|m| m.code == code).ok_or_else(|| {
+        Error::invalid(
+            "links",
+            "the train's rotation graph fails egt's checks in every bearing layout".to_string(),
+        )
+    })
 }
 
 /// Number of partitionable units (turning-pair trees) for `links`.
@@ -152,12 +259,7 @@ pub fn enumerate_with(
 /// Calls `f` with every choice of `k` candidates whose legs cover all the
 /// tree's turning pairs (`full`): a turning pair that is no gear pair's leg
 /// would be a bridge of the rotation graph, not a bearing of this tree form.
-fn for_each_cover(
-    cands: &[Candidate],
-    k: usize,
-    full: u32,
-    f: &mut dyn FnMut(&[Candidate]),
-) {
+fn for_each_cover(cands: &[Candidate], k: usize, full: u32, f: &mut dyn FnMut(&[Candidate])) {
     fn rec(
         cands: &[Candidate],
         k: usize,
@@ -202,6 +304,16 @@ struct Found {
 /// displacement graph is owned by exactly one tree, so trees partition the
 /// search with no de-duplication across them.
 fn found_in_tree(tree_graph: &ChainGraph, req: &AtlasRequest) -> BTreeMap<Code, Found> {
+    found_from_tree(tree_graph, req, true)
+}
+
+/// As [`found_in_tree`]; with `owned_only` false, every displacement graph
+/// reachable from `tree` (for testing that ownership loses nothing).
+fn found_from_tree(
+    tree_graph: &ChainGraph,
+    req: &AtlasRequest,
+    owned_only: bool,
+) -> BTreeMap<Code, Found> {
     let n = req.links;
     let gears = n - 1 - req.dof;
     let tree = Tree::new(tree_graph);
@@ -210,19 +322,26 @@ fn found_in_tree(tree_graph: &ChainGraph, req: &AtlasRequest) -> BTreeMap<Code, 
     let mut owner: HashMap<Code, bool> = HashMap::new();
     let mut seen: HashSet<(Code, Vec<usize>)> = HashSet::new();
     let mut out: BTreeMap<Code, Found> = BTreeMap::new();
+    // Level partitions that a symmetry of the tree maps onto each other give
+    // the same displacement graphs: one per orbit is enough.
+    let mut orbits: HashSet<Code> = HashSet::new();
     tree.for_each_level_partition(|levels| {
+        if !orbits.insert(canonical(tree_graph, Extra::Levels(levels)).0) {
+            return;
+        }
         let cands = tree.candidates(levels);
         for_each_cover(&cands, gears, full, &mut |picked| {
             let (g, lv) = rotation_graph(n, picked);
             let (rcode, perm) = canonical(&g, Extra::None);
-            let owned = *owner.entry(rcode.clone()).or_insert_with(|| {
-                let gc = g.permuted(&perm);
-                let mut t = ChainGraph::empty(n);
-                for (a, b) in bfs_tree(&gc) {
-                    t.set(a, b, Joint::Turning);
-                }
-                canonical(&t, Extra::None).0 == tcode
-            });
+            let owned = !owned_only
+                || *owner.entry(rcode.clone()).or_insert_with(|| {
+                    let gc = g.permuted(&perm);
+                    let mut t = ChainGraph::empty(n);
+                    for (a, b) in bfs_tree(&gc) {
+                        t.set(a, b, Joint::Turning);
+                    }
+                    canonical(&t, Extra::None).0 == tcode
+                });
             if !owned {
                 return;
             }
@@ -244,7 +363,12 @@ fn found_in_tree(tree_graph: &ChainGraph, req: &AtlasRequest) -> BTreeMap<Code, 
 
 /// `levels` (of `g`'s turning pairs) re-indexed for `gc = g.permuted(perm)`
 /// and renamed in order of first appearance.
-fn permuted_levels(g: &ChainGraph, levels: &[usize], gc: &ChainGraph, perm: &[usize]) -> Vec<usize> {
+fn permuted_levels(
+    g: &ChainGraph,
+    levels: &[usize],
+    gc: &ChainGraph,
+    perm: &[usize],
+) -> Vec<usize> {
     let old = g.pairs(Joint::Turning);
     let raw: Vec<usize> = gc
         .pairs(Joint::Turning)
@@ -287,7 +411,10 @@ fn members_of_tree(tree: &ChainGraph, req: &AtlasRequest) -> Vec<AtlasMember> {
     let mut by_rotation: BTreeMap<Code, Vec<(Code, Emitted)>> = BTreeMap::new();
     for (dcode, f) in found_in_tree(tree, req) {
         if let Some(emitted) = checked_form(&f.graph, &f.levels) {
-            by_rotation.entry(f.rcode).or_default().push((dcode, emitted));
+            by_rotation
+                .entry(f.rcode)
+                .or_default()
+                .push((dcode, emitted));
         }
     }
     let mut out = Vec::new();
@@ -302,6 +429,7 @@ fn members_of_tree(tree: &ChainGraph, req: &AtlasRequest) -> Vec<AtlasMember> {
             carriers: e.carriers,
             axes: e.axes,
             coaxial: e.coaxial.clone(),
+            coaxial_triples: e.coaxial_triples,
             displacement_graphs: count,
             code: code.iter().map(|b| format!("{b:02x}")).collect(),
         };
@@ -327,6 +455,7 @@ struct Emitted {
     carriers: usize,
     axes: usize,
     coaxial: Vec<String>,
+    coaxial_triples: usize,
 }
 
 impl Emitted {
@@ -334,30 +463,51 @@ impl Emitted {
     /// with its levels, then the gear pairs.
     fn new(g: &ChainGraph, levels: &[usize], tree: &[(usize, usize)]) -> Self {
         let turning = g.pairs(Joint::Turning);
-        let level_of = |e: (usize, usize)| levels[turning.iter().position(|&x| x == e).expect("edge")];
-        let tree_levels = renamed(&tree.iter().map(|&e| level_of(e)).collect::<Vec<_>>());
+        let level_of =
+            |e: (usize, usize)| levels[turning.iter().position(|&x| x == e).expect("edge")];
+        let tree_levels: Vec<usize> = tree.iter().map(|&e| level_of(e)).collect();
+        Self::with_layout(g, tree, &tree_levels)
+    }
+
+    /// The bearing tree `tree` with its levels `tree_levels` (any names),
+    /// then the gear pairs of the rotation graph `g`.
+    fn with_layout(g: &ChainGraph, tree: &[(usize, usize)], tree_levels: &[usize]) -> Self {
+        let tree_levels = renamed(tree_levels);
         let mut parts: Vec<String> = tree
             .iter()
             .zip(&tree_levels)
             .map(|(&(a, b), &l)| format!("{}-{}:{}", a + 1, b + 1, level_name(l)))
             .collect();
         let gear_pairs = g.pairs(Joint::Gear);
-        parts.extend(gear_pairs.iter().map(|&(a, b)| format!("{}-{}:G", a + 1, b + 1)));
+        parts.extend(
+            gear_pairs
+                .iter()
+                .map(|&(a, b)| format!("{}-{}:G", a + 1, b + 1)),
+        );
         // carriers: the common turning neighbour of each gear pair
         let mut carriers: Vec<usize> = gear_pairs
             .iter()
             .filter_map(|&(a, b)| {
-                (0..g.links()).find(|&k| g.joint(a, k) == Joint::Turning && g.joint(b, k) == Joint::Turning)
+                (0..g.links())
+                    .find(|&k| g.joint(a, k) == Joint::Turning && g.joint(b, k) == Joint::Turning)
             })
             .collect();
         carriers.sort_unstable();
         carriers.dedup();
         let axes = tree_levels.iter().max().map_or(0, |m| m + 1);
+        // a level's pairs form a tree: pairs + 1 links on that axis
+        let coaxial_triples = (0..axes)
+            .map(|l| {
+                let k = tree_levels.iter().filter(|&&x| x == l).count() + 1;
+                k * k.saturating_sub(1) * k.saturating_sub(2) / 6
+            })
+            .sum();
         Emitted {
             adjacency: parts.join(" "),
             carriers: carriers.len(),
             axes,
             coaxial: coaxial(tree, &tree_levels),
+            coaxial_triples,
         }
     }
 }
@@ -394,43 +544,101 @@ fn egt_check(adjacency: &str) -> Result<Train> {
 }
 
 /// The displacement graph `(g, levels)` in the first bearing layout that
-/// passes egt's checks, or `None` when none does. Kinematically every
-/// spanning tree of the rotation graph's turning edges is the same train (the
-/// levels make each cycle of turning edges coaxial), so only planarity can
-/// depend on the layout: the breadth-first tree is tried first, and when it is
-/// not planar, the other spanning trees in a fixed order.
+/// passes egt's checks, or `None` when none does.
+///
+/// A level is a set of coaxial links; any tree of bearings inside each level
+/// gives the same train (the same rotation graph and Willis equations). Two
+/// of egt's checks read the bearing graph itself: planarity, and
+/// fractionation (a link whose removal splits the graph into moving parts).
+/// The breadth-first spanning tree of `g` is tried first; when it fails one
+/// of those two, every other layout (every tree on each level's links, by
+/// Prüfer sequences) in a fixed order. So a member is a train that some
+/// bearing layout makes acceptable to `egt check`.
 fn checked_form(g: &ChainGraph, levels: &[usize]) -> Option<Emitted> {
     let bfs = bfs_tree(g);
     let first = Emitted::new(g, levels, &bfs);
     match egt_check(&first.adjacency) {
         Ok(_) => return Some(first),
-        Err(Error::Topology(TopologyError::NonPlanar { .. })) => {}
+        Err(Error::Topology(
+            TopologyError::NonPlanar { .. } | TopologyError::Fractionated { .. },
+        )) => {}
         Err(_) => return None,
     }
-    let n = g.links();
     let turning = g.pairs(Joint::Turning);
-    let mut found = None;
-    for_each_subset(turning.len(), n - 1, |pick| {
-        if found.is_some() {
-            return;
+    let classes: Vec<Vec<usize>> = (0..levels.iter().max().map_or(0, |m| m + 1))
+        .map(|l| {
+            let mut links: Vec<usize> = turning
+                .iter()
+                .zip(levels)
+                .filter(|&(_, &x)| x == l)
+                .flat_map(|(&(a, b), _)| [a, b])
+                .collect();
+            links.sort_unstable();
+            links.dedup();
+            links
+        })
+        .collect();
+    // one Prüfer sequence per level: digit i of level c runs over its links
+    let digits: Vec<(usize, usize)> = classes
+        .iter()
+        .enumerate()
+        .flat_map(|(c, links)| (0..links.len().saturating_sub(2)).map(move |_| (c, links.len())))
+        .collect();
+    let mut seq = vec![0usize; digits.len()];
+    loop {
+        let mut layout: Vec<(usize, usize)> = Vec::new();
+        let mut layout_levels: Vec<usize> = Vec::new();
+        for (c, links) in classes.iter().enumerate() {
+            let code: Vec<usize> = digits
+                .iter()
+                .zip(&seq)
+                .filter(|((dc, _), _)| *dc == c)
+                .map(|(_, &x)| x)
+                .collect();
+            for (a, b) in pruefer_tree(links.len(), &code) {
+                let (x, y) = (links[a], links[b]);
+                layout.push((x.min(y), x.max(y)));
+                layout_levels.push(c);
+            }
         }
-        let mut t = ChainGraph::empty(n);
-        for &p in pick {
-            t.set(turning[p].0, turning[p].1, Joint::Turning);
-        }
-        let tree = bfs_tree(&t);
-        if tree.len() != n - 1 {
-            return; // not spanning
-        }
-        let form = Emitted::new(g, levels, &tree);
+        let form = Emitted::with_layout(g, &layout, &layout_levels);
         if egt_check(&form.adjacency).is_ok() {
-            found = Some(form);
+            return Some(form);
         }
-    });
-    found
+        // next sequence (mixed radix)
+        let Some(i) = (0..seq.len()).find(|&i| seq[i] + 1 < digits[i].1) else {
+            return None;
+        };
+        seq[i] += 1;
+        for x in &mut seq[..i] {
+            *x = 0;
+        }
+    }
+}
+
+/// The labelled tree on `0..m` with Prüfer sequence `code` (length `m - 2`).
+fn pruefer_tree(m: usize, code: &[usize]) -> Vec<(usize, usize)> {
+    if m < 2 {
+        return Vec::new();
+    }
+    let mut degree = vec![1usize; m];
+    for &x in code {
+        degree[x] += 1;
+    }
+    let mut edges = Vec::with_capacity(m - 1);
+    for &x in code {
+        let leaf = (0..m).find(|&v| degree[v] == 1).expect("a leaf");
+        edges.push((leaf, x));
+        degree[leaf] -= 1;
+        degree[x] -= 1;
+    }
+    let last: Vec<usize> = (0..m).filter(|&v| degree[v] == 1).collect();
+    edges.push((last[0], last[1]));
+    edges
 }
 
 /// Calls `f` with every `k`-subset of `0..m` (as sorted indices).
+#[cfg(test)]
 fn for_each_subset(m: usize, k: usize, mut f: impl FnMut(&[usize])) {
     if k > m {
         return;
