@@ -12,7 +12,7 @@
 //! considered) and is tested against the plain minimum over all `n!`
 //! permutations in this module's tests.
 
-use super::graph::{ChainGraph, Joint};
+use super::graph::{ChainGraph, Joint, MAX_LINKS};
 
 /// A canonical code: equal codes iff isomorphic (for the same `n`).
 pub type Code = Vec<u8>;
@@ -96,43 +96,56 @@ fn renamed(x: u8, rename: &mut [u8; 16], next: &mut u8) -> u8 {
 /// the multiset of (pair kind, neighbour colour) until stable (1-WL). Colours
 /// are ranks of sorted signatures, so relabelling the graph permutes them.
 fn colours(g: &ChainGraph) -> Vec<usize> {
+    // A signature: own colour, neighbour count, then the sorted
+    // (kind, colour) codes of the neighbours; fixed size, no allocation.
+    type Sig = [u16; MAX_LINKS + 2];
     let n = g.links();
     let kind = |a: usize, b: usize| match g.joint(a, b) {
-        Joint::None => 0usize,
+        Joint::None => 0u16,
         Joint::Turning => 1,
         Joint::Gear => 2,
     };
-    let rank = |sigs: &[Vec<usize>]| -> Vec<usize> {
-        let mut sorted: Vec<&Vec<usize>> = sigs.iter().collect();
-        sorted.sort();
+    let rank = |sigs: &[Sig], out: &mut [usize]| -> usize {
+        let mut sorted: Vec<Sig> = sigs.to_vec();
+        sorted.sort_unstable();
         sorted.dedup();
-        sigs.iter()
-            .map(|s| sorted.binary_search(&s).expect("present"))
-            .collect()
-    };
-    let base: Vec<Vec<usize>> = (0..n)
-        .map(|a| vec![g.degree(a, Joint::Turning), g.degree(a, Joint::Gear)])
-        .collect();
-    let mut col = rank(&base);
-    loop {
-        let sigs: Vec<Vec<usize>> = (0..n)
-            .map(|a| {
-                let mut nb: Vec<usize> = (0..n)
-                    .filter(|&b| kind(a, b) != 0)
-                    .map(|b| kind(a, b) * n + col[b])
-                    .collect();
-                nb.sort_unstable();
-                let mut s = vec![col[a]];
-                s.extend(nb);
-                s
-            })
-            .collect();
-        let next = rank(&sigs);
-        let classes = |c: &[usize]| c.iter().max().map_or(0, |m| m + 1);
-        if classes(&next) == classes(&col) {
-            return next;
+        for (o, s) in out.iter_mut().zip(sigs) {
+            *o = sorted.binary_search(s).expect("present");
         }
+        sorted.len()
+    };
+    let mut sigs: Vec<Sig> = (0..n)
+        .map(|a| {
+            let mut s = [0u16; MAX_LINKS + 2];
+            s[0] = g.degree(a, Joint::Turning) as u16;
+            s[1] = g.degree(a, Joint::Gear) as u16;
+            s
+        })
+        .collect();
+    let mut col = vec![0usize; n];
+    let mut classes = rank(&sigs, &mut col);
+    loop {
+        for (a, s) in sigs.iter_mut().enumerate() {
+            *s = [0u16; MAX_LINKS + 2];
+            s[0] = col[a] as u16;
+            let mut k = 2;
+            for b in 0..n {
+                let j = kind(a, b);
+                if j != 0 {
+                    s[k] = j * (MAX_LINKS as u16 + 1) + col[b] as u16;
+                    k += 1;
+                }
+            }
+            s[1] = (k - 2) as u16;
+            s[2..k].sort_unstable();
+        }
+        let mut next = vec![0usize; n];
+        let more = rank(&sigs, &mut next);
         col = next;
+        if more == classes {
+            return col;
+        }
+        classes = more;
     }
 }
 
@@ -147,6 +160,10 @@ struct Search<'a> {
     class_at: Vec<usize>,
     /// Links of each colour class.
     members: Vec<Vec<usize>>,
+    /// The least link each link is a twin of (same pairs with every other
+    /// link): swapping twins is an automorphism, so at each position only
+    /// one twin of a kind need be tried.
+    twin: Vec<usize>,
     used: Vec<bool>,
     /// Link at each filled position.
     placed: Vec<usize>,
@@ -155,42 +172,58 @@ struct Search<'a> {
 }
 
 impl Search<'_> {
-    fn fill(&mut self, q: usize, rename: [u8; 16], next: u8) {
+    /// Fills position `q`. `below` says the prefix so far is already less than
+    /// the best code's (so no comparison is needed); returns whether the best
+    /// code was replaced (after which the prefix equals the new best's).
+    fn fill(&mut self, q: usize, rename: [u8; 16], next: u8, mut below: bool) -> bool {
         let n = self.n;
         if q == n {
-            if self.best.as_ref().is_none_or(|(b, _)| self.cur < *b) {
-                let mut perm = vec![0; n];
-                for (pos, &old) in self.placed.iter().enumerate() {
-                    perm[old] = pos;
-                }
-                self.best = Some((self.cur.clone(), perm));
+            let mut perm = vec![0; n];
+            for (pos, &old) in self.placed.iter().enumerate() {
+                perm[old] = pos;
             }
-            return;
+            match &mut self.best {
+                Some((b, p)) => {
+                    b.copy_from_slice(&self.cur);
+                    *p = perm;
+                }
+                None => self.best = Some((self.cur.clone(), perm)),
+            }
+            return true;
         }
         let start = q * q.saturating_sub(1) / 2;
         let end = start + q;
         let class = self.class_at[q];
+        let mut replaced = false;
+        let mut tried = 0u32;
         for i in 0..self.members[class].len() {
             let v = self.members[class][i];
-            if self.used[v] {
+            if self.used[v] || tried & (1 << self.twin[v]) != 0 {
                 continue;
             }
+            tried |= 1 << self.twin[v];
             let (mut r, mut nx) = (rename, next);
             for p in 0..q {
                 self.cur[start + p] = renamed(self.m[self.placed[p] * n + v], &mut r, &mut nx);
             }
-            if self
-                .best
-                .as_ref()
-                .is_some_and(|(b, _)| self.cur[..end] > b[..end])
-            {
-                continue;
-            }
+            let child_below = below
+                || match &self.best {
+                    None => true,
+                    Some((b, _)) => match self.cur[start..end].cmp(&b[start..end]) {
+                        std::cmp::Ordering::Greater => continue,
+                        std::cmp::Ordering::Less => true,
+                        std::cmp::Ordering::Equal => false,
+                    },
+                };
             self.used[v] = true;
             self.placed[q] = v;
-            self.fill(q + 1, r, nx);
+            if self.fill(q + 1, r, nx, child_below) {
+                replaced = true;
+                below = false;
+            }
             self.used[v] = false;
         }
+        replaced
     }
 }
 
@@ -206,9 +239,17 @@ pub fn canonical(g: &ChainGraph, extra: Extra<'_>) -> (Code, Vec<usize>) {
     for &a in &order {
         members[col[a]].push(a);
     }
+    let twin: Vec<usize> = (0..n)
+        .map(|v| {
+            (0..v)
+                .find(|&w| (0..n).all(|x| x == v || x == w || m[v * n + x] == m[w * n + x]))
+                .unwrap_or(v)
+        })
+        .collect();
     let mut search = Search {
         n,
         m: &m,
+        twin,
         class_at: order.iter().map(|&a| col[a]).collect(),
         members,
         used: vec![false; n],
@@ -216,7 +257,7 @@ pub fn canonical(g: &ChainGraph, extra: Extra<'_>) -> (Code, Vec<usize>) {
         cur: vec![0; n * n.saturating_sub(1) / 2],
         best: None,
     };
-    search.fill(0, [u8::MAX; 16], 0);
+    search.fill(0, [u8::MAX; 16], 0, false);
     search.best.expect("at least one relabelling")
 }
 
