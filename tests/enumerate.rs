@@ -134,3 +134,21 @@ fn identify_prints_the_member_a_train_is() {
     assert_eq!(code, 2);
     assert!(err.contains("case"), "{err}");
 }
+
+#[test]
+fn eight_link_counts_equal_the_published_atlas_at_both_levels() {
+    // Yang & Ding (2019): 1070 r-graphs and 6360 d-graphs. One run: each
+    // rotation graph says how many displacement graphs it has.
+    let (code, out, err) = egt(&["enumerate", "--links", "8", "--jsonl"], None);
+    assert_eq!(code, 0, "{err}");
+    let members: Vec<Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("json line"))
+        .collect();
+    assert_eq!(members.len(), 1070);
+    let d: u64 = members
+        .iter()
+        .map(|m| m["displacement_graphs"].as_u64().expect("count"))
+        .sum();
+    assert_eq!(d, 6360);
+}

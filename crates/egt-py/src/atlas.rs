@@ -1,11 +1,40 @@
 //! `egt.atlas(links, dof, level, part)`: the atlas of non-isomorphic gear-train
-//! graphs (egt_core::synthesis) as a list of dicts, one per member.
+//! graphs (egt_core::synthesis) as a list of dicts, one per member; and
+//! `atlas_member(train, level)`, the member a train is.
 
-use egt_core::synthesis::{AtlasRequest, GraphLevel, enumerate};
+use egt_core::synthesis::{AtlasMember, AtlasRequest, GraphLevel, enumerate, member};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::errors::{Result, guard};
+use crate::train::TrainCore;
+
+fn level_of(level: &str) -> Result<GraphLevel> {
+    match level {
+        "rotation" => Ok(GraphLevel::Rotation),
+        "displacement" => Ok(GraphLevel::Displacement),
+        other => Err(egt_core::Error::invalid(
+            "level",
+            format!("`{other}`: expected `rotation` or `displacement`"),
+        )
+        .into()),
+    }
+}
+
+fn to_dict<'py>(py: Python<'py>, m: AtlasMember) -> Result<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("adjacency", m.adjacency)?;
+    d.set_item("links", m.links)?;
+    d.set_item("dof", m.dof)?;
+    d.set_item("gears", m.gears)?;
+    d.set_item("carriers", m.carriers)?;
+    d.set_item("axes", m.axes)?;
+    d.set_item("coaxial", m.coaxial)?;
+    d.set_item("coaxial_triples", m.coaxial_triples)?;
+    d.set_item("displacement_graphs", m.displacement_graphs)?;
+    d.set_item("code", m.code)?;
+    Ok(d)
+}
 
 /// Every member with `links` links and `dof` DOF, at level `rotation` or `displacement`.
 #[pyfunction]
@@ -17,17 +46,7 @@ pub fn atlas<'py>(
     level: &str,
     part: Option<(usize, usize)>,
 ) -> Result<Vec<Bound<'py, PyDict>>> {
-    let level = match level {
-        "rotation" => GraphLevel::Rotation,
-        "displacement" => GraphLevel::Displacement,
-        other => {
-            return Err(egt_core::Error::invalid(
-                "level",
-                format!("`{other}`: expected `rotation` or `displacement`"),
-            )
-            .into());
-        }
-    };
+    let level = level_of(level)?;
     let members = guard(|| {
         Ok(enumerate(&AtlasRequest {
             links,
@@ -36,20 +55,18 @@ pub fn atlas<'py>(
             part,
         })?)
     })?;
-    let mut out = Vec::with_capacity(members.len());
-    for m in members {
-        let d = PyDict::new(py);
-        d.set_item("adjacency", m.adjacency)?;
-        d.set_item("links", m.links)?;
-        d.set_item("dof", m.dof)?;
-        d.set_item("gears", m.gears)?;
-        d.set_item("carriers", m.carriers)?;
-        d.set_item("axes", m.axes)?;
-        d.set_item("coaxial", m.coaxial)?;
-        d.set_item("coaxial_triples", m.coaxial_triples)?;
-        d.set_item("displacement_graphs", m.displacement_graphs)?;
-        d.set_item("code", m.code)?;
-        out.push(d);
-    }
-    Ok(out)
+    members.into_iter().map(|m| to_dict(py, m)).collect()
+}
+
+/// The member `core`'s train is, at level `rotation` or `displacement`.
+#[pyfunction]
+#[pyo3(signature = (core, level = "rotation"))]
+pub fn atlas_member<'py>(
+    py: Python<'py>,
+    core: &TrainCore,
+    level: &str,
+) -> Result<Bound<'py, PyDict>> {
+    let level = level_of(level)?;
+    let m = guard(|| Ok(member(&core.train, level)?))?;
+    to_dict(py, m)
 }

@@ -40,6 +40,7 @@ fn _egt(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(transmission::shift_table, m)?)?;
     m.add_function(wrap_pyfunction!(cli, m)?)?;
     m.add_function(wrap_pyfunction!(atlas::atlas, m)?)?;
+    m.add_function(wrap_pyfunction!(atlas::atlas_member, m)?)?;
     m.add_class::<design::SearchCore>()?;
     m.add_function(wrap_pyfunction!(design::search_inputs, m)?)?;
     errors::register(m)?;

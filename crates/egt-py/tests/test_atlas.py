@@ -3,6 +3,7 @@
 import pytest
 
 import egt
+from conftest import EXAMPLES
 
 
 def test_every_member_loads_as_a_train_with_the_requested_dof() -> None:
@@ -25,3 +26,31 @@ def test_bad_requests_raise_egt_errors() -> None:
         egt.atlas(5, level="other")
     with pytest.raises(egt.EgtError, match="links"):
         egt.atlas(2)
+
+
+def test_six_link_counts_equal_the_published_atlas() -> None:
+    # Yang & Ding, ASME J. Mech. Des. 141(4):043301 (2019): 27 r-graphs, 81 d-graphs.
+    assert len(egt.atlas(6)) == 27
+    assert len(egt.atlas(6, level="displacement")) == 81
+
+
+def test_coaxial_triples_count_the_three_link_subsets_of_each_axis() -> None:
+    from math import comb
+
+    for m in egt.atlas(6, level="displacement"):
+        turning = [p for p in m["adjacency"].split() if not p.endswith(":G")]
+        per_axis: dict[str, int] = {}
+        for p in turning:
+            level = p.split(":")[1]
+            per_axis[level] = per_axis.get(level, 0) + 1
+        # a level's pairs form a tree: pairs + 1 links on that axis
+        assert m["coaxial_triples"] == sum(comb(k + 1, 3) for k in per_axis.values())
+
+
+def test_a_train_names_its_atlas_member() -> None:
+    train = egt.Train.from_file(EXAMPLES / "fig5_example62.toml")
+    m = train.atlas_member("displacement")
+    assert m["links"] == 6 and m["dof"] == 2
+    assert m["code"] in {x["code"] for x in egt.atlas(6, dof=2, level="displacement")}
+    with pytest.raises(egt.EgtError, match="case"):
+        egt.Train.from_file(EXAMPLES / "ford_c4_simpson.toml").atlas_member()

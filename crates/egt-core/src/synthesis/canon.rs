@@ -129,10 +129,10 @@ fn colours(g: &ChainGraph) -> Vec<usize> {
             *s = [0u16; MAX_LINKS + 2];
             s[0] = col[a] as u16;
             let mut k = 2;
-            for b in 0..n {
+            for (b, &c) in col.iter().enumerate() {
                 let j = kind(a, b);
                 if j != 0 {
-                    s[k] = j * (MAX_LINKS as u16 + 1) + col[b] as u16;
+                    s[k] = j * (MAX_LINKS as u16 + 1) + c as u16;
                     k += 1;
                 }
             }

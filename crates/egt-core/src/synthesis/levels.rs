@@ -176,9 +176,9 @@ pub fn bfs_tree(g: &ChainGraph) -> Vec<(usize, usize)> {
     let mut queue = std::collections::VecDeque::from([0]);
     let mut tree = Vec::with_capacity(n.saturating_sub(1));
     while let Some(a) = queue.pop_front() {
-        for b in 0..n {
-            if !seen[b] && g.joint(a, b) == Joint::Turning {
-                seen[b] = true;
+        for (b, s) in seen.iter_mut().enumerate() {
+            if !*s && g.joint(a, b) == Joint::Turning {
+                *s = true;
                 tree.push((a.min(b), a.max(b)));
                 queue.push_back(b);
             }

@@ -606,9 +606,7 @@ fn checked_form(g: &ChainGraph, levels: &[usize]) -> Option<Emitted> {
             return Some(form);
         }
         // next sequence (mixed radix)
-        let Some(i) = (0..seq.len()).find(|&i| seq[i] + 1 < digits[i].1) else {
-            return None;
-        };
+        let i = (0..seq.len()).find(|&i| seq[i] + 1 < digits[i].1)?;
         seq[i] += 1;
         for x in &mut seq[..i] {
             *x = 0;

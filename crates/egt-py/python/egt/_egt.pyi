@@ -21,6 +21,7 @@ __all__ = [
     "shift_table",
     "cli",
     "atlas",
+    "atlas_member",
     "EgtError",
     "SpecError",
     "SpecSyntaxError",
@@ -96,6 +97,7 @@ def structure(core: TrainCore) -> Dict[str, Any]: ...
 def atlas(
     links: int, dof: int = 1, level: str = "rotation", part: Optional[Tuple[int, int]] = None
 ) -> List[Dict[str, Any]]: ...
+def atlas_member(core: TrainCore, level: str = "rotation") -> Dict[str, Any]: ...
 @final
 class BatchPlanCore:
     @property

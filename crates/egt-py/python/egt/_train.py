@@ -33,6 +33,7 @@ from . import _batch
 from ._batch import BatchDynamics, BatchKinematics, BatchPlan
 from ._args import ArgumentError, ArgumentKeyError, ArgumentTypeError, count, mapping, number
 from ._egt import TrainCore, batch_plan
+from ._egt import atlas_member as _atlas_member
 from ._egt import gear as _gear
 from ._egt import shift_table as _shift_table
 from ._egt import simulate as _simulate
@@ -255,6 +256,14 @@ class Train:
     def check(self) -> List[str]:
         """The topology checks the train passed, in words (section 2)."""
         return list(self._core.checks())
+
+    def atlas_member(self, level: str = "rotation") -> Dict[str, Any]:
+        """The member of ``egt.atlas(links, dof, level)`` this train is (docs/atlas.md).
+
+        Raises ``egt.EgtError`` naming the link when a link is in no gear pair's
+        circuit (e.g. a housing joined by a bearing only).
+        """
+        return _atlas_member(self._core, level)
 
     def _repr_html_(self) -> str:
         from ._results import _html_table
