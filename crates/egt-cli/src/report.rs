@@ -168,6 +168,19 @@ pub fn sci(v: f64) -> String {
     }
 }
 
+/// A link name safe in a CSV header (quotes and commas replaced).
+pub fn csv_name(n: &str) -> String {
+    n.chars()
+        .map(|c| {
+            if c == ',' || c == '"' || c.is_whitespace() {
+                '_'
+            } else {
+                c
+            }
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,5 +1,8 @@
-//! The SVG pieces both plots share (`egt simulate --plot`, `egt shift --plot`):
-//! the palette, text escaping, round tick positions and tick labels.
+//! The SVG pieces the plots share (`egt simulate --plot`, `egt shift --plot`,
+//! `egt shift-sim --plot`): the palette, text escaping, round tick positions
+//! and tick labels, and the time-series panel.
+
+use std::fmt::Write as _;
 
 /// A colour-blind-friendly palette (Okabe-Ito and Tol), cycled.
 pub const PALETTE: [&str; 12] = [
@@ -42,4 +45,162 @@ pub fn fmt_tick(v: f64) -> String {
     let s = format!("{v:.4}");
     let s = s.trim_end_matches('0').trim_end_matches('.');
     if s == "-0" { "0".into() } else { s.into() }
+}
+
+/// Width of a time-series plot.
+pub const WIDTH: f64 = 900.0;
+/// Left margin of a panel.
+pub const LEFT: f64 = 80.0;
+/// Top of the first panel.
+pub const TOP: f64 = 95.0;
+/// Panel width.
+pub const PLOT_W: f64 = 660.0;
+/// Panel height.
+pub const PLOT_H: f64 = 330.0;
+/// Space between panels (axis labels and the next panel's heading).
+pub const GAP: f64 = 90.0;
+/// At most this many points per line.
+const MAX_POINTS: usize = 600;
+/// The style sheet of the time-series plots.
+pub const PLOT_STYLE: &str = "<style>.grid{stroke:#ddd;stroke-width:1}.zero{stroke:#888;stroke-width:1}.axis{stroke:#333;stroke-width:1.2;fill:none}.tick{font-size:12px;fill:#333}.title{font-size:16px;font-weight:bold}.head{font-size:14px;font-weight:bold;fill:#222}.sub{font-size:12px;fill:#444}.label{font-size:13px}</style>\n";
+
+/// A panel's place and words.
+pub struct Panel<'a> {
+    /// Top edge.
+    pub top: f64,
+    /// Heading.
+    pub title: &'a str,
+    /// Y axis label.
+    pub ylabel: &'a str,
+}
+
+/// One line of a panel: its value at sample `i`, and an optional dashed level.
+pub struct Line<'a> {
+    /// Value at sample `i`.
+    pub value: &'a dyn Fn(usize) -> f64,
+    /// A reference level drawn dashed in the line's colour.
+    pub level: Option<f64>,
+}
+
+/// One panel: axes, ticks against time, a coloured line per `lines` entry
+/// (colours in order of `PALETTE`), dashed levels.
+pub fn panel(
+    svg: &mut String,
+    p: &Panel<'_>,
+    samples: usize,
+    time: &dyn Fn(usize) -> f64,
+    lines: &[Line<'_>],
+    t_end: f64,
+) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for line in lines {
+        for i in 0..samples {
+            let v = (line.value)(i);
+            if v.is_finite() {
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+        }
+        if let Some(l) = line.level {
+            lo = lo.min(l);
+            hi = hi.max(l);
+        }
+    }
+    if !lo.is_finite() || !hi.is_finite() {
+        (lo, hi) = (-1.0, 1.0);
+    }
+    let (ya, yb, yt) = ticks(lo, hi);
+    let (xa, xb, xt) = ticks(0.0, t_end);
+    let top = p.top;
+    let x = |t: f64| LEFT + (t - xa) / (xb - xa) * PLOT_W;
+    let y = |v: f64| top + PLOT_H - (v - ya) / (yb - ya) * PLOT_H;
+    let _ = writeln!(
+        svg,
+        r#"<text x="{LEFT}" y="{:.1}" class="head">{}</text>"#,
+        top - 10.0,
+        esc(p.title)
+    );
+    for &v in &yt {
+        let class = if v.abs() < 1e-12 * (yb - ya) {
+            "zero"
+        } else {
+            "grid"
+        };
+        let _ = writeln!(
+            svg,
+            r#"<line x1="{LEFT}" y1="{0:.1}" x2="{1:.1}" y2="{0:.1}" class="{class}"/><text x="{2:.1}" y="{3:.1}" class="tick" text-anchor="end">{4}</text>"#,
+            y(v),
+            LEFT + PLOT_W,
+            LEFT - 6.0,
+            y(v) + 4.0,
+            fmt_tick(v)
+        );
+    }
+    for &t in &xt {
+        let _ = writeln!(
+            svg,
+            r#"<line x1="{0:.1}" y1="{top}" x2="{0:.1}" y2="{1:.1}" class="grid"/><text x="{0:.1}" y="{2:.1}" class="tick" text-anchor="middle">{3}</text>"#,
+            x(t),
+            top + PLOT_H,
+            top + PLOT_H + 18.0,
+            fmt_tick(t)
+        );
+    }
+    let _ = writeln!(
+        svg,
+        r#"<rect x="{LEFT}" y="{top}" width="{PLOT_W}" height="{PLOT_H}" class="axis"/>"#
+    );
+    let _ = writeln!(
+        svg,
+        r#"<text x="{:.1}" y="{:.1}" class="label" text-anchor="middle">t [s]</text>"#,
+        LEFT + PLOT_W / 2.0,
+        top + PLOT_H + 38.0
+    );
+    let _ = writeln!(
+        svg,
+        r#"<text x="20" y="{0:.1}" class="label" text-anchor="middle" transform="rotate(-90 20 {0:.1})">{1}</text>"#,
+        top + PLOT_H / 2.0,
+        esc(p.ylabel)
+    );
+    let stride = samples.div_ceil(MAX_POINTS).max(1);
+    for (k, line) in lines.iter().enumerate() {
+        let colour = PALETTE[k % PALETTE.len()];
+        if let Some(l) = line.level {
+            let _ = writeln!(
+                svg,
+                r#"<line x1="{LEFT}" y1="{0:.2}" x2="{1:.1}" y2="{0:.2}" stroke="{colour}" stroke-width="1" stroke-dasharray="5 4"/>"#,
+                y(l),
+                LEFT + PLOT_W
+            );
+        }
+        let mut pts = String::new();
+        for i in 0..samples {
+            if i % stride == 0 || i + 1 == samples {
+                let _ = write!(pts, "{:.2},{:.2} ", x(time(i)), y((line.value)(i)));
+            }
+        }
+        let _ = writeln!(
+            svg,
+            r#"<polyline points="{}" fill="none" stroke="{colour}" stroke-width="1.8"/>"#,
+            pts.trim_end()
+        );
+    }
+}
+
+/// A legend to the right of the panels: a colour swatch and a label per line.
+pub fn legend(svg: &mut String, labels: &[String]) {
+    for (k, label) in labels.iter().enumerate() {
+        let colour = PALETTE[k % PALETTE.len()];
+        let ly = TOP + 14.0 + 22.0 * k as f64;
+        let _ = writeln!(
+            svg,
+            r#"<line x1="{0:.1}" y1="{1:.1}" x2="{2:.1}" y2="{1:.1}" stroke="{colour}" stroke-width="2.5"/><text x="{3:.1}" y="{4:.1}" class="label">{5}</text>"#,
+            LEFT + PLOT_W + 20.0,
+            ly,
+            LEFT + PLOT_W + 44.0,
+            LEFT + PLOT_W + 50.0,
+            ly + 4.5,
+            esc(label)
+        );
+    }
 }

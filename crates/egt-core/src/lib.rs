@@ -120,6 +120,7 @@ pub use model::circuits::FundamentalCircuit;
 pub use model::mass::{MassMatrix, Offset};
 pub use model::train::{Edge, GearId, GearPair, LevelId, Link, LinkId, Ratio, RevoluteId, Train};
 pub use model::train::{ElementId, GearState, ShiftElement, Transmission};
+pub use motion::shift_dynamics;
 pub use motion::simulate::{
     LinearCurves, Method, ReducedDynamics, Sample, Simulation, SimulationOptions,
     SimulationOverrides, SimulationRequest, TorqueFn, TorqueModel,

@@ -16,6 +16,7 @@ pub mod kinematics;
 pub mod power;
 pub mod schema;
 pub mod shift;
+pub mod shift_sim;
 pub mod simulate;
 pub mod stability;
 pub mod synth;
@@ -32,6 +33,7 @@ pub fn run(command: &Command, out: &mut dyn Write) -> anyhow::Result<()> {
         Command::Dynamics(args) => dynamics::run(args, out),
         Command::Power(args) => power::run(args, out),
         Command::Shift(args) => shift::run(args, out),
+        Command::ShiftSim(args) => shift_sim::run(args, out),
         Command::Graph(args) => graph::run(args, out),
         Command::Stability(args) => stability::run(args, out),
         Command::Simulate(args) => simulate::run(args, out),

@@ -312,7 +312,7 @@ fn write_csv(out: &mut dyn Write, train: &Train, r: &Report) -> anyhow::Result<(
     header.extend(
         moving
             .iter()
-            .map(|&l| format!("w_{}", csv_name(&r.links[l.index()]))),
+            .map(|&l| format!("w_{}", report::csv_name(&r.links[l.index()]))),
     );
     header.extend(["drift", "energy", "work", "power"].map(String::from));
     writeln!(out, "{}", header.join(","))?;
@@ -323,19 +323,6 @@ fn write_csv(out: &mut dyn Write, train: &Train, r: &Report) -> anyhow::Result<(
         writeln!(out, "{}", row.join(","))?;
     }
     Ok(())
-}
-
-/// A link name safe in a CSV header (quotes and commas replaced).
-fn csv_name(n: &str) -> String {
-    n.chars()
-        .map(|c| {
-            if c == ',' || c == '"' || c.is_whitespace() {
-                '_'
-            } else {
-                c
-            }
-        })
-        .collect()
 }
 
 /// Rows shown in the table: about 20, evenly spaced, the last always.

@@ -14,16 +14,23 @@
 //! - [`mode`]: the reduced coordinates of a mode, the null space of the Willis
 //!   rows plus the locked-element rows (a gear: 1 DOF; mid-shift: 2).
 //!
-//! The train-level shift integration (a schedule driving [`mode`] bases
-//! through the engagement logic), one-way elements and the CLI `shift-sim` are
-//! not built yet: see docs/shift_dynamics.md.
+//! - [`shift`]: a whole train's gear change (`egt shift-sim`): the off-going
+//!   element releases, the on-coming one slips and locks, one-way elements
+//!   overrun and engage; modes of [`mode`], events located on the dense
+//!   output of [`ode`], lock-ups by momentum-consistent projection.
+//!
+//! Not built yet: a stiff method, mesh losses in the shift, compliance. See
+//! docs/shift_dynamics.md.
 
 pub mod engagement;
 pub mod friction;
 pub mod lockup;
 pub mod mode;
+pub mod ode;
+pub mod shift;
 
 pub use engagement::{Engagement, EngagementResult, EngagementSample, Phase};
 pub use friction::{Capacity, FrictionLaw};
 pub use lockup::{LockUp, lock_projection};
 pub use mode::{ModeBasis, mode_basis};
+pub use shift::{InputTorque, ModeChange, ShiftResult, ShiftSample, ShiftSim};

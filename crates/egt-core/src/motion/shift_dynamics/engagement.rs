@@ -17,6 +17,7 @@
 use crate::error::{AnalysisError, Error, Result};
 
 use super::friction::{Capacity, FrictionLaw};
+use super::ode;
 
 /// Which mode the clutch is in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -299,13 +300,10 @@ impl Engagement {
                 }
             }
             h = h.min(stop - t);
-            let (y1, f1, err) = bs23(|tt, yy| self.rhs(phase, dir, tt, yy), t, &y, &f0, h);
-            let scale = |i: usize| self.atol + self.rtol * y[i].abs().max(y1[i].abs());
-            let norm = (0..4)
-                .map(|i| (err[i] / scale(i)).powi(2))
-                .sum::<f64>()
-                .sqrt()
-                / 2.0;
+            let mut rhs = |tt: f64, yy: &[f64]| self.rhs(phase, dir, tt, &state(yy)).to_vec();
+            let (y1, f1, err) = ode::bs23(&mut rhs, t, &y, &f0, h);
+            let (y1, f1) = (state(&y1), state(&f1));
+            let norm = ode::error_norm(&err, &y, &y1, self.rtol, self.atol);
             if !norm.is_finite() {
                 return Err(refuse(format!("state stopped being finite at t = {t}")));
             }
@@ -323,8 +321,8 @@ impl Engagement {
             let g1 = self.event(phase, dir, t1, &y1);
             if g0 > 0.0 && g1 <= 0.0 {
                 // Locate the mode change on the dense output.
-                let dense = |s: f64| hermite(t, &y, &f0, t1, &y1, &f1, s);
-                let te = locate(|s| self.event(phase, dir, s, &dense(s)), t, t1, g0, g1);
+                let dense = |s: f64| state(&ode::hermite(t, &y, &f0, t1, &y1, &f1, s));
+                let te = ode::locate(|s| self.event(phase, dir, s, &dense(s)), t, t1, g0, g1);
                 let mut ye = dense(te);
                 match phase {
                     Phase::Slipping => {
@@ -376,81 +374,9 @@ impl Engagement {
     }
 }
 
-/// One Bogacki–Shampine 3(2) step: the new state, its derivative (FSAL) and
-/// the embedded error estimate.
-fn bs23(
-    f: impl Fn(f64, &State) -> State,
-    t: f64,
-    y: &State,
-    k1: &State,
-    h: f64,
-) -> (State, State, State) {
-    let add = |a: &State, parts: &[(f64, &State)]| {
-        let mut r = *a;
-        for (c, k) in parts {
-            for i in 0..4 {
-                r[i] += h * c * k[i];
-            }
-        }
-        r
-    };
-    let k2 = f(t + 0.5 * h, &add(y, &[(0.5, k1)]));
-    let k3 = f(t + 0.75 * h, &add(y, &[(0.75, &k2)]));
-    let y1 = add(y, &[(2.0 / 9.0, k1), (1.0 / 3.0, &k2), (4.0 / 9.0, &k3)]);
-    let k4 = f(t + h, &y1);
-    let mut err = [0.0; 4];
-    for i in 0..4 {
-        err[i] = h
-            * ((2.0 / 9.0 - 7.0 / 24.0) * k1[i]
-                + (1.0 / 3.0 - 0.25) * k2[i]
-                + (4.0 / 9.0 - 1.0 / 3.0) * k3[i]
-                - 0.125 * k4[i]);
-    }
-    (y1, k4, err)
-}
-
-/// Cubic Hermite interpolant through (t0, y0, f0) and (t1, y1, f1) at `s`:
-/// the third-order dense output of Bogacki–Shampine.
-fn hermite(t0: f64, y0: &State, f0: &State, t1: f64, y1: &State, f1: &State, s: f64) -> State {
-    let h = t1 - t0;
-    let th = (s - t0) / h;
-    let h00 = (1.0 + 2.0 * th) * (1.0 - th) * (1.0 - th);
-    let h10 = th * (1.0 - th) * (1.0 - th);
-    let h01 = th * th * (3.0 - 2.0 * th);
-    let h11 = th * th * (th - 1.0);
-    let mut r = [0.0; 4];
-    for i in 0..4 {
-        r[i] = h00 * y0[i] + h10 * h * f0[i] + h01 * y1[i] + h11 * h * f1[i];
-    }
-    r
-}
-
-/// Illinois false position for the root of `g` in `[a, b]` with `g(a) > 0 >= g(b)`.
-fn locate(g: impl Fn(f64) -> f64, mut a: f64, mut b: f64, mut ga: f64, mut gb: f64) -> f64 {
-    let mut side = 0;
-    for _ in 0..200 {
-        if gb == 0.0 || (b - a).abs() <= 4.0 * f64::EPSILON * b.abs().max(1e-300) {
-            return b;
-        }
-        let c = (a * gb - b * ga) / (gb - ga);
-        let gc = g(c);
-        if gc > 0.0 {
-            a = c;
-            ga = gc;
-            if side == 1 {
-                gb *= 0.5;
-            }
-            side = 1;
-        } else {
-            b = c;
-            gb = gc;
-            if side == -1 {
-                ga *= 0.5;
-            }
-            side = -1;
-        }
-    }
-    b
+/// A state from a slice of four.
+fn state(v: &[f64]) -> State {
+    [v[0], v[1], v[2], v[3]]
 }
 
 fn refuse(detail: String) -> Error {

@@ -1,0 +1,403 @@
+//! `egt shift-sim SPEC --from 2 --to 3 ...`: a gear change in time
+//! (egt_core::shift_dynamics::ShiftSim). The off-going element's capacity
+//! falls and the on-coming one's rises. The report gives the mode changes,
+//! the shift time, the output-torque range and each element's dissipated
+//! energy. `--format json` adds every sample, `--format csv` gives the time
+//! series, and `--plot FILE` writes the shift plot: link speeds, element
+//! torques and output torque against time.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use anyhow::Context;
+use egt_core::Train;
+use egt_core::shift_dynamics::{Capacity, FrictionLaw, InputTorque, ShiftResult, ShiftSim};
+
+use crate::cli::{OutputFormat, SpecArgs};
+use crate::input;
+use crate::report::{self, Table};
+use crate::svg::{GAP, LEFT, Line, PLOT_H, Panel, TOP, WIDTH, esc, legend, panel};
+
+/// How `egt shift-sim` prints its result.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ShiftFormat {
+    /// The summary as a table.
+    Table,
+    /// The whole result, samples included.
+    Json,
+    /// The time series.
+    Csv,
+}
+
+/// Arguments of `egt shift-sim`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct Args {
+    /// The spec file (TOML or JSON), or `-` for standard input; it needs a `[transmission]`.
+    #[arg(value_name = "SPEC")]
+    pub spec: PathBuf,
+    /// Spec format; by default from the extension.
+    #[arg(long, value_enum, value_name = "FORMAT")]
+    pub spec_format: Option<crate::cli::SpecFormat>,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = ShiftFormat::Table)]
+    pub format: ShiftFormat,
+    /// The gear before the shift (a state of `[transmission.states]`).
+    #[arg(long)]
+    pub from: String,
+    /// The gear after the shift: one element released, one applied.
+    #[arg(long)]
+    pub to: String,
+    /// Input speed at t = 0 [rad/s]; the train starts in the `--from` gear's steady motion.
+    #[arg(long, value_name = "W")]
+    pub input_speed: f64,
+    /// Constant input torque [N m].
+    #[arg(
+        long,
+        value_name = "T",
+        conflicts_with = "torque_table",
+        required_unless_present = "torque_table"
+    )]
+    pub input_torque: Option<f64>,
+    /// Input torque over input speed, `W:T,W:T,...` [rad/s : N m], linear between points.
+    #[arg(long, value_name = "TABLE", value_parser = parse_table)]
+    pub torque_table: Option<Vec<(f64, f64)>>,
+    /// Road load at the output, `C0,C1,C2`: c0 sgn(w) + c1 w + c2 w|w| [N m].
+    #[arg(long, value_name = "C0,C1,C2", value_parser = parse_three, default_value = "0,0,0")]
+    pub road_load: [f64; 3],
+    /// Vehicle inertia reflected to the output link [kg m^2].
+    #[arg(long, value_name = "J", default_value_t = 0.0)]
+    pub vehicle_inertia: f64,
+    /// Friction coefficients `STATIC,KINETIC` of both elements (typical wet clutch: 0.15,0.12).
+    #[arg(long, value_name = "MU_S,MU_K", value_parser = parse_two, default_value = "0.15,0.12")]
+    pub mu: [f64; 2],
+    /// Slip speed [rad/s] over which the coefficient falls from static to
+    /// kinetic (exp(-|slip|/decay)); default: a step.
+    #[arg(long, value_name = "W")]
+    pub mu_decay: Option<f64>,
+    /// Off-going capacity [N m per unit friction coefficient]: `C` or a ramp `T0:T1:FROM:TO`.
+    #[arg(long, value_name = "RAMP", value_parser = parse_capacity)]
+    pub off_going: Capacity,
+    /// On-coming capacity, as `--off-going` (e.g. a pressure ramp `0.05:0.35:0:8000`).
+    #[arg(long, value_name = "RAMP", value_parser = parse_capacity)]
+    pub on_coming: Capacity,
+    /// End time [s].
+    #[arg(long, value_name = "T", default_value_t = 1.0)]
+    pub t_end: f64,
+    /// Relative tolerance of the adaptive steps.
+    #[arg(long, default_value_t = 1e-8)]
+    pub rtol: f64,
+    /// Absolute tolerance [rad/s, J].
+    #[arg(long, default_value_t = 1e-8)]
+    pub atol: f64,
+    /// Write the shift plot (SVG) to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
+}
+
+fn numbers(s: &str, n: usize, sep: char) -> Result<Vec<f64>, String> {
+    let v: Vec<f64> = s
+        .split(sep)
+        .map(|x| x.trim().parse::<f64>().map_err(|e| format!("`{x}`: {e}")))
+        .collect::<Result<_, _>>()?;
+    if v.len() == n {
+        Ok(v)
+    } else {
+        Err(format!(
+            "expected {n} numbers separated by `{sep}`, got {}",
+            v.len()
+        ))
+    }
+}
+
+fn parse_three(s: &str) -> Result<[f64; 3], String> {
+    let v = numbers(s, 3, ',')?;
+    Ok([v[0], v[1], v[2]])
+}
+
+fn parse_two(s: &str) -> Result<[f64; 2], String> {
+    let v = numbers(s, 2, ',')?;
+    Ok([v[0], v[1]])
+}
+
+fn parse_capacity(s: &str) -> Result<Capacity, String> {
+    if s.contains(':') {
+        let v = numbers(s, 4, ':')?;
+        Ok(Capacity::Ramp {
+            t0: v[0],
+            t1: v[1],
+            from: v[2],
+            to: v[3],
+        })
+    } else {
+        Ok(Capacity::Constant(numbers(s, 1, ':')?[0]))
+    }
+}
+
+fn parse_table(s: &str) -> Result<Vec<(f64, f64)>, String> {
+    s.split(',')
+        .map(|p| numbers(p, 2, ':').map(|v| (v[0], v[1])))
+        .collect()
+}
+
+/// Runs `egt shift-sim`.
+///
+/// # Errors
+/// The spec, a bad shift (named field), a failed run, or I/O.
+pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
+    let loaded = input::load(&SpecArgs {
+        spec: args.spec.clone(),
+        spec_format: args.spec_format,
+        format: OutputFormat::Table,
+    })?;
+    let train = &loaded.train;
+    let sim = ShiftSim {
+        from: args.from.clone(),
+        to: args.to.clone(),
+        input_speed: args.input_speed,
+        input_torque: match (&args.torque_table, args.input_torque) {
+            (Some(t), _) => InputTorque::Table(t.clone()),
+            (None, t) => InputTorque::Constant(t.unwrap_or_default()),
+        },
+        road_load: args.road_load,
+        vehicle_inertia: args.vehicle_inertia,
+        law: FrictionLaw {
+            mu_static: args.mu[0],
+            mu_kinetic: args.mu[1],
+            decay: args.mu_decay,
+        },
+        off_going: args.off_going,
+        on_coming: args.on_coming,
+        t_end: args.t_end,
+        rtol: args.rtol,
+        atol: args.atol,
+    };
+    let r = sim
+        .run(train)
+        .map_err(|e| anyhow::Error::new(e).context(loaded.source.clone()))?;
+    if let Some(path) = &args.plot {
+        std::fs::write(path, plot(train, &report::title(train, &loaded.source), &r))
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    match args.format {
+        ShiftFormat::Json => report::json(out, &r),
+        ShiftFormat::Csv => csv(out, train, &r),
+        ShiftFormat::Table => table(out, train, &loaded.source, &args.from, &args.to, &r),
+    }
+}
+
+fn opt(v: Option<f64>) -> String {
+    v.map_or_else(|| "-".into(), report::float)
+}
+
+fn table(
+    out: &mut dyn Write,
+    train: &Train,
+    source: &str,
+    from: &str,
+    to: &str,
+    r: &ShiftResult,
+) -> anyhow::Result<()> {
+    writeln!(out, "{}", report::title(train, source))?;
+    writeln!(
+        out,
+        "shift {from} -> {to}: off-going `{}`, on-coming `{}`; locked throughout: {}",
+        r.elements[0],
+        r.elements[1],
+        if r.kept.is_empty() {
+            "none".to_string()
+        } else {
+            r.kept
+                .iter()
+                .map(|k| format!("`{k}`"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        }
+    )?;
+    writeln!(out)?;
+    writeln!(out, "mode changes:")?;
+    let mut t = Table::new(&["t [s]", "element", "now", "DOF"]).right(&[0, 3]);
+    for c in &r.changes {
+        t.row(vec![
+            report::float(c.t),
+            c.element.clone(),
+            c.now.clone(),
+            c.dof.to_string(),
+        ]);
+    }
+    t.write(out, 2)?;
+    writeln!(out)?;
+    writeln!(
+        out,
+        "torque phase starts (on-coming capacity > 0): {} s",
+        opt(r.shift_start)
+    )?;
+    writeln!(
+        out,
+        "on-coming element locks:                      {} s",
+        opt(r.lock_time)
+    )?;
+    writeln!(
+        out,
+        "shift time:                                   {} s",
+        opt(r.shift_time)
+    )?;
+    writeln!(
+        out,
+        "output torque: max {} N m, min {} N m",
+        report::float(r.output_torque_range[0]),
+        report::float(r.output_torque_range[1])
+    )?;
+    writeln!(
+        out,
+        "energy dissipated: `{}` {} J, `{}` {} J; at lock-ups {} J",
+        r.elements[0],
+        report::float(r.dissipated[0]),
+        r.elements[1],
+        report::float(r.dissipated[1]),
+        report::sci(r.lock_loss)
+    )?;
+    writeln!(
+        out,
+        "energy balance (W_in - dKE - E_friction - E_lock): largest residual {} J over {} steps",
+        report::sci(r.max_energy_residual),
+        r.steps
+    )?;
+    Ok(())
+}
+
+fn csv(out: &mut dyn Write, train: &Train, r: &ShiftResult) -> anyhow::Result<()> {
+    let moving: Vec<usize> = train.coordinates().iter().map(|l| l.index()).collect();
+    let mut header = vec!["t".to_string()];
+    header.extend(
+        moving
+            .iter()
+            .map(|&l| format!("w_{}", report::csv_name(&train.links()[l].name))),
+    );
+    for e in &r.elements {
+        header.push(format!("slip_{}", report::csv_name(e)));
+        header.push(format!("torque_{}", report::csv_name(e)));
+        header.push(format!("dissipated_{}", report::csv_name(e)));
+    }
+    header.extend(["output_torque", "energy_residual", "dof"].map(String::from));
+    writeln!(out, "{}", header.join(","))?;
+    for s in &r.samples {
+        let mut row = vec![format!("{:e}", s.t)];
+        row.extend(moving.iter().map(|&l| format!("{:e}", s.speed[l])));
+        for i in 0..2 {
+            row.extend([s.slip[i], s.element_torque[i], s.dissipated[i]].map(|v| format!("{v:e}")));
+        }
+        row.push(format!("{:e}", s.output_torque));
+        row.push(format!("{:e}", s.energy_residual));
+        row.push(s.dof.to_string());
+        writeln!(out, "{}", row.join(","))?;
+    }
+    Ok(())
+}
+
+/// The standard shift plot: link speeds; the two elements' torques; the
+/// output torque.
+fn plot(train: &Train, title: &str, r: &ShiftResult) -> String {
+    use std::fmt::Write as _;
+    let s = &r.samples;
+    let t_end = s.last().map_or(1.0, |x| x.t).max(f64::MIN_POSITIVE);
+    let height = TOP + 3.0 * (PLOT_H + GAP) + 10.0;
+    let mut svg = String::new();
+    let _ = writeln!(
+        svg,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{WIDTH}" height="{height}" viewBox="0 0 {WIDTH} {height}" font-family="sans-serif">"#
+    );
+    svg.push_str(crate::svg::PLOT_STYLE);
+    let _ = writeln!(
+        svg,
+        r#"<rect width="{WIDTH}" height="{height}" fill="white"/>"#
+    );
+    let _ = writeln!(
+        svg,
+        r#"<text x="{LEFT}" y="28" class="title">{}</text>"#,
+        esc(title)
+    );
+    let _ = writeln!(
+        svg,
+        r#"<text x="{LEFT}" y="48" class="sub">off-going `{}`, on-coming `{}`; shift time {} s; output torque {} .. {} N m</text>"#,
+        esc(&r.elements[0]),
+        esc(&r.elements[1]),
+        opt(r.shift_time),
+        report::float(r.output_torque_range[1]),
+        report::float(r.output_torque_range[0]),
+    );
+    let time = |i: usize| s[i].t;
+    let links: Vec<usize> = train.coordinates().iter().map(|l| l.index()).collect();
+    let speeds: Vec<Box<dyn Fn(usize) -> f64 + '_>> = links
+        .iter()
+        .map(|&l| Box::new(move |i: usize| s[i].speed[l]) as Box<dyn Fn(usize) -> f64>)
+        .collect();
+    let lines: Vec<Line<'_>> = speeds
+        .iter()
+        .map(|f| Line {
+            value: f.as_ref(),
+            level: None,
+        })
+        .collect();
+    panel(
+        &mut svg,
+        &Panel {
+            top: TOP,
+            title: "link speeds",
+            ylabel: "speed [rad/s]",
+        },
+        s.len(),
+        &time,
+        &lines,
+        t_end,
+    );
+    let off = |i: usize| s[i].element_torque[0];
+    let on = |i: usize| s[i].element_torque[1];
+    let head = format!(
+        "element torques: blue `{}` (off-going), orange `{}` (on-coming)",
+        r.elements[0], r.elements[1]
+    );
+    panel(
+        &mut svg,
+        &Panel {
+            top: TOP + PLOT_H + GAP,
+            title: &head,
+            ylabel: "torque [N m]",
+        },
+        s.len(),
+        &time,
+        &[
+            Line {
+                value: &off,
+                level: None,
+            },
+            Line {
+                value: &on,
+                level: None,
+            },
+        ],
+        t_end,
+    );
+    let output = |i: usize| s[i].output_torque;
+    panel(
+        &mut svg,
+        &Panel {
+            top: TOP + 2.0 * (PLOT_H + GAP),
+            title: "output torque (to the vehicle)",
+            ylabel: "torque [N m]",
+        },
+        s.len(),
+        &time,
+        &[Line {
+            value: &output,
+            level: None,
+        }],
+        t_end,
+    );
+    let labels: Vec<String> = links
+        .iter()
+        .map(|&l| format!("link {}", train.links()[l].name))
+        .collect();
+    legend(&mut svg, &labels);
+    svg.push_str("</svg>\n");
+    svg
+}

@@ -1,0 +1,1071 @@
+//! A gear change of a whole train: one element releases, one applies, and the
+//! link speeds move from the old gear's ratio to the new one's.
+//!
+//! The run goes through *modes*, each a set of locked elements. The kept
+//! elements (engaged in both gears) stay locked. The off-going and on-coming
+//! elements are locked or slipping. A mode's speeds are `v = N q`, with `N`
+//! the orthonormal null-space basis of its rows ([`mode_basis`]: Willis rows
+//! plus one row `a_e` per locked element). So a mode has exactly its own
+//! degrees of freedom: 1 in a gear, 2 while one element slips, 3 while both
+//! slip. The equations of motion are `N^T M N q' = N^T f` (eq. 25 with `V = N`).
+//! Here `f` is the input torque at the input link, the road load and the
+//! vehicle inertia at the output link, and, for each slipping element, its
+//! friction torque `T_e a_e`. A slipping element's torque on its first link
+//! is `-dir mu(slip) C(t)`: [`FrictionLaw`] times a [`Capacity`] ramp. A
+//! slipping one-way element carries no torque. A locked element's torque is
+//! its Lagrange multiplier: the least-squares solution of `A^T lambda =
+//! M v' - f` over the mode's rows `A`.
+//!
+//! Mode changes are located as roots on each step's dense output:
+//! - a slipping element's slip reaching zero (it locks, or slips on the other
+//!   way when its static limit cannot hold the locked torque);
+//! - a locked element's torque reaching its static limit `mu_s C(t)` (it
+//!   releases);
+//! - a one-way element's locked torque reaching zero (it overruns).
+//!
+//! At a lock, the speeds are projected onto the new mode in the metric of
+//! \[M\] (as [`super::lockup::lock_projection`]).
+//! That projection never raises kinetic energy; the energy it removes is
+//! recorded (about zero, since the slip was located at zero). Every sample
+//! carries the energy residual `W_applied - dKE - E_friction - E_lock`.
+
+use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
+use serde::Serialize;
+
+use super::friction::{Capacity, FrictionLaw};
+use super::mode::{element_row, mode_basis};
+use super::ode;
+use crate::analysis::transmission::is_one_way;
+use crate::error::{AnalysisError, Error, Result};
+use crate::model::train::{ElementId, Train};
+
+/// Steps allowed before a run is refused.
+pub const MAX_STEPS: usize = 2_000_000;
+
+/// The input torque: constant, or a table over the input speed (linear
+/// between points, held at the ends), e.g. an engine's full-load curve.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InputTorque {
+    /// The same torque at every speed (N m).
+    Constant(f64),
+    /// `(speed rad/s, torque N m)` points, speeds increasing.
+    Table(Vec<(f64, f64)>),
+}
+
+impl InputTorque {
+    /// The torque at input speed `w`.
+    pub fn at(&self, w: f64) -> f64 {
+        match self {
+            InputTorque::Constant(t) => *t,
+            InputTorque::Table(pts) => {
+                let Some(i) = pts.iter().position(|&(s, _)| s > w) else {
+                    return pts.last().map_or(0.0, |p| p.1);
+                };
+                if i == 0 {
+                    return pts[0].1;
+                }
+                let ((s0, t0), (s1, t1)) = (pts[i - 1], pts[i]);
+                t0 + (t1 - t0) * (w - s0) / (s1 - s0)
+            }
+        }
+    }
+
+    fn validate(&self) -> Result<()> {
+        match self {
+            InputTorque::Constant(t) if !t.is_finite() => Err(Error::invalid(
+                "shift.input_torque",
+                format!("{t} is not finite"),
+            )),
+            InputTorque::Table(pts) => {
+                if pts.is_empty() {
+                    return Err(Error::invalid("shift.input_torque", "the table is empty"));
+                }
+                for (i, &(s, t)) in pts.iter().enumerate() {
+                    if !(s.is_finite() && t.is_finite()) {
+                        return Err(Error::invalid(
+                            format!("shift.input_torque[{i}]"),
+                            format!("({s}, {t}) is not finite"),
+                        ));
+                    }
+                    if i > 0 && s <= pts[i - 1].0 {
+                        return Err(Error::invalid(
+                            format!("shift.input_torque[{i}]"),
+                            format!("speed {s} must exceed the previous one, {}", pts[i - 1].0),
+                        ));
+                    }
+                }
+                Ok(())
+            }
+            InputTorque::Constant(_) => Ok(()),
+        }
+    }
+}
+
+/// What to simulate: a single-swap shift between two gear states.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShiftSim {
+    /// The gear before (a state of the spec's `[transmission]`).
+    pub from: String,
+    /// The gear after.
+    pub to: String,
+    /// Input speed at `t = 0` (rad/s); the train starts in `from`'s steady motion.
+    pub input_speed: f64,
+    /// Torque applied to the input link.
+    pub input_torque: InputTorque,
+    /// Road load at the output, resisting motion: `c0 sgn(w) + c1 w + c2 w |w|` (N m).
+    pub road_load: [f64; 3],
+    /// Vehicle inertia reflected to the output link (kg m^2), added to \[M\].
+    pub vehicle_inertia: f64,
+    /// Friction law of the off-going and on-coming elements.
+    pub law: FrictionLaw,
+    /// Capacity (N m per unit friction coefficient) of the off-going element.
+    pub off_going: Capacity,
+    /// Capacity of the on-coming element.
+    pub on_coming: Capacity,
+    /// End time (s).
+    pub t_end: f64,
+    /// Relative tolerance of the adaptive steps.
+    pub rtol: f64,
+    /// Absolute tolerance (rad/s, J).
+    pub atol: f64,
+}
+
+/// A mode change.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ModeChange {
+    /// Time (s).
+    pub t: f64,
+    /// The element that changed.
+    pub element: String,
+    /// `locked`, `slipping` or `overrunning` (a one-way element).
+    pub now: String,
+    /// The mode's degrees of freedom after the change.
+    pub dof: usize,
+}
+
+/// One output sample.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ShiftSample {
+    /// Time (s).
+    pub t: f64,
+    /// Speed of every link, by link index (rad/s; 0 for the frame).
+    pub speed: Vec<f64>,
+    /// Slip of the off-going and on-coming elements (`a_e . v`).
+    pub slip: [f64; 2],
+    /// Torque of the off-going and on-coming elements on their first link.
+    pub element_torque: [f64; 2],
+    /// Torque the output shaft delivers to the vehicle: vehicle inertia times
+    /// output acceleration plus the road load.
+    pub output_torque: f64,
+    /// Energy dissipated so far by the off-going and on-coming elements (J).
+    pub dissipated: [f64; 2],
+    /// `W_applied - dKE - E_friction - E_lock` (J).
+    pub energy_residual: f64,
+    /// Degrees of freedom of the mode.
+    pub dof: usize,
+}
+
+/// The result of a shift.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ShiftResult {
+    /// The off-going and on-coming elements' names.
+    pub elements: [String; 2],
+    /// The elements engaged in both gears (locked throughout).
+    pub kept: Vec<String>,
+    /// Samples at every accepted step and every mode change.
+    pub samples: Vec<ShiftSample>,
+    /// Mode changes in time order.
+    pub changes: Vec<ModeChange>,
+    /// Time the on-coming element first carries capacity (start of the torque phase).
+    pub shift_start: Option<f64>,
+    /// Time the on-coming element locks (end of the inertia phase).
+    pub lock_time: Option<f64>,
+    /// `lock_time - shift_start`.
+    pub shift_time: Option<f64>,
+    /// Largest and smallest output torque over the run.
+    pub output_torque_range: [f64; 2],
+    /// Energy each element dissipated (J).
+    pub dissipated: [f64; 2],
+    /// Energy removed by the lock-up projections (J).
+    pub lock_loss: f64,
+    /// Largest |energy residual| over the run (J).
+    pub max_energy_residual: f64,
+    /// Accepted steps.
+    pub steps: usize,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Phase {
+    Locked,
+    /// Slipping with the sign its slip had when the phase began.
+    Slipping(f64),
+}
+
+/// One mode's constant matrices.
+struct Mode {
+    basis: DMatrix<f64>,
+    /// Cholesky of `N^T M N`.
+    reduced: Cholesky<f64, Dyn>,
+    rows: DMatrix<f64>,
+    /// `(A A^T)^-1`, for the multipliers.
+    gram_inverse: DMatrix<f64>,
+    /// Row index of each friction element when locked.
+    row_of: [Option<usize>; 2],
+}
+
+struct Setup<'a> {
+    train: &'a Train,
+    sim: &'a ShiftSim,
+    m: DMatrix<f64>,
+    input: usize,
+    output: usize,
+    kept: Vec<ElementId>,
+    elements: [ElementId; 2],
+    rows: [DVector<f64>; 2],
+    one_way: [bool; 2],
+    capacity: [&'a Capacity; 2],
+    n: usize,
+}
+
+impl Setup<'_> {
+    fn mode(&self, phases: &[Phase; 2]) -> Result<Mode> {
+        let mut locked = self.kept.clone();
+        let mut row_of = [None, None];
+        let willis = mode_basis(self.train, &[])?.rows.nrows();
+        for (i, p) in phases.iter().enumerate() {
+            if *p == Phase::Locked {
+                row_of[i] = Some(willis + locked.len());
+                locked.push(self.elements[i]);
+            }
+        }
+        let mb = mode_basis(self.train, &locked)?;
+        if mb.dof() == 0 {
+            return Err(refuse(format!(
+                "tie-up: with {} locked the train cannot move",
+                locked
+                    .iter()
+                    .map(|&e| format!("`{}`", self.train.elements()[e.index()].name))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )));
+        }
+        let basis = mb.basis.clone();
+        let reduced = Cholesky::new(basis.transpose() * &self.m * &basis).ok_or_else(|| {
+            Error::Analysis(AnalysisError::MissingData {
+                what: "inertia on every moving part of the mode".into(),
+                analysis: "a shift simulation (the reduced mass matrix is singular)".into(),
+                hint: "give `inertia` to the links (and planets) of the gear sets".into(),
+            })
+        })?;
+        let gram_inverse = (&mb.rows * mb.rows.transpose())
+            .try_inverse()
+            .ok_or_else(|| {
+                refuse(format!(
+                    "the rows of the mode with {} locked are dependent (an element that repeats another's constraint), so its torques are not determined",
+                    locked
+                        .iter()
+                        .map(|&e| format!("`{}`", self.train.elements()[e.index()].name))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))
+            })?;
+        Ok(Mode {
+            basis,
+            reduced,
+            rows: mb.rows,
+            gram_inverse,
+            row_of,
+        })
+    }
+
+    /// The applied torques (input and road load) at speeds `v`.
+    fn applied(&self, v: &[f64]) -> DVector<f64> {
+        let mut f = DVector::zeros(self.n);
+        f[self.input] += self.sim.input_torque.at(v[self.input]);
+        let w = v[self.output];
+        let [c0, c1, c2] = self.sim.road_load;
+        f[self.output] -=
+            c0 * w.signum() * f64::from(u8::from(w != 0.0)) + c1 * w + c2 * w * w.abs();
+        f
+    }
+
+    fn slip(&self, i: usize, v: &[f64]) -> f64 {
+        self.rows[i].iter().zip(v).map(|(a, b)| a * b).sum()
+    }
+
+    /// Torque of a slipping element on its first link.
+    fn friction(&self, i: usize, dir: f64, t: f64, v: &[f64]) -> f64 {
+        if self.one_way[i] {
+            0.0
+        } else {
+            -dir * self.sim.law.mu(self.slip(i, v)) * self.capacity[i].at(t)
+        }
+    }
+
+    /// All generalised forces in `phases` (applied plus slipping friction).
+    fn forces(&self, phases: &[Phase; 2], t: f64, v: &[f64]) -> (DVector<f64>, [f64; 2]) {
+        let mut f = self.applied(v);
+        let mut tf = [0.0; 2];
+        for (i, p) in phases.iter().enumerate() {
+            if let Phase::Slipping(dir) = *p {
+                tf[i] = self.friction(i, dir, t, v);
+                f.axpy(tf[i], &self.rows[i], 1.0);
+            }
+        }
+        (f, tf)
+    }
+
+    /// The state derivative: speeds, the two elements' dissipation, applied work.
+    fn rhs(&self, mode: &Mode, phases: &[Phase; 2], t: f64, y: &[f64]) -> Vec<f64> {
+        let n = self.n;
+        let v = &y[..n];
+        let (f, tf) = self.forces(phases, t, v);
+        let q = mode.reduced.solve(&(mode.basis.transpose() * &f));
+        let a = &mode.basis * q;
+        let mut d = a.as_slice().to_vec();
+        for (i, t) in tf.iter().enumerate() {
+            d.push(-t * self.slip(i, v));
+        }
+        d.push(self.applied(v).iter().zip(v).map(|(x, w)| x * w).sum());
+        d
+    }
+
+    /// The locked elements' torques on their first links (`0` where slipping).
+    fn locked_torques(
+        &self,
+        mode: &Mode,
+        phases: &[Phase; 2],
+        t: f64,
+        y: &[f64],
+        dy: &[f64],
+    ) -> [f64; 2] {
+        let n = self.n;
+        let (f, _) = self.forces(phases, t, &y[..n]);
+        let a = DVector::from_column_slice(&dy[..n]);
+        let r = &self.m * a - f;
+        let lambda = &mode.gram_inverse * (&mode.rows * r);
+        mode.row_of.map(|k| k.map_or(0.0, |k| lambda[k]))
+    }
+
+    /// Event functions of the current phases: each crosses zero at a change.
+    fn events(&self, mode: &Mode, phases: &[Phase; 2], t: f64, y: &[f64], dy: &[f64]) -> [f64; 2] {
+        let lam = self.locked_torques(mode, phases, t, y, dy);
+        let mut g = [f64::INFINITY; 2];
+        for i in 0..2 {
+            g[i] = match phases[i] {
+                Phase::Slipping(dir) => dir * self.slip(i, &y[..self.n]),
+                Phase::Locked if self.one_way[i] => lam[i],
+                Phase::Locked => self.sim.law.static_limit(self.capacity[i].at(t)) - lam[i].abs(),
+            };
+        }
+        g
+    }
+
+    /// The lock-up: `v` projected onto `mode`'s speeds in the metric of
+    /// \[M\] (the speeds a constraint impulse leaves: `M (v+ - v)` lies in the
+    /// row space of the mode's rows), and the kinetic energy it removes. The
+    /// same map as [`super::lockup::lock_projection`], computed in the mode's
+    /// coordinates so that links without inertia do no harm.
+    fn project(&self, mode: &Mode, v: &[f64]) -> (DVector<f64>, f64) {
+        let v = DVector::from_column_slice(v);
+        let q = mode
+            .reduced
+            .solve(&(mode.basis.transpose() * (&self.m * &v)));
+        let plus = &mode.basis * q;
+        let lost = self.kinetic(v.as_slice()) - self.kinetic(plus.as_slice());
+        (plus, lost.max(0.0))
+    }
+
+    fn kinetic(&self, v: &[f64]) -> f64 {
+        let v = DVector::from_column_slice(v);
+        0.5 * v.dot(&(&self.m * &v))
+    }
+}
+
+impl ShiftSim {
+    fn validate(&self) -> Result<()> {
+        let finite = |name: &str, v: f64| {
+            if v.is_finite() {
+                Ok(())
+            } else {
+                Err(Error::invalid(
+                    format!("shift.{name}"),
+                    format!("{v} is not finite"),
+                ))
+            }
+        };
+        finite("input_speed", self.input_speed)?;
+        for (i, c) in self.road_load.iter().enumerate() {
+            finite(&format!("road_load[{i}]"), *c)?;
+        }
+        for (name, v) in [("vehicle_inertia", self.vehicle_inertia)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(Error::invalid(
+                    format!("shift.{name}"),
+                    format!("{v} must be finite and >= 0"),
+                ));
+            }
+        }
+        for (name, v) in [
+            ("t_end", self.t_end),
+            ("rtol", self.rtol),
+            ("atol", self.atol),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::invalid(
+                    format!("shift.{name}"),
+                    format!("{v} must be finite and > 0"),
+                ));
+            }
+        }
+        self.input_torque.validate()?;
+        self.law.validate("shift.law")?;
+        self.off_going.validate("shift.off_going")?;
+        self.on_coming.validate("shift.on_coming")
+    }
+
+    /// Simulates the shift on `train`.
+    ///
+    /// # Errors
+    /// A named invalid field; an unknown gear state or one that is not a
+    /// single swap from `from`; missing inertias (a singular reduced mass
+    /// matrix); a tie-up; too many steps or a state that stops being finite.
+    pub fn run(&self, train: &Train) -> Result<ShiftResult> {
+        self.validate()?;
+        let t = train.checked_transmission()?;
+        let state = |name: &str, field: &str| {
+            t.states.iter().find(|s| s.name == name).ok_or_else(|| {
+                Error::invalid(
+                    format!("shift.{field}"),
+                    format!(
+                        "no gear state `{name}`; the states are {}",
+                        t.states
+                            .iter()
+                            .map(|s| format!("`{}`", s.name))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                )
+            })
+        };
+        let (from, to) = (state(&self.from, "from")?, state(&self.to, "to")?);
+        let kept: Vec<ElementId> = from
+            .engaged
+            .iter()
+            .copied()
+            .filter(|e| to.engaged.contains(e))
+            .collect();
+        let off: Vec<ElementId> = from
+            .engaged
+            .iter()
+            .copied()
+            .filter(|e| !to.engaged.contains(e))
+            .collect();
+        let on: Vec<ElementId> = to
+            .engaged
+            .iter()
+            .copied()
+            .filter(|e| !from.engaged.contains(e))
+            .collect();
+        let name = |e: ElementId| train.elements()[e.index()].name.clone();
+        let ([off], [on]) = (&off[..], &on[..]) else {
+            return Err(Error::invalid(
+                "shift.to",
+                format!(
+                    "`{}` -> `{}` releases {} and applies {}: only single swaps (one element each way) are simulated",
+                    self.from,
+                    self.to,
+                    if off.is_empty() {
+                        "nothing".into()
+                    } else {
+                        off.iter()
+                            .map(|&e| format!("`{}`", name(e)))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    },
+                    if on.is_empty() {
+                        "nothing".into()
+                    } else {
+                        on.iter()
+                            .map(|&e| format!("`{}`", name(e)))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    },
+                ),
+            ));
+        };
+        let (input, output) = (
+            train.coordinate(t.input).expect("checked: input moves"),
+            train.coordinate(t.output).expect("checked: output moves"),
+        );
+        let mut m = train.mass_matrix()?.matrix;
+        m[(output, output)] += self.vehicle_inertia;
+        let n = m.nrows();
+        let rows = [
+            DVector::from_vec(element_row(train, *off)?),
+            DVector::from_vec(element_row(train, *on)?),
+        ];
+        let kind = |e: ElementId| train.elements()[e.index()].kind;
+        let setup = Setup {
+            train,
+            sim: self,
+            m,
+            input,
+            output,
+            kept: kept.clone(),
+            elements: [*off, *on],
+            rows,
+            one_way: [is_one_way(kind(*off)), is_one_way(kind(*on))],
+            capacity: [&self.off_going, &self.on_coming],
+            n,
+        };
+        // Start: the old gear's steady motion at the input speed.
+        let start = mode_basis(train, &from.engaged)?;
+        let col = start.basis.column(0);
+        let scale = self.input_speed / col[input];
+        let mut y: Vec<f64> = col.iter().map(|c| c * scale).collect();
+        y.extend([0.0, 0.0, 0.0]);
+        let ke0 = setup.kinetic(&y[..n]);
+        let slip_on = setup.slip(1, &y[..n]);
+        let mut phases = [
+            Phase::Locked,
+            if slip_on == 0.0 {
+                Phase::Locked
+            } else {
+                Phase::Slipping(slip_on.signum())
+            },
+        ];
+        let mut mode = setup.mode(&phases)?;
+        let mut t_now = 0.0;
+        let mut lock_loss = 0.0;
+        let mut out = ShiftResult {
+            elements: [name(*off), name(*on)],
+            kept: kept.iter().map(|&e| name(e)).collect(),
+            samples: Vec::new(),
+            changes: Vec::new(),
+            shift_start: None,
+            lock_time: None,
+            shift_time: None,
+            output_torque_range: [f64::NEG_INFINITY, f64::INFINITY],
+            dissipated: [0.0; 2],
+            lock_loss: 0.0,
+            max_energy_residual: 0.0,
+            steps: 0,
+        };
+        let mut f0 = setup.rhs(&mode, &phases, t_now, &y);
+        let record = |out: &mut ShiftResult,
+                      t: f64,
+                      y: &[f64],
+                      dy: &[f64],
+                      mode: &Mode,
+                      phases: &[Phase; 2],
+                      loss: f64| {
+            let v = &y[..n];
+            let lam = setup.locked_torques(mode, phases, t, y, dy);
+            let (_, tf) = setup.forces(phases, t, v);
+            let element_torque = [0, 1].map(|i| {
+                if phases[i] == Phase::Locked {
+                    lam[i]
+                } else {
+                    tf[i]
+                }
+            });
+            let w = v[output];
+            let [c0, c1, c2] = self.road_load;
+            let road = c0 * w.signum() * f64::from(u8::from(w != 0.0)) + c1 * w + c2 * w * w.abs();
+            let output_torque = self.vehicle_inertia * dy[output] + road;
+            let residual = y[n + 2] - (setup.kinetic(v) - ke0) - y[n] - y[n + 1] - loss;
+            out.max_energy_residual = out.max_energy_residual.max(residual.abs());
+            out.output_torque_range[0] = out.output_torque_range[0].max(output_torque);
+            out.output_torque_range[1] = out.output_torque_range[1].min(output_torque);
+            let mut speed = vec![0.0; train.links().len()];
+            for (k, &l) in train.coordinates().iter().enumerate() {
+                speed[l.index()] = v[k];
+            }
+            out.samples.push(ShiftSample {
+                t,
+                speed,
+                slip: [setup.slip(0, v), setup.slip(1, v)],
+                element_torque,
+                output_torque,
+                dissipated: [y[n], y[n + 1]],
+                energy_residual: residual,
+                dof: mode.basis.ncols(),
+            });
+        };
+        record(&mut out, t_now, &y, &f0, &mode, &phases, lock_loss);
+        let breaks: Vec<f64> = self
+            .off_going
+            .breakpoints()
+            .into_iter()
+            .chain(self.on_coming.breakpoints())
+            .collect();
+        let mut h = (self.t_end * 1e-4).min(1e-4);
+        while t_now < self.t_end {
+            if out.steps >= MAX_STEPS {
+                return Err(refuse(format!(
+                    "{MAX_STEPS} steps reached at t = {t_now} before t_end = {}",
+                    self.t_end
+                )));
+            }
+            let mut stop = self.t_end;
+            for &b in &breaks {
+                if b > t_now * (1.0 + 1e-15) + 1e-300 && b < stop {
+                    stop = b;
+                }
+            }
+            h = h.min(stop - t_now);
+            let mut rhs = |tt: f64, yy: &[f64]| setup.rhs(&mode, &phases, tt, yy);
+            let (y1, f1, err) = ode::bs23(&mut rhs, t_now, &y, &f0, h);
+            let norm = ode::error_norm(&err, &y, &y1, self.rtol, self.atol);
+            if !norm.is_finite() {
+                return Err(refuse(format!(
+                    "the state stopped being finite at t = {t_now}"
+                )));
+            }
+            if norm > 1.0 {
+                h *= (0.9 * norm.powf(-1.0 / 3.0)).max(0.2);
+                continue;
+            }
+            out.steps += 1;
+            let t1 = if stop - (t_now + h) <= 1e-15 * stop.abs().max(1.0) {
+                stop
+            } else {
+                t_now + h
+            };
+            let g0 = setup.events(&mode, &phases, t_now, &y, &f0);
+            let g1 = setup.events(&mode, &phases, t1, &y1, &f1);
+            // The earliest crossing, located on the dense output.
+            let mut first: Option<(f64, usize)> = None;
+            for i in 0..2 {
+                if g0[i] > 0.0 && g1[i] <= 0.0 {
+                    let te = ode::locate(
+                        |s| {
+                            let ys = ode::hermite(t_now, &y, &f0, t1, &y1, &f1, s);
+                            let ds = setup.rhs(&mode, &phases, s, &ys);
+                            setup.events(&mode, &phases, s, &ys, &ds)[i]
+                        },
+                        t_now,
+                        t1,
+                        g0[i],
+                        g1[i],
+                    );
+                    if first.is_none_or(|(tf, _)| te < tf) {
+                        first = Some((te, i));
+                    }
+                }
+            }
+            if let Some((te, i)) = first {
+                let mut ye = ode::hermite(t_now, &y, &f0, t1, &y1, &f1, te);
+                let element = out.elements[i].clone();
+                let now = match phases[i] {
+                    Phase::Slipping(_) => {
+                        // Zero slip: lock (momentum-consistent), then check
+                        // that the element can hold the locked torque.
+                        let mut trial = phases;
+                        trial[i] = Phase::Locked;
+                        let locked_mode = setup.mode(&trial)?;
+                        let (speed, lost) = setup.project(&locked_mode, &ye[..n]);
+                        let mut yl = ye.clone();
+                        yl[..n].copy_from_slice(speed.as_slice());
+                        let dl = setup.rhs(&locked_mode, &trial, te, &yl);
+                        let lam = setup.locked_torques(&locked_mode, &trial, te, &yl, &dl)[i];
+                        let holds = if setup.one_way[i] {
+                            lam >= 0.0
+                        } else {
+                            lam.abs() <= self.law.static_limit(self.capacity_of(i).at(te))
+                        };
+                        if holds {
+                            lock_loss += lost;
+                            ye = yl;
+                            phases = trial;
+                            mode = locked_mode;
+                            if i == 1 && out.lock_time.is_none() {
+                                out.lock_time = Some(te);
+                            }
+                            "locked"
+                        } else {
+                            let dir = if setup.one_way[i] { 1.0 } else { -lam.signum() };
+                            phases[i] = Phase::Slipping(dir);
+                            if setup.one_way[i] {
+                                "overrunning"
+                            } else {
+                                "slipping"
+                            }
+                        }
+                    }
+                    Phase::Locked => {
+                        let lam = setup.locked_torques(
+                            &mode,
+                            &phases,
+                            te,
+                            &ye,
+                            &setup.rhs(&mode, &phases, te, &ye),
+                        )[i];
+                        let dir = if setup.one_way[i] { 1.0 } else { -lam.signum() };
+                        phases[i] = Phase::Slipping(dir);
+                        mode = setup.mode(&phases)?;
+                        if setup.one_way[i] {
+                            "overrunning"
+                        } else {
+                            "slipping"
+                        }
+                    }
+                };
+                out.changes.push(ModeChange {
+                    t: te,
+                    element,
+                    now: now.to_string(),
+                    dof: mode.basis.ncols(),
+                });
+                t_now = te;
+                y = ye;
+                f0 = setup.rhs(&mode, &phases, t_now, &y);
+                record(&mut out, t_now, &y, &f0, &mode, &phases, lock_loss);
+                continue;
+            }
+            t_now = t1;
+            y = y1;
+            f0 = f1;
+            record(&mut out, t_now, &y, &f0, &mode, &phases, lock_loss);
+            let grow = if norm == 0.0 {
+                5.0
+            } else {
+                (0.9 * norm.powf(-1.0 / 3.0)).min(5.0)
+            };
+            h *= grow;
+        }
+        out.dissipated = [y[n], y[n + 1]];
+        out.lock_loss = lock_loss;
+        out.shift_start = first_positive(&self.on_coming, self.t_end);
+        out.shift_time = match (out.shift_start, out.lock_time) {
+            (Some(s), Some(l)) => Some(l - s),
+            _ => None,
+        };
+        Ok(out)
+    }
+
+    fn capacity_of(&self, i: usize) -> &Capacity {
+        if i == 0 {
+            &self.off_going
+        } else {
+            &self.on_coming
+        }
+    }
+}
+
+/// The first time in `[0, t_end]` a capacity is positive.
+fn first_positive(c: &Capacity, t_end: f64) -> Option<f64> {
+    if c.at(0.0) > 0.0 {
+        return Some(0.0);
+    }
+    let [a, b] = c.breakpoints();
+    // A linear ramp rises from its start.
+    [a, b]
+        .into_iter()
+        .find(|&s| s.is_finite() && s <= t_end && c.at(s + 1e-12 * s.abs().max(1.0)) > 0.0)
+}
+
+fn refuse(detail: String) -> Error {
+    Error::Analysis(AnalysisError::Singular {
+        what: "shift simulation".into(),
+        detail,
+    })
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+    use crate::spec::parse::Format;
+
+    fn simpson() -> Train {
+        let text = include_str!(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../examples/ford_c4_simpson.toml"
+        ));
+        Train::from_str(text, Format::Toml, "ford_c4_simpson.toml").unwrap()
+    }
+
+    fn upshift() -> ShiftSim {
+        ShiftSim {
+            from: "2".into(),
+            to: "3".into(),
+            input_speed: 300.0,
+            input_torque: InputTorque::Constant(150.0),
+            road_load: [30.0, 0.1, 0.001],
+            vehicle_inertia: 15.0,
+            law: FrictionLaw {
+                mu_static: 0.15,
+                mu_kinetic: 0.12,
+                decay: None,
+            },
+            off_going: Capacity::Ramp {
+                t0: 0.05,
+                t1: 0.25,
+                from: 6000.0,
+                to: 0.0,
+            },
+            on_coming: Capacity::Ramp {
+                t0: 0.05,
+                t1: 0.35,
+                from: 0.0,
+                to: 8000.0,
+            },
+            t_end: 1.0,
+            rtol: 1e-8,
+            atol: 1e-8,
+        }
+    }
+
+    fn rel(a: f64, b: f64) -> f64 {
+        (a - b).abs() / b.abs().max(1e-300)
+    }
+
+    #[test]
+    fn the_2_3_upshift_releases_the_band_then_locks_the_clutch_in_third() {
+        let train = simpson();
+        let r = upshift().run(&train).unwrap();
+        let what: Vec<(&str, &str)> = r
+            .changes
+            .iter()
+            .map(|c| (c.element.as_str(), c.now.as_str()))
+            .collect();
+        assert_eq!(
+            what,
+            [
+                ("intermediate_band", "slipping"),
+                ("reverse_high_clutch", "locked")
+            ]
+        );
+        assert_eq!(r.changes[0].dof, 2);
+        assert_eq!(r.changes[1].dof, 1);
+        let (start, lock) = (r.shift_start.unwrap(), r.lock_time.unwrap());
+        assert_eq!(start, 0.05);
+        assert!(lock > r.changes[0].t && lock < 1.0);
+        // After the lock every link turns as third gear says (egt shift).
+        let third = train.analyse_gear("3").unwrap();
+        let last = r.samples.last().unwrap();
+        let input = train.checked_transmission().unwrap().input.index();
+        for (l, s) in third.speed.iter().enumerate() {
+            if let Some(s) = s {
+                assert!(
+                    (last.speed[l] - s * last.speed[input]).abs() < 1e-9 * last.speed[input].abs()
+                );
+            }
+        }
+        // Energy: W_applied = dKE + friction + lock loss at every sample, to a
+        // tolerance tied to the integrator's (rtol 1e-8).
+        let dissipated = r.dissipated[0] + r.dissipated[1];
+        assert!(dissipated > 100.0);
+        assert!(
+            r.max_energy_residual < 1e-7 * dissipated,
+            "{} of {dissipated}",
+            r.max_energy_residual
+        );
+        // Friction only removes energy; a lock located at zero slip removes ~none.
+        assert!(r.dissipated.iter().all(|&d| d >= 0.0));
+        assert!(r.lock_loss >= 0.0 && r.lock_loss < 1e-6 * dissipated);
+    }
+
+    #[test]
+    fn the_steady_state_after_the_shift_is_egt_shifts_solution() {
+        // A linear road load only: the train settles where the output torque
+        // equals the load, and then every torque is the steady gear's.
+        let train = simpson();
+        let torque = 150.0;
+        let sim = ShiftSim {
+            road_load: [0.0, 2.0, 0.0],
+            vehicle_inertia: 0.5,
+            t_end: 12.0,
+            ..upshift()
+        };
+        let r = sim.run(&train).unwrap();
+        let last = r.samples.last().unwrap();
+        let third = train.analyse_gear("3").unwrap();
+        assert!(
+            rel(last.output_torque, torque * third.output_torque) < 1e-7,
+            "{} vs {}",
+            last.output_torque,
+            torque * third.output_torque
+        );
+        let on = third
+            .elements
+            .iter()
+            .find(|e| train.elements()[e.element.index()].name == "reverse_high_clutch")
+            .unwrap();
+        assert!(
+            rel(last.element_torque[1], torque * on.torque) < 1e-7,
+            "{} vs {}",
+            last.element_torque[1],
+            torque * on.torque
+        );
+        // and the output speed is where the load balances it
+        let out = train.checked_transmission().unwrap().output.index();
+        assert!(rel(last.speed[out], torque * third.output_torque / 2.0) < 1e-7);
+    }
+
+    #[test]
+    fn the_1_2_upshift_lets_the_low_one_way_overrun_and_never_gains_energy_at_a_lock() {
+        let train = simpson();
+        let sim = ShiftSim {
+            from: "1".into(),
+            to: "2".into(),
+            ..upshift()
+        };
+        let r = sim.run(&train).unwrap();
+        let what: Vec<(&str, &str)> = r
+            .changes
+            .iter()
+            .map(|c| (c.element.as_str(), c.now.as_str()))
+            .collect();
+        assert_eq!(
+            what,
+            [
+                ("low_one_way", "overrunning"),
+                ("intermediate_band", "locked")
+            ]
+        );
+        // it overruns in its free direction (positive slip) until the end
+        let after = r.samples.iter().filter(|s| s.t > r.changes[0].t + 1e-6);
+        assert!(
+            after
+                .clone()
+                .all(|s| s.slip[0] > 0.0 && s.element_torque[0] == 0.0)
+        );
+        assert!(r.lock_loss >= 0.0);
+        let second = train.analyse_gear("2").unwrap();
+        let last = r.samples.last().unwrap();
+        let t = train.checked_transmission().unwrap();
+        assert!(
+            rel(
+                last.speed[t.input.index()] / last.speed[t.output.index()],
+                second.ratio
+            ) < 1e-9
+        );
+    }
+
+    #[test]
+    fn a_power_on_3_2_downshift_slips_the_clutch_until_the_band_locks() {
+        let train = simpson();
+        let sim = ShiftSim {
+            from: "3".into(),
+            to: "2".into(),
+            input_speed: 200.0,
+            off_going: Capacity::Ramp {
+                t0: 0.05,
+                t1: 0.2,
+                from: 6000.0,
+                to: 400.0,
+            },
+            on_coming: Capacity::Ramp {
+                t0: 0.3,
+                t1: 0.5,
+                from: 0.0,
+                to: 8000.0,
+            },
+            ..upshift()
+        };
+        let r = sim.run(&train).unwrap();
+        assert_eq!(r.changes.first().unwrap().element, "reverse_high_clutch");
+        assert!(r.lock_time.is_some(), "{:?}", r.changes);
+        let second = train.analyse_gear("2").unwrap();
+        let last = r.samples.last().unwrap();
+        let t = train.checked_transmission().unwrap();
+        assert!(
+            rel(
+                last.speed[t.input.index()] / last.speed[t.output.index()],
+                second.ratio
+            ) < 1e-9
+        );
+        assert!(r.max_energy_residual < 1e-7 * (r.dissipated[0] + r.dissipated[1]));
+    }
+
+    fn zf() -> Train {
+        let text = include_str!(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../examples/zf_8hp70.toml"
+        ));
+        Train::from_str(text, Format::Toml, "zf_8hp70.toml").unwrap()
+    }
+
+    #[test]
+    fn every_8hp_single_swap_upshift_and_downshift_ends_in_its_gear_with_energy_balanced() {
+        let train = zf();
+        let t = train.checked_transmission().unwrap().clone();
+        let forward: Vec<&str> = ["1", "2", "3", "4", "5", "6", "7", "8"].into();
+        let mut runs = 0;
+        for w in forward.windows(2) {
+            for (from, to) in [(w[0], w[1]), (w[1], w[0])] {
+                let sim = ShiftSim {
+                    from: from.into(),
+                    to: to.into(),
+                    input_speed: 250.0,
+                    input_torque: InputTorque::Constant(200.0),
+                    road_load: [20.0, 0.2, 0.002],
+                    vehicle_inertia: 12.0,
+                    off_going: Capacity::Ramp {
+                        t0: 0.05,
+                        t1: 0.15,
+                        from: 20000.0,
+                        to: 0.0,
+                    },
+                    on_coming: Capacity::Ramp {
+                        t0: 0.05,
+                        t1: 0.4,
+                        from: 0.0,
+                        to: 20000.0,
+                    },
+                    t_end: 1.5,
+                    ..upshift()
+                };
+                let r = sim.run(&train).unwrap();
+                assert!(r.lock_time.is_some(), "{from} -> {to}: {:?}", r.changes);
+                let gear = train.analyse_gear(to).unwrap();
+                let last = r.samples.last().unwrap();
+                assert!(
+                    rel(
+                        last.speed[t.input.index()] / last.speed[t.output.index()],
+                        gear.ratio
+                    ) < 1e-9,
+                    "{from} -> {to}"
+                );
+                let dissipated = r.dissipated[0] + r.dissipated[1];
+                assert!(
+                    r.max_energy_residual < 1e-7 * dissipated.max(1.0),
+                    "{from} -> {to}"
+                );
+                runs += 1;
+            }
+        }
+        assert_eq!(runs, 14);
+    }
+
+    #[test]
+    fn bad_shifts_are_named() {
+        let train = simpson();
+        let err = |sim: ShiftSim| sim.run(&train).unwrap_err().to_string();
+        let e = err(ShiftSim {
+            from: "9".into(),
+            ..upshift()
+        });
+        assert!(e.contains("shift.from") && e.contains("`9`"), "{e}");
+        let e = err(ShiftSim {
+            from: "1".into(),
+            to: "R".into(),
+            ..upshift()
+        });
+        assert!(e.contains("shift.to") && e.contains("single swap"), "{e}");
+        let e = err(ShiftSim {
+            t_end: -1.0,
+            ..upshift()
+        });
+        assert!(e.contains("shift.t_end"), "{e}");
+        let e = err(ShiftSim {
+            input_torque: InputTorque::Table(vec![(1.0, 2.0), (0.5, 3.0)]),
+            ..upshift()
+        });
+        assert!(e.contains("shift.input_torque[1]"), "{e}");
+    }
+}
