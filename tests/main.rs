@@ -29,3 +29,6 @@ mod enumerate;
 
 // Issue 16: `egt synth`, the design search, against the real transmissions and `egt shift`.
 mod synth;
+
+// Issue 14: `egt shift-sim`, a gear change in time, on the 8HP example.
+mod shift_sim;

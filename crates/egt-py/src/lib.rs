@@ -36,6 +36,7 @@ fn _egt(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(batch::ratios_from_teeth, m)?)?;
     m.add_function(wrap_pyfunction!(motion::stability, m)?)?;
     m.add_function(wrap_pyfunction!(motion::simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(motion::shift_sim, m)?)?;
     m.add_function(wrap_pyfunction!(transmission::gear, m)?)?;
     m.add_function(wrap_pyfunction!(transmission::shift_table, m)?)?;
     m.add_function(wrap_pyfunction!(cli, m)?)?;

@@ -179,3 +179,69 @@ pub fn simulate<'py>(
         to_py(py, &sim)
     })
 }
+
+/// A capacity as the Python side passes it: `[C]` or `[t0, t1, from, to]`.
+fn capacity(v: &[f64], field: &str) -> Result<egt_core::shift_dynamics::Capacity> {
+    use egt_core::shift_dynamics::Capacity;
+    match *v {
+        [c] => Ok(Capacity::Constant(c)),
+        [t0, t1, from, to] => Ok(Capacity::Ramp { t0, t1, from, to }),
+        _ => Err(value_error(format!(
+            "{field}: a capacity is a number or (t0, t1, from, to), got {} numbers",
+            v.len()
+        ))),
+    }
+}
+
+/// A gear change in time (egt_core::shift_dynamics::ShiftSim), as its serde form.
+#[pyfunction]
+#[pyo3(signature = (core, from_, to, input_speed, input_torque, torque_table, road_load, vehicle_inertia, mu, mu_decay, off_going, on_coming, t_end, rtol, atol))]
+#[allow(clippy::too_many_arguments)]
+pub fn shift_sim<'py>(
+    py: Python<'py>,
+    core: &TrainCore,
+    from_: String,
+    to: String,
+    input_speed: f64,
+    input_torque: Option<f64>,
+    torque_table: Option<Vec<(f64, f64)>>,
+    road_load: (f64, f64, f64),
+    vehicle_inertia: f64,
+    mu: (f64, f64),
+    mu_decay: Option<f64>,
+    off_going: Vec<f64>,
+    on_coming: Vec<f64>,
+    t_end: f64,
+    rtol: f64,
+    atol: f64,
+) -> Result<Bound<'py, PyAny>> {
+    use egt_core::shift_dynamics::{FrictionLaw, InputTorque, ShiftSim};
+    let input_torque = match (input_torque, torque_table) {
+        (Some(t), None) => InputTorque::Constant(t),
+        (None, Some(table)) => InputTorque::Table(table),
+        _ => {
+            return Err(value_error(
+                "give exactly one of input_torque (a number) and torque_table ((speed, torque) pairs)",
+            ));
+        }
+    };
+    let sim = ShiftSim {
+        from: from_,
+        to,
+        input_speed,
+        input_torque,
+        road_load: [road_load.0, road_load.1, road_load.2],
+        vehicle_inertia,
+        law: FrictionLaw {
+            mu_static: mu.0,
+            mu_kinetic: mu.1,
+            decay: mu_decay,
+        },
+        off_going: capacity(&off_going, "off_going")?,
+        on_coming: capacity(&on_coming, "on_coming")?,
+        t_end,
+        rtol,
+        atol,
+    };
+    guard(|| to_py(py, &sim.run(&core.train)?))
+}

@@ -54,7 +54,15 @@ from ._results import (
     PowerFlow,
     RelativeSpeed,
 )
-from ._motion import Curve, MasslessDirection, Mode, OperatingPoint, Simulation, StabilityReport
+from ._motion import (
+    Curve,
+    MasslessDirection,
+    Mode,
+    OperatingPoint,
+    ShiftSimulation,
+    Simulation,
+    StabilityReport,
+)
 from ._synth import SynthResult, synth, synth_distributed
 from ._train import CurveLike, Speed, Train, load, loads
 from ._transmission import (
@@ -103,6 +111,7 @@ __all__ = [
     "MasslessDirection",
     "StabilityReport",
     "Simulation",
+    "ShiftSimulation",
     "GearState",
     "ElementLoad",
     "Slip",

@@ -22,6 +22,7 @@ __all__ = [
     "cli",
     "atlas",
     "atlas_member",
+    "shift_sim",
     "EgtError",
     "SpecError",
     "SpecSyntaxError",
@@ -138,6 +139,23 @@ def simulate(
     curves: Optional[List[_Curve]] = None,
     torque: Optional[Callable[[float, npt.NDArray[np.float64]], npt.NDArray[np.float64]]] = None,
     every: int = 0,
+) -> Dict[str, Any]: ...
+def shift_sim(
+    core: TrainCore,
+    from_: str,
+    to: str,
+    input_speed: float,
+    input_torque: Optional[float],
+    torque_table: Optional[List[Tuple[float, float]]],
+    road_load: Tuple[float, float, float],
+    vehicle_inertia: float,
+    mu: Tuple[float, float],
+    mu_decay: Optional[float],
+    off_going: List[float],
+    on_coming: List[float],
+    t_end: float,
+    rtol: float,
+    atol: float,
 ) -> Dict[str, Any]: ...
 def ratios_from_teeth(
     core: TrainCore, teeth: npt.NDArray[np.int64]

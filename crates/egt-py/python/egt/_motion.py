@@ -301,3 +301,97 @@ class Simulation:
         df["energy"] = self.energy
         df["work"] = self.work
         return df
+
+
+@dataclass(frozen=True, eq=False)
+class ShiftSimulation:
+    """A gear change in time (``Train.simulate_shift``; docs/shift_dynamics.md).
+
+    Element arrays have two columns: the off-going element, then the
+    on-coming one (``elements``).
+    """
+
+    links: Tuple[str, ...]
+    elements: Tuple[str, str]
+    kept: Tuple[str, ...]
+    """Elements engaged in both gears (locked throughout)."""
+    t: np.ndarray
+    """(samples,) times [s]."""
+    speeds: np.ndarray
+    """(samples, links) link speeds [rad/s]."""
+    slip: np.ndarray
+    """(samples, 2) slip speeds of the two elements [rad/s]."""
+    element_torque: np.ndarray
+    """(samples, 2) torques of the two elements on their first link [N m]."""
+    output_torque: np.ndarray
+    """(samples,) torque delivered to the vehicle [N m]."""
+    dissipated: np.ndarray
+    """(samples, 2) energy each element has dissipated [J]."""
+    energy_residual: np.ndarray
+    """(samples,) W_applied - dKE - E_friction - E_lock [J]."""
+    dof: np.ndarray
+    """(samples,) degrees of freedom of the mode."""
+    changes: Tuple[Tuple[float, str, str, int], ...]
+    """(time, element, now, DOF) of every mode change."""
+    shift_start: Optional[float]
+    lock_time: Optional[float]
+    shift_time: Optional[float]
+    output_torque_range: Tuple[float, float]
+    """(largest, smallest) output torque."""
+    energy: Tuple[float, float]
+    """Energy each element dissipated over the run [J]."""
+    lock_loss: float
+    max_energy_residual: float
+    steps: int
+
+    @classmethod
+    def _from_core(cls, links: Tuple[str, ...], d: Mapping[str, Any]) -> "ShiftSimulation":
+        samples = d["samples"]
+        n = len(samples)
+
+        def series(key: str) -> np.ndarray:
+            return _array([x[key] for x in samples])
+
+        def pairs(key: str) -> np.ndarray:
+            return np.asarray([x[key] for x in samples], dtype=np.float64).reshape(n, 2)
+
+        return cls(
+            links=links,
+            elements=(d["elements"][0], d["elements"][1]),
+            kept=tuple(d["kept"]),
+            t=series("t"),
+            speeds=np.asarray([x["speed"] for x in samples], dtype=np.float64).reshape(n, len(links)),
+            slip=pairs("slip"),
+            element_torque=pairs("element_torque"),
+            output_torque=series("output_torque"),
+            dissipated=pairs("dissipated"),
+            energy_residual=series("energy_residual"),
+            dof=np.asarray([x["dof"] for x in samples], dtype=np.int64),
+            changes=tuple((c["t"], c["element"], c["now"], c["dof"]) for c in d["changes"]),
+            shift_start=d["shift_start"],
+            lock_time=d["lock_time"],
+            shift_time=d["shift_time"],
+            output_torque_range=(d["output_torque_range"][0], d["output_torque_range"][1]),
+            energy=(d["dissipated"][0], d["dissipated"][1]),
+            lock_loss=d["lock_loss"],
+            max_energy_residual=d["max_energy_residual"],
+            steps=d["steps"],
+        )
+
+    def speed(self, link: str) -> np.ndarray:
+        """One link's speed over time."""
+        return self.speeds[:, self.links.index(link)]
+
+    def to_pandas(self) -> "pandas.DataFrame":
+        """The time series: link speeds, then slip, torque and dissipated
+        energy per element, output torque, energy residual and DOF; indexed by t."""
+        pd = _pandas()
+        df = pd.DataFrame(self.speeds, columns=list(self.links), index=pd.Index(self.t, name="t"))
+        for k, e in enumerate(self.elements):
+            df[f"slip_{e}"] = self.slip[:, k]
+            df[f"torque_{e}"] = self.element_torque[:, k]
+            df[f"dissipated_{e}"] = self.dissipated[:, k]
+        df["output_torque"] = self.output_torque
+        df["energy_residual"] = self.energy_residual
+        df["dof"] = self.dof
+        return df

@@ -36,9 +36,10 @@ from ._egt import TrainCore, batch_plan
 from ._egt import atlas_member as _atlas_member
 from ._egt import gear as _gear
 from ._egt import shift_table as _shift_table
+from ._egt import shift_sim as _shift_sim
 from ._egt import simulate as _simulate
 from ._egt import stability as _stability
-from ._motion import Curve, Simulation, StabilityReport
+from ._motion import Curve, ShiftSimulation, Simulation, StabilityReport
 from ._transmission import GearState, ShiftTable
 from . import _units
 from ._results import (
@@ -620,6 +621,68 @@ class Train:
             every,
         )
         return Simulation._from_core(self._links, raw)
+
+    def simulate_shift(
+        self,
+        from_: str,
+        to: str,
+        *,
+        input_speed: float,
+        off_going: Union[float, Sequence[float]],
+        on_coming: Union[float, Sequence[float]],
+        input_torque: Optional[float] = None,
+        torque_table: Optional[Sequence[Tuple[float, float]]] = None,
+        road_load: Sequence[float] = (0.0, 0.0, 0.0),
+        vehicle_inertia: float = 0.0,
+        mu: Sequence[float] = (0.15, 0.12),
+        mu_decay: Optional[float] = None,
+        t_end: float = 1.0,
+        rtol: float = 1e-8,
+        atol: float = 1e-8,
+    ) -> ShiftSimulation:
+        """A gear change in time, as ``egt shift-sim`` (docs/shift_dynamics.md).
+
+        The train starts in ``from_``'s steady motion at ``input_speed``
+        [rad/s]; the off-going element's capacity falls and the on-coming
+        one's rises. A capacity [N m per unit friction coefficient] is a
+        number or a ramp ``(t0, t1, from, to)``. The input torque is a
+        constant ``input_torque`` or a ``torque_table`` of (speed, torque)
+        points. ``road_load`` is ``(c0, c1, c2)``: c0 sgn(w) + c1 w + c2 w|w|
+        at the output; ``vehicle_inertia`` is reflected to the output link.
+        ``mu`` is (static, kinetic).
+        """
+
+        def cap(v: Union[float, Sequence[float]], field: str) -> List[float]:
+            if isinstance(v, (int, float, Real)):
+                return [number(v, field)]
+            return [number(x, f"{field}[{k}]") for k, x in enumerate(v)]
+
+        rl = [number(x, f"road_load[{k}]") for k, x in enumerate(road_load)]
+        if len(rl) != 3:
+            raise ArgumentError(f"road_load: expected (c0, c1, c2), got {len(rl)} numbers")
+        m = [number(x, f"mu[{k}]") for k, x in enumerate(mu)]
+        if len(m) != 2:
+            raise ArgumentError(f"mu: expected (static, kinetic), got {len(m)} numbers")
+        raw = _shift_sim(
+            self._core,
+            str(from_),
+            str(to),
+            number(input_speed, "input_speed"),
+            None if input_torque is None else number(input_torque, "input_torque"),
+            None
+            if torque_table is None
+            else [(number(w, f"torque_table[{k}]"), number(t, f"torque_table[{k}]")) for k, (w, t) in enumerate(torque_table)],
+            (rl[0], rl[1], rl[2]),
+            number(vehicle_inertia, "vehicle_inertia"),
+            (m[0], m[1]),
+            None if mu_decay is None else number(mu_decay, "mu_decay"),
+            cap(off_going, "off_going"),
+            cap(on_coming, "on_coming"),
+            number(t_end, "t_end"),
+            number(rtol, "rtol"),
+            number(atol, "atol"),
+        )
+        return ShiftSimulation._from_core(self._links, raw)
 
     # -- transmissions -----------------------------------------------------
 

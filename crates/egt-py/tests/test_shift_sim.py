@@ -1,0 +1,69 @@
+"""Train.simulate_shift: the 8HP 2-3 upshift from Python, against the CLI and
+against the steady gear (egt shift)."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import egt
+from conftest import EXAMPLES
+
+UPSHIFT = dict(
+    input_speed=250.0,
+    input_torque=300.0,
+    road_load=(20.0, 0.2, 0.002),
+    vehicle_inertia=12.0,
+    off_going=(0.05, 0.15, 5000.0, 0.0),
+    on_coming=(0.05, 0.3, 0.0, 9000.0),
+)
+
+
+def zf() -> egt.Train:
+    return egt.Train.from_file(EXAMPLES / "zf_8hp70.toml")
+
+
+def test_the_upshift_ends_in_third_with_its_energy_balanced() -> None:
+    train = zf()
+    s = train.simulate_shift("2", "3", **UPSHIFT)  # type: ignore[arg-type]
+    assert s.elements == ("A", "C")
+    assert s.kept == ("B", "E")
+    assert [c[1:3] for c in s.changes] == [("A", "slipping"), ("C", "locked")]
+    assert s.lock_time is not None and s.shift_start == 0.05
+    third = train.gear("3")
+    ratio = s.speed("input")[-1] / s.speed("output")[-1]
+    assert ratio == pytest.approx(third.ratio, rel=1e-9)
+    total = s.energy[0] + s.energy[1]
+    assert np.abs(s.energy_residual).max() < 1e-7 * total
+    assert s.dof[0] == 1 and s.dof.max() == 2 and s.dof[-1] == 1
+    df = s.to_pandas()
+    assert {"input", "slip_C", "torque_A", "output_torque", "dof"} <= set(df.columns)
+
+
+def test_python_and_the_cli_give_the_same_shift() -> None:
+    s = zf().simulate_shift("2", "3", **UPSHIFT)  # type: ignore[arg-type]
+    out = subprocess.run(
+        [
+            sys.executable, "-m", "egt", "shift-sim", str(EXAMPLES / "zf_8hp70.toml"),
+            "--from", "2", "--to", "3", "--input-speed", "250", "--input-torque", "300",
+            "--road-load", "20,0.2,0.002", "--vehicle-inertia", "12",
+            "--off-going", "0.05:0.15:5000:0", "--on-coming", "0.05:0.3:0:9000",
+            "--format", "json",
+        ],
+        capture_output=True, text=True, check=True,
+    )
+    cli = json.loads(out.stdout)
+    assert cli["lock_time"] == s.lock_time
+    assert cli["dissipated"] == list(s.energy)
+
+
+def test_bad_shifts_raise_egt_errors_naming_the_field() -> None:
+    train = zf()
+    with pytest.raises(egt.EgtError, match="shift.from"):
+        train.simulate_shift("9", "3", **UPSHIFT)  # type: ignore[arg-type]
+    with pytest.raises(egt.EgtError, match="off_going"):
+        train.simulate_shift("2", "3", **{**UPSHIFT, "off_going": (1.0, 2.0)})  # type: ignore[arg-type]
+    with pytest.raises(egt.EgtError, match="input_torque"):
+        train.simulate_shift("2", "3", **{**UPSHIFT, "input_torque": None})  # type: ignore[arg-type]

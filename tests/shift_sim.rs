@@ -1,0 +1,176 @@
+//! `egt shift-sim` as a user runs it: a 2-3 upshift on the 8HP example with a
+//! pressure ramp, its summary, JSON, CSV and plot; bad shifts exit 2 naming
+//! the flag or field.
+
+use serde_json::Value;
+
+use crate::util::{egt, root};
+
+const UPSHIFT: &[&str] = &[
+    "shift-sim",
+    "examples/zf_8hp70.toml",
+    "--from",
+    "2",
+    "--to",
+    "3",
+    "--input-speed",
+    "250",
+    "--input-torque",
+    "300",
+    "--road-load",
+    "20,0.2,0.002",
+    "--vehicle-inertia",
+    "12",
+    "--off-going",
+    "0.05:0.15:5000:0",
+    "--on-coming",
+    "0.05:0.3:0:9000",
+];
+
+fn with(extra: &[&str]) -> Vec<String> {
+    UPSHIFT.iter().chain(extra).map(|s| s.to_string()).collect()
+}
+
+fn run(args: &[String]) -> crate::util::Run {
+    let a: Vec<&str> = args.iter().map(String::as_str).collect();
+    egt(&a, None)
+}
+
+#[test]
+fn the_8hp_2_3_upshift_gives_its_shift_time_and_clutch_energy_in_one_command() {
+    let r = run(&with(&[]));
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    for words in [
+        "off-going `A`, on-coming `C`",
+        "locked throughout: `B`, `E`",
+        "shift time:",
+        "energy dissipated: `A`",
+    ] {
+        assert!(r.stdout.contains(words), "{words}\n{}", r.stdout);
+    }
+    let r = run(&with(&["--format", "json"]));
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let v: Value = serde_json::from_str(&r.stdout).expect("json");
+    let lock = v["lock_time"].as_f64().expect("the clutch locks");
+    let start = v["shift_start"].as_f64().expect("a torque phase");
+    assert!((v["shift_time"].as_f64().expect("shift time") - (lock - start)).abs() < 1e-12);
+    let clutch = v["dissipated"][1].as_f64().expect("energy");
+    assert!(clutch > 0.0);
+    // The energy balance holds to the integrator's tolerance.
+    assert!(v["max_energy_residual"].as_f64().expect("residual") < 1e-7 * clutch);
+    // Ends in third: input over output speed is third's ratio (egt shift).
+    let (_, table, _) = {
+        let s = egt(
+            &["shift", "examples/zf_8hp70.toml", "--format", "json"],
+            None,
+        );
+        (s.code, s.stdout, s.stderr)
+    };
+    let shift: Value = serde_json::from_str(&table).expect("json");
+    let third = shift["gears"]
+        .as_array()
+        .expect("gears")
+        .iter()
+        .find(|g| g["state"] == "3")
+        .expect("third")["ratio"]
+        .as_f64()
+        .expect("ratio");
+    let last = v["samples"]
+        .as_array()
+        .expect("samples")
+        .last()
+        .expect("a sample")
+        .clone();
+    let speed = last["speed"].as_array().expect("speeds");
+    let names: Vec<Value> = serde_json::from_str::<Value>(
+        &egt(
+            &["graph", "examples/zf_8hp70.toml", "--format", "json"],
+            None,
+        )
+        .stdout,
+    )
+    .expect("json")["nodes"]
+        .as_array()
+        .expect("nodes")
+        .clone();
+    let index = |name: &str| names.iter().position(|n| n["link"] == name).expect("link");
+    let ratio = speed[index("input")].as_f64().unwrap() / speed[index("output")].as_f64().unwrap();
+    assert!((ratio - third).abs() < 1e-9 * third, "{ratio} vs {third}");
+}
+
+#[test]
+fn csv_and_plot_carry_the_time_series() {
+    let dir = std::env::temp_dir().join(format!("egt-shift-sim-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let svg = dir.join("shift.svg");
+    let r = run(&with(&[
+        "--format",
+        "csv",
+        "--plot",
+        svg.to_str().expect("utf-8"),
+    ]));
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let mut lines = r.stdout.lines();
+    let header = lines.next().expect("header");
+    for col in [
+        "t",
+        "w_input",
+        "w_output",
+        "slip_A",
+        "torque_C",
+        "dissipated_C",
+        "output_torque",
+        "dof",
+    ] {
+        assert!(header.split(',').any(|h| h == col), "{col} in {header}");
+    }
+    let rows: Vec<&str> = lines.collect();
+    assert!(rows.len() > 100);
+    let plot = std::fs::read_to_string(&svg).expect("plot written");
+    assert!(
+        plot.starts_with("<svg")
+            && plot.contains("output torque")
+            && plot.contains("element torques")
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    let _ = root();
+}
+
+#[test]
+fn bad_shifts_exit_2_naming_the_flag_or_field() {
+    let mut not_single = with(&[]);
+    // 1 (A B C) -> 4 (B D E) swaps two elements each way
+    not_single[3] = "1".into();
+    not_single[5] = "4".into();
+    for (args, words) in [
+        (not_single, "shift.to"),
+        (with(&["--mu", "0.1"]), "--mu"),
+        (with(&["--t-end=-1"]), "shift.t_end"),
+    ] {
+        let r = run(&args);
+        assert_eq!(r.code, 2, "{args:?}: {}", r.stderr);
+        assert!(r.stderr.contains(words), "{words}: {}", r.stderr);
+    }
+    // A spec without inertias cannot be simulated; the message says what to give.
+    let r = egt(
+        &[
+            "shift-sim",
+            "examples/zf_6hp26_lepelletier.toml",
+            "--from",
+            "1",
+            "--to",
+            "2",
+            "--input-speed",
+            "200",
+            "--input-torque",
+            "100",
+            "--off-going",
+            "0",
+            "--on-coming",
+            "100",
+        ],
+        None,
+    );
+    assert_ne!(r.code, 0);
+    assert!(r.stderr.contains("inertia"), "{}", r.stderr);
+}
