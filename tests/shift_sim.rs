@@ -94,7 +94,8 @@ fn the_8hp_2_3_upshift_gives_its_shift_time_and_clutch_energy_in_one_command() {
         .expect("nodes")
         .clone();
     let index = |name: &str| names.iter().position(|n| n["link"] == name).expect("link");
-    let ratio = speed[index("input")].as_f64().unwrap() / speed[index("output")].as_f64().unwrap();
+    let ratio = speed[index("input")].as_f64().expect("speed")
+        / speed[index("output")].as_f64().expect("speed");
     assert!((ratio - third).abs() < 1e-9 * third, "{ratio} vs {third}");
 }
 
