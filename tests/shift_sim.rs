@@ -175,3 +175,52 @@ fn bad_shifts_exit_2_naming_the_flag_or_field() {
     assert_ne!(r.code, 0);
     assert!(r.stderr.contains("inertia"), "{}", r.stderr);
 }
+
+#[test]
+fn a_stiff_shift_says_when_the_explicit_method_is_held_back() {
+    // A huge viscous road load on the C4's light inertias: decay rates near
+    // 6e4 1/s. `auto` notices and goes on implicitly; `explicit` says so.
+    let base = [
+        "shift-sim",
+        "examples/ford_c4_simpson.toml",
+        "--from",
+        "2",
+        "--to",
+        "3",
+        "--input-speed",
+        "300",
+        "--input-torque",
+        "150",
+        "--road-load",
+        "0,5000,0",
+        "--off-going",
+        "0:0.02:6000:0",
+        "--on-coming",
+        "0.05:0.35:0:8000",
+        "--t-end",
+        "0.6",
+        "--format",
+        "json",
+    ];
+    let steps = |method: &str| {
+        let mut args = base.to_vec();
+        args.extend(["--method", method]);
+        let r = egt(&args, None);
+        assert_eq!(r.code, 0, "{}", r.stderr);
+        let v: Value = serde_json::from_str(&r.stdout).expect("json");
+        assert!(v["stiff"]["rate"].as_f64().expect("stiffness reported") > 1e4);
+        (
+            v["method"].as_str().expect("method").to_string(),
+            v["steps"].as_u64().expect("steps"),
+        )
+    };
+    let (auto, n_auto) = steps("auto");
+    let (explicit, n_explicit) = steps("explicit");
+    assert_eq!(auto, "explicit, then implicit");
+    assert_eq!(explicit, "explicit");
+    assert!(n_auto * 10 < n_explicit, "{n_auto} vs {n_explicit}");
+    let mut args = base[..base.len() - 2].to_vec();
+    args.extend(["--method", "explicit"]);
+    let table = egt(&args, None);
+    assert!(table.stdout.contains("stiff from t ="), "{}", table.stdout);
+}

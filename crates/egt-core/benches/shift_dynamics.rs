@@ -77,6 +77,7 @@ fn zf_2_3() -> (egt_core::Train, egt_core::shift_dynamics::ShiftSim) {
         t_end: 1.0,
         rtol: 1e-8,
         atol: 1e-8,
+        method: egt_core::shift_dynamics::ShiftMethod::Auto,
     };
     (train, sim)
 }

@@ -195,7 +195,7 @@ fn capacity(v: &[f64], field: &str) -> Result<egt_core::shift_dynamics::Capacity
 
 /// A gear change in time (egt_core::shift_dynamics::ShiftSim), as its serde form.
 #[pyfunction]
-#[pyo3(signature = (core, from_, to, input_speed, input_torque, torque_table, road_load, vehicle_inertia, mu, mu_decay, off_going, on_coming, t_end, rtol, atol))]
+#[pyo3(signature = (core, from_, to, input_speed, input_torque, torque_table, road_load, vehicle_inertia, mu, mu_decay, off_going, on_coming, t_end, rtol, atol, method))]
 #[allow(clippy::too_many_arguments)]
 pub fn shift_sim<'py>(
     py: Python<'py>,
@@ -214,8 +214,19 @@ pub fn shift_sim<'py>(
     t_end: f64,
     rtol: f64,
     atol: f64,
+    method: &str,
 ) -> Result<Bound<'py, PyAny>> {
-    use egt_core::shift_dynamics::{FrictionLaw, InputTorque, ShiftSim};
+    use egt_core::shift_dynamics::{FrictionLaw, InputTorque, ShiftMethod, ShiftSim};
+    let method = match method {
+        "auto" => ShiftMethod::Auto,
+        "explicit" => ShiftMethod::Explicit,
+        "implicit" => ShiftMethod::Implicit,
+        other => {
+            return Err(value_error(format!(
+                "method: expected \"auto\", \"explicit\" or \"implicit\", got {other:?}"
+            )));
+        }
+    };
     let input_torque = match (input_torque, torque_table) {
         (Some(t), None) => InputTorque::Constant(t),
         (None, Some(table)) => InputTorque::Table(table),
@@ -242,6 +253,7 @@ pub fn shift_sim<'py>(
         t_end,
         rtol,
         atol,
+        method,
     };
     guard(|| to_py(py, &sim.run(&core.train)?))
 }

@@ -38,6 +38,7 @@ def test_the_upshift_ends_in_third_with_its_energy_balanced() -> None:
     total = s.energy[0] + s.energy[1]
     assert np.abs(s.energy_residual).max() < 1e-7 * total
     assert s.dof[0] == 1 and s.dof.max() == 2 and s.dof[-1] == 1
+    assert s.method == "explicit" and s.stiff is None
     df = s.to_pandas()
     assert {"input", "slip_C", "torque_A", "output_torque", "dof"} <= set(df.columns)
 
@@ -65,5 +66,7 @@ def test_bad_shifts_raise_egt_errors_naming_the_field() -> None:
         train.simulate_shift("9", "3", **UPSHIFT)  # type: ignore[arg-type]
     with pytest.raises(egt.EgtError, match="off_going"):
         train.simulate_shift("2", "3", **{**UPSHIFT, "off_going": (1.0, 2.0)})  # type: ignore[arg-type]
+    with pytest.raises(egt.EgtError, match="method"):
+        train.simulate_shift("2", "3", method="rk4", **UPSHIFT)  # type: ignore[arg-type]
     with pytest.raises(egt.EgtError, match="input_torque"):
         train.simulate_shift("2", "3", **{**UPSHIFT, "input_torque": None})  # type: ignore[arg-type]

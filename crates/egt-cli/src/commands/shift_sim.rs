@@ -11,7 +11,9 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use egt_core::Train;
-use egt_core::shift_dynamics::{Capacity, FrictionLaw, InputTorque, ShiftResult, ShiftSim};
+use egt_core::shift_dynamics::{
+    Capacity, FrictionLaw, InputTorque, ShiftMethod, ShiftResult, ShiftSim,
+};
 
 use crate::cli::{OutputFormat, SpecArgs};
 use crate::input;
@@ -27,6 +29,17 @@ pub enum ShiftFormat {
     Json,
     /// The time series.
     Csv,
+}
+
+/// The integrator, as on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum MethodArg {
+    /// Explicit Bogacki–Shampine, implicit from where a stiff mode limits its steps.
+    Auto,
+    /// Explicit Bogacki–Shampine 3(2) throughout.
+    Explicit,
+    /// Extrapolated linearly implicit Euler throughout.
+    Implicit,
 }
 
 /// Arguments of `egt shift-sim`.
@@ -89,6 +102,10 @@ pub struct Args {
     /// Absolute tolerance [rad/s, J].
     #[arg(long, default_value_t = 1e-8)]
     pub atol: f64,
+    /// Integrator: `auto` (explicit until a stiff mode limits its steps, then
+    /// implicit), `explicit` (reports a stiff mode, keeps going), `implicit`.
+    #[arg(long, value_enum, default_value_t = MethodArg::Auto)]
+    pub method: MethodArg,
     /// Write the shift plot (SVG) to FILE.
     #[arg(long, value_name = "FILE")]
     pub plot: Option<PathBuf>,
@@ -170,6 +187,11 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         t_end: args.t_end,
         rtol: args.rtol,
         atol: args.atol,
+        method: match args.method {
+            MethodArg::Auto => ShiftMethod::Auto,
+            MethodArg::Explicit => ShiftMethod::Explicit,
+            MethodArg::Implicit => ShiftMethod::Implicit,
+        },
     };
     let r = sim
         .run(train)
@@ -258,10 +280,27 @@ fn table(
     )?;
     writeln!(
         out,
-        "energy balance (W_in - dKE - E_friction - E_lock): largest residual {} J over {} steps",
+        "energy balance (W_in - dKE - E_friction - E_lock): largest residual {} J over {} steps ({})",
         report::sci(r.max_energy_residual),
-        r.steps
+        r.steps,
+        r.method
     )?;
+    if let Some(s) = &r.stiff {
+        writeln!(
+            out,
+            "stiff from t = {} s: decay rate {} 1/s holds explicit steps to {} s (2.5 / rate) whatever the tolerance{}",
+            report::float(s.t),
+            report::sci(s.rate),
+            report::sci(s.h),
+            if r.method == "explicit" {
+                "; `--method auto` or `implicit` would take far fewer steps"
+            } else if r.method == "implicit" {
+                ""
+            } else {
+                "; continued with the implicit method"
+            }
+        )?;
+    }
     Ok(())
 }
 

@@ -33,4 +33,6 @@ pub use engagement::{Engagement, EngagementResult, EngagementSample, Phase};
 pub use friction::{Capacity, FrictionLaw};
 pub use lockup::{LockUp, lock_projection};
 pub use mode::{ModeBasis, mode_basis};
-pub use shift::{InputTorque, ModeChange, ShiftResult, ShiftSample, ShiftSim};
+pub use shift::{
+    InputTorque, ModeChange, ShiftMethod, ShiftResult, ShiftSample, ShiftSim, Stiffness,
+};

@@ -156,6 +156,7 @@ def shift_sim(
     t_end: float,
     rtol: float,
     atol: float,
+    method: str,
 ) -> Dict[str, Any]: ...
 def ratios_from_teeth(
     core: TrainCore, teeth: npt.NDArray[np.int64]

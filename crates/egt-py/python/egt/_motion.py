@@ -343,6 +343,11 @@ class ShiftSimulation:
     lock_loss: float
     max_energy_residual: float
     steps: int
+    method: str
+    """``explicit``, ``implicit`` or ``explicit, then implicit``."""
+    stiff: Optional[Tuple[float, float, float]]
+    """(time, explicit step, decay rate 1/s) where a stiff mode began to limit
+    the explicit steps, if one did."""
 
     @classmethod
     def _from_core(cls, links: Tuple[str, ...], d: Mapping[str, Any]) -> "ShiftSimulation":
@@ -376,6 +381,8 @@ class ShiftSimulation:
             lock_loss=d["lock_loss"],
             max_energy_residual=d["max_energy_residual"],
             steps=d["steps"],
+            method=d["method"],
+            stiff=None if d["stiff"] is None else (d["stiff"]["t"], d["stiff"]["h"], d["stiff"]["rate"]),
         )
 
     def speed(self, link: str) -> np.ndarray:

@@ -639,6 +639,7 @@ class Train:
         t_end: float = 1.0,
         rtol: float = 1e-8,
         atol: float = 1e-8,
+        method: str = "auto",
     ) -> ShiftSimulation:
         """A gear change in time, as ``egt shift-sim`` (docs/shift_dynamics.md).
 
@@ -649,7 +650,9 @@ class Train:
         constant ``input_torque`` or a ``torque_table`` of (speed, torque)
         points. ``road_load`` is ``(c0, c1, c2)``: c0 sgn(w) + c1 w + c2 w|w|
         at the output; ``vehicle_inertia`` is reflected to the output link.
-        ``mu`` is (static, kinetic).
+        ``mu`` is (static, kinetic). ``method``: ``"auto"`` (explicit until a
+        stiff mode limits its steps, then implicit; ``stiff`` says when),
+        ``"explicit"`` or ``"implicit"``.
         """
 
         def cap(v: Union[float, Sequence[float]], field: str) -> List[float]:
@@ -681,6 +684,7 @@ class Train:
             number(t_end, "t_end"),
             number(rtol, "rtol"),
             number(atol, "atol"),
+            str(method),
         )
         return ShiftSimulation._from_core(self._links, raw)
 

@@ -102,6 +102,20 @@ impl InputTorque {
     }
 }
 
+/// How the shift is integrated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum ShiftMethod {
+    /// Explicit Bogacki–Shampine until its steps are limited by stability
+    /// (a stiff mode), then implicit for the rest of the run.
+    #[default]
+    Auto,
+    /// Explicit Bogacki–Shampine 3(2) only; a stiff mode is reported.
+    Explicit,
+    /// Extrapolated linearly implicit Euler (third order, stiffly stable) throughout.
+    Implicit,
+}
+
 /// What to simulate: a single-swap shift between two gear states.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ShiftSim {
@@ -129,6 +143,20 @@ pub struct ShiftSim {
     pub rtol: f64,
     /// Absolute tolerance (rad/s, J).
     pub atol: f64,
+    /// Integration method.
+    pub method: ShiftMethod,
+}
+
+/// Where the explicit method's steps became limited by stability.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Stiffness {
+    /// Time (s).
+    pub t: f64,
+    /// The explicit step there (s).
+    pub h: f64,
+    /// The estimated stiffness (largest decay rate, 1/s): the explicit method
+    /// needs `h <= 2.5 / rate` whatever the accuracy asked.
+    pub rate: f64,
 }
 
 /// A mode change.
@@ -193,7 +221,19 @@ pub struct ShiftResult {
     pub max_energy_residual: f64,
     /// Accepted steps.
     pub steps: usize,
+    /// The method each part of the run used: `explicit`, `implicit`, or
+    /// `explicit, then implicit`.
+    pub method: String,
+    /// When the explicit steps became limited by stability (a stiff mode),
+    /// if they did: with `auto` the run went on implicitly from there; with
+    /// `explicit` it kept taking steps of about `h`.
+    pub stiff: Option<Stiffness>,
 }
+
+/// Consecutive stability-limited explicit steps that call a mode stiff.
+const STIFF_STEPS: usize = 10;
+/// The Bogacki–Shampine stability boundary on the negative real axis (about 2.51).
+const EXPLICIT_LIMIT: f64 = 2.5;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Phase {
@@ -552,7 +592,11 @@ impl ShiftSim {
             lock_loss: 0.0,
             max_energy_residual: 0.0,
             steps: 0,
+            method: String::new(),
+            stiff: None,
         };
+        let mut implicit = self.method == ShiftMethod::Implicit;
+        let mut limited = 0usize;
         let mut f0 = setup.rhs(&mode, &phases, t_now, &y);
         let record = |out: &mut ShiftResult,
                       t: f64,
@@ -617,7 +661,22 @@ impl ShiftSim {
             }
             h = h.min(stop - t_now);
             let mut rhs = |tt: f64, yy: &[f64]| setup.rhs(&mode, &phases, tt, yy);
-            let (y1, f1, err) = ode::bs23(&mut rhs, t_now, &y, &f0, h);
+            let step = if implicit {
+                ode::implicit_step(&mut rhs, t_now, &y, h)
+            } else {
+                Some(ode::bs23(&mut rhs, t_now, &y, &f0, h))
+            };
+            // both error estimates are of a second-order solution: exponent 1/3
+            let order = 3.0;
+            let Some((y1, f1, err)) = step else {
+                h *= 0.25;
+                if h < 1e-14 * self.t_end {
+                    return Err(refuse(format!(
+                        "the implicit step's matrix is singular at t = {t_now} for every step size"
+                    )));
+                }
+                continue;
+            };
             let norm = ode::error_norm(&err, &y, &y1, self.rtol, self.atol);
             if !norm.is_finite() {
                 return Err(refuse(format!(
@@ -625,10 +684,39 @@ impl ShiftSim {
                 )));
             }
             if norm > 1.0 {
-                h *= (0.9 * norm.powf(-1.0 / 3.0)).max(0.2);
+                h *= (0.9 * norm.powf(-1.0 / order)).max(0.2);
                 continue;
             }
             out.steps += 1;
+            if !implicit {
+                // Stiffness: the decay rate along the step's correction,
+                // |f(y1) - f(y_euler)| / |y1 - y_euler|, against the explicit
+                // stability boundary.
+                let euler: Vec<f64> = y.iter().zip(&f0).map(|(a, b)| a + h * b).collect();
+                let fe = setup.rhs(&mode, &phases, t_now + h, &euler);
+                let (mut num, mut den) = (0.0f64, 0.0f64);
+                for i in 0..n {
+                    num += (f1[i] - fe[i]).powi(2);
+                    den += (y1[i] - euler[i]).powi(2);
+                }
+                let size = y1[..n].iter().fold(1.0f64, |m, v| m.max(v.abs()));
+                let rate = if den.sqrt() > 1e-9 * size {
+                    (num / den).sqrt()
+                } else {
+                    0.0 // the correction is at rounding level: no estimate
+                };
+                if h * rate > 0.8 * EXPLICIT_LIMIT {
+                    limited += 1;
+                    if limited >= STIFF_STEPS && out.stiff.is_none() {
+                        out.stiff = Some(Stiffness { t: t_now, h, rate });
+                        if self.method == ShiftMethod::Auto {
+                            implicit = true;
+                        }
+                    }
+                } else {
+                    limited = 0;
+                }
+            }
             let t1 = if stop - (t_now + h) <= 1e-15 * stop.abs().max(1.0) {
                 stop
             } else {
@@ -732,10 +820,16 @@ impl ShiftSim {
             let grow = if norm == 0.0 {
                 5.0
             } else {
-                (0.9 * norm.powf(-1.0 / 3.0)).min(5.0)
+                (0.9 * norm.powf(-1.0 / order)).min(5.0)
             };
             h *= grow;
         }
+        out.method = match (self.method, &out.stiff) {
+            (ShiftMethod::Implicit, _) => "implicit",
+            (ShiftMethod::Auto, Some(_)) => "explicit, then implicit",
+            _ => "explicit",
+        }
+        .to_string();
         out.dissipated = [y[n], y[n + 1]];
         out.lock_loss = lock_loss;
         out.shift_start = first_positive(&self.on_coming, self.t_end);
@@ -816,6 +910,7 @@ mod tests {
             t_end: 1.0,
             rtol: 1e-8,
             atol: 1e-8,
+            method: ShiftMethod::Auto,
         }
     }
 
@@ -1040,6 +1135,82 @@ mod tests {
             }
         }
         assert_eq!(runs, 14);
+    }
+
+    #[test]
+    fn a_stiff_road_load_switches_to_the_implicit_method_and_says_when() {
+        // A huge viscous road load on light inertias: decay rates of about
+        // 1e5 1/s, far faster than the shift. The explicit method must take
+        // steps near 2.5 / rate whatever the accuracy; the auto method
+        // detects it and goes on implicitly.
+        let train = simpson();
+        let stiff = ShiftSim {
+            road_load: [0.0, 5000.0, 0.0],
+            vehicle_inertia: 0.0,
+            off_going: Capacity::Ramp {
+                t0: 0.0,
+                t1: 0.02,
+                from: 6000.0,
+                to: 0.0,
+            },
+            t_end: 0.6,
+            ..upshift()
+        };
+        let auto = stiff.run(&train).unwrap();
+        let explicit = ShiftSim {
+            method: ShiftMethod::Explicit,
+            ..stiff.clone()
+        }
+        .run(&train)
+        .unwrap();
+        let s = auto.stiff.clone().expect("stiffness detected");
+        assert_eq!(auto.method, "explicit, then implicit");
+        assert!(s.rate > 1e4, "{s:?}");
+        assert!(s.h * s.rate > 2.0 && s.h * s.rate < 3.0, "{s:?}");
+        assert_eq!(explicit.method, "explicit");
+        assert!(explicit.stiff.is_some());
+        assert!(
+            auto.steps * 10 < explicit.steps,
+            "{} vs {}",
+            auto.steps,
+            explicit.steps
+        );
+        eprintln!(
+            "stiff run: {s:?}; steps auto {} explicit {}",
+            auto.steps, explicit.steps
+        );
+        // Same physics: the same lock time and final speeds, energy balanced.
+        let (la, le) = (auto.lock_time.unwrap(), explicit.lock_time.unwrap());
+        assert!((la - le).abs() < 1e-4, "{la} vs {le}");
+        let (a, e) = (
+            auto.samples.last().unwrap(),
+            explicit.samples.last().unwrap(),
+        );
+        for (x, y) in a.speed.iter().zip(&e.speed) {
+            assert!((x - y).abs() < 1e-4 * (1.0 + y.abs()), "{x} vs {y}");
+        }
+        for r in [&auto, &explicit] {
+            assert!(r.max_energy_residual < 1e-6 * (r.dissipated[0] + r.dissipated[1]));
+        }
+    }
+
+    #[test]
+    fn the_implicit_method_gives_the_explicit_shift() {
+        let train = simpson();
+        let e = upshift().run(&train).unwrap();
+        assert!(e.stiff.is_none() && e.method == "explicit");
+        let i = ShiftSim {
+            method: ShiftMethod::Implicit,
+            ..upshift()
+        }
+        .run(&train)
+        .unwrap();
+        assert_eq!(i.method, "implicit");
+        assert!((i.lock_time.unwrap() - e.lock_time.unwrap()).abs() < 1e-5);
+        let (a, b) = (i.samples.last().unwrap(), e.samples.last().unwrap());
+        for (x, y) in a.speed.iter().zip(&b.speed) {
+            assert!((x - y).abs() < 1e-5 * (1.0 + y.abs()));
+        }
     }
 
     #[test]
