@@ -1214,6 +1214,62 @@ mod tests {
     }
 
     #[test]
+    fn a_2_1_downshift_engages_the_low_one_way_when_its_slip_reaches_zero() {
+        // Power on, the band lets go; the engine flares until the rear
+        // carrier's backward slip returns to zero, and the one-way element
+        // locks there under drive torque (it holds, T >= 0 on its link).
+        let train = simpson();
+        let sim = ShiftSim {
+            from: "2".into(),
+            to: "1".into(),
+            input_speed: 200.0,
+            off_going: Capacity::Ramp {
+                t0: 0.05,
+                t1: 0.15,
+                from: 6000.0,
+                to: 0.0,
+            },
+            on_coming: Capacity::Constant(0.0),
+            ..upshift()
+        };
+        let r = sim.run(&train).unwrap();
+        let what: Vec<(&str, &str)> = r
+            .changes
+            .iter()
+            .map(|c| (c.element.as_str(), c.now.as_str()))
+            .collect();
+        assert_eq!(
+            what,
+            [("intermediate_band", "slipping"), ("low_one_way", "locked")]
+        );
+        let last = r.samples.last().unwrap();
+        assert!(
+            last.element_torque[1] >= 0.0,
+            "holds in drive: {}",
+            last.element_torque[1]
+        );
+        let first = train.analyse_gear("1").unwrap();
+        let t = train.checked_transmission().unwrap();
+        assert!(
+            rel(
+                last.speed[t.input.index()] / last.speed[t.output.index()],
+                first.ratio
+            ) < 1e-9
+        );
+        // No energy is created at the engagement.
+        assert!(r.lock_loss >= 0.0);
+        // Little is dissipated here (the band slips briefly, the one-way not
+        // at all): bound the residual by the work the input does instead,
+        // about 150 N m x 200 rad/s x 1 s.
+        assert!(
+            r.max_energy_residual < 1e-9 * 150.0 * 200.0,
+            "{}",
+            r.max_energy_residual
+        );
+        assert_eq!(r.dissipated[1], 0.0);
+    }
+
+    #[test]
     fn bad_shifts_are_named() {
         let train = simpson();
         let err = |sim: ShiftSim| sim.run(&train).unwrap_err().to_string();
