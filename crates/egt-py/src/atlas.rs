@@ -2,7 +2,9 @@
 //! graphs (egt_core::synthesis) as a list of dicts, one per member; and
 //! `atlas_member(train, level)`, the member a train is.
 
-use egt_core::synthesis::{AtlasMember, AtlasRequest, GraphLevel, enumerate, member};
+use egt_core::synthesis::{
+    AtlasMember, AtlasRequest, Fractionation, GraphLevel, enumerate, member,
+};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -38,21 +40,34 @@ fn to_dict<'py>(py: Python<'py>, m: AtlasMember) -> Result<Bound<'py, PyDict>> {
 
 /// Every member with `links` links and `dof` DOF, at level `rotation` or `displacement`.
 #[pyfunction]
-#[pyo3(signature = (links, dof = 1, level = "rotation", part = None))]
+#[pyo3(signature = (links, dof = 1, level = "rotation", part = None, fractionation = "layout"))]
 pub fn atlas<'py>(
     py: Python<'py>,
     links: usize,
     dof: usize,
     level: &str,
     part: Option<(usize, usize)>,
+    fractionation: &str,
 ) -> Result<Vec<Bound<'py, PyDict>>> {
     let level = level_of(level)?;
+    let fractionation = match fractionation {
+        "layout" => Fractionation::Layout,
+        "kinematic" => Fractionation::Kinematic,
+        other => {
+            return Err(egt_core::Error::invalid(
+                "fractionation",
+                format!("`{other}`: expected `layout` or `kinematic`"),
+            )
+            .into());
+        }
+    };
     let members = guard(|| {
         Ok(enumerate(&AtlasRequest {
             links,
             dof,
             level,
             part,
+            fractionation,
         })?)
     })?;
     members.into_iter().map(|m| to_dict(py, m)).collect()

@@ -54,3 +54,11 @@ def test_a_train_names_its_atlas_member() -> None:
     assert m["code"] in {x["code"] for x in egt.atlas(6, dof=2, level="displacement")}
     with pytest.raises(egt.EgtError, match="case"):
         egt.Train.from_file(EXAMPLES / "ford_c4_simpson.toml").atlas_member()
+
+
+def test_the_kinematic_sense_of_fractionation_is_stricter_for_two_dof() -> None:
+    layout = {m["code"] for m in egt.atlas(6, dof=2, level="displacement")}
+    kinematic = {m["code"] for m in egt.atlas(6, dof=2, level="displacement", fractionation="kinematic")}
+    assert kinematic < layout and len(kinematic) == 3
+    with pytest.raises(egt.EgtError, match="fractionation"):
+        egt.atlas(6, fractionation="other")

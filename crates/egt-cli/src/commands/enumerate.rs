@@ -9,7 +9,7 @@ use std::io::Write;
 
 use std::path::PathBuf;
 
-use egt_core::synthesis::{AtlasRequest, GraphLevel, enumerate_with, member, units};
+use egt_core::synthesis::{AtlasRequest, Fractionation, GraphLevel, enumerate_with, member, units};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::args::parse_part;
@@ -38,9 +38,23 @@ pub struct Args {
     /// Only partition I of K (`I/K`, 0-based): disjoint parts that together make the atlas.
     #[arg(long)]
     pub part: Option<String>,
+    /// Which chains count as fractionated: `layout` (as `egt check`, in some
+    /// bearing layout) or `kinematic` (also a cut link in the rotation graph,
+    /// Tsai & Lin's non-fractionated trains; stricter for two or more DOF).
+    #[arg(long, value_enum, default_value_t = FractionationArg::Layout)]
+    pub fractionation: FractionationArg,
     /// Print only the number of members.
     #[arg(long)]
     pub count: bool,
+}
+
+/// The sense of fractionation, as on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum FractionationArg {
+    /// As `egt check`, in the best bearing layout.
+    Layout,
+    /// Also no cut link in the rotation graph.
+    Kinematic,
 }
 
 /// The graph level, as on the command line.
@@ -83,6 +97,10 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         dof: args.dof,
         level,
         part: args.part.as_deref().map(parse_part).transpose()?,
+        fractionation: match args.fractionation {
+            FractionationArg::Layout => Fractionation::Layout,
+            FractionationArg::Kinematic => Fractionation::Kinematic,
+        },
     };
     // Drawn on stderr only when it is a terminal (indicatif hides it otherwise).
     let bar = ProgressBar::new(units(links.clamp(1, 12)) as u64);

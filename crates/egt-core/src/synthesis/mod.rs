@@ -39,6 +39,20 @@ pub enum GraphLevel {
     Displacement,
 }
 
+/// Which sense of "fractionated" rejects a chain.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Fractionation {
+    /// As `egt check`: a link whose removal splits the graph of some bearing
+    /// layout into moving parts; a chain passes when some layout passes.
+    #[default]
+    Layout,
+    /// Kinematic (Tsai & Lin's non-fractionated trains): also reject a chain
+    /// whose rotation graph has a cut link, whatever the bearings. Stricter
+    /// for two or more DOF; the same for one DOF.
+    Kinematic,
+}
+
 /// What to enumerate.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct AtlasRequest {
@@ -52,6 +66,8 @@ pub struct AtlasRequest {
     /// of the search that can run on separate machines; their outputs are
     /// disjoint and together make the whole atlas.
     pub part: Option<(usize, usize)>,
+    /// Which sense of fractionation rejects a chain.
+    pub fractionation: Fractionation,
 }
 
 /// One member of the atlas.
@@ -168,6 +184,7 @@ pub fn member(train: &Train, level: GraphLevel) -> Result<AtlasMember> {
         dof: train.dof(),
         level,
         part: None,
+        fractionation: Fractionation::Layout,
     };
     let (_, p) = canonical(&owner, Extra::None);
     let members = members_of_tree(&owner.permuted(&p), &req);
@@ -410,6 +427,9 @@ fn members_of_tree(tree: &ChainGraph, req: &AtlasRequest) -> Vec<AtlasMember> {
     // r-code -> its valid displacement graphs (d-code, emitted form)
     let mut by_rotation: BTreeMap<Code, Vec<(Code, Emitted)>> = BTreeMap::new();
     for (dcode, f) in found_in_tree(tree, req) {
+        if req.fractionation == Fractionation::Kinematic && has_cut_link(&f.graph) {
+            continue;
+        }
         if let Some(emitted) = checked_form(&f.graph, &f.levels) {
             by_rotation
                 .entry(f.rcode)
@@ -541,6 +561,30 @@ fn coaxial(turning: &[(usize, usize)], levels: &[usize]) -> Vec<String> {
 fn egt_check(adjacency: &str) -> Result<Train> {
     let text = format!("frame = \"1\"\nadjacency = \"{adjacency}\"\n");
     Train::from_str(&text, Format::Toml, "atlas")
+}
+
+/// Whether removing one link disconnects the rest of `g` (turning and gear
+/// pairs alike): a cut link of the rotation graph.
+fn has_cut_link(g: &ChainGraph) -> bool {
+    let n = g.links();
+    (0..n).any(|cut| {
+        let start = usize::from(cut == 0);
+        let mut seen = vec![false; n];
+        seen[cut] = true;
+        seen[start] = true;
+        let mut stack = vec![start];
+        let mut count = 2;
+        while let Some(a) = stack.pop() {
+            for b in 0..n {
+                if !seen[b] && g.joint(a, b) != Joint::None {
+                    seen[b] = true;
+                    count += 1;
+                    stack.push(b);
+                }
+            }
+        }
+        count < n
+    })
 }
 
 /// The displacement graph `(g, levels)` in the first bearing layout that

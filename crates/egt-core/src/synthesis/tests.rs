@@ -17,6 +17,7 @@ fn atlas(
         dof,
         level,
         part,
+        fractionation: Fractionation::Layout,
     })
     .unwrap()
 }
@@ -103,6 +104,7 @@ fn bad_requests_name_the_field() {
             dof,
             level: GraphLevel::Rotation,
             part,
+            fractionation: Fractionation::Layout,
         })
         .unwrap_err()
         .to_string()
@@ -130,6 +132,7 @@ fn differently_seeded_generation_orders_give_the_same_set() {
             dof: 1,
             level,
             part: None,
+            fractionation: Fractionation::Layout,
         };
         for t in trees::trees(6) {
             let codes = |g: &ChainGraph| {
@@ -240,7 +243,7 @@ fn hex(code: &Code) -> String {
 /// gear pairs, each with a carrier, taken as the union of their rotation
 /// triangles; every level assignment of its turning edges; egt's check on a
 /// bearing tree built by `tree_form`. Returns (rotation codes, displacement codes).
-fn brute_force(n: usize, dof: usize) -> (BTreeSet<String>, BTreeSet<String>) {
+fn brute_force(n: usize, dof: usize, kinematic: bool) -> (BTreeSet<String>, BTreeSet<String>) {
     let ng = n - 1 - dof;
     let mut triples = Vec::new();
     for k in 0..n {
@@ -288,6 +291,9 @@ fn brute_force(n: usize, dof: usize) -> (BTreeSet<String>, BTreeSet<String>) {
                     .collect()
             })
             .collect();
+        if kinematic && has_cut_link(g) {
+            continue;
+        }
         all_rgs(thin.len(), |levels| {
             // each gear pair turns about two different axes of one carrier
             if !legs
@@ -327,7 +333,7 @@ fn codes(links: usize, dof: usize, level: GraphLevel) -> BTreeSet<String> {
 #[test]
 fn the_search_finds_exactly_the_brute_force_atlas() {
     for (n, f) in [(3, 1), (4, 1), (5, 1), (6, 1), (5, 2), (6, 2), (6, 3)] {
-        let (r, d) = brute_force(n, f);
+        let (r, d) = brute_force(n, f, false);
         assert_eq!(
             codes(n, f, GraphLevel::Rotation),
             r,
@@ -402,6 +408,7 @@ fn ownership_loses_nothing() {
         dof: 1,
         level: GraphLevel::Displacement,
         part: None,
+        fractionation: Fractionation::Layout,
     };
     let all: Vec<_> = trees::trees(n)
         .par_iter()
@@ -433,7 +440,7 @@ fn ownership_loses_nothing() {
 fn brute_force_agrees_beyond_ci_sizes() {
     let n: usize = std::env::var("ATLAS_LINKS").map_or(7, |s| s.parse().unwrap());
     let f: usize = std::env::var("ATLAS_DOF").map_or(1, |s| s.parse().unwrap());
-    let (r, d) = brute_force(n, f);
+    let (r, d) = brute_force(n, f, false);
     assert_eq!(codes(n, f, GraphLevel::Rotation), r);
     assert_eq!(codes(n, f, GraphLevel::Displacement), d);
     eprintln!(
@@ -441,4 +448,41 @@ fn brute_force_agrees_beyond_ci_sizes() {
         r.len(),
         d.len()
     );
+}
+
+#[test]
+fn the_kinematic_sense_of_fractionation_drops_series_trains_like_fig_5() {
+    let strict = |n: usize, f: usize, level: GraphLevel| -> BTreeSet<String> {
+        enumerate(&AtlasRequest {
+            links: n,
+            dof: f,
+            level,
+            part: None,
+            fractionation: Fractionation::Kinematic,
+        })
+        .unwrap()
+        .into_iter()
+        .map(|m| m.code)
+        .collect()
+    };
+    // The same as the second generator with the same filter, and a subset
+    // of the layout sense; equal to it for one DOF.
+    for (n, f) in [(5, 2), (6, 2), (6, 3)] {
+        let (r, d) = brute_force(n, f, true);
+        assert_eq!(strict(n, f, GraphLevel::Rotation), r, "{n} links {f} DOF");
+        assert_eq!(
+            strict(n, f, GraphLevel::Displacement),
+            d,
+            "{n} links {f} DOF"
+        );
+        assert!(d.is_subset(&codes(n, f, GraphLevel::Displacement)));
+    }
+    assert_eq!(
+        strict(6, 1, GraphLevel::Displacement),
+        codes(6, 1, GraphLevel::Displacement)
+    );
+    // Fig. 5's carrier 3 alone joins its fixed-axis pair to its differential.
+    let fig5 = member(&example("fig5_example62.toml"), GraphLevel::Displacement).unwrap();
+    assert!(codes(6, 2, GraphLevel::Displacement).contains(&fig5.code));
+    assert!(!strict(6, 2, GraphLevel::Displacement).contains(&fig5.code));
 }

@@ -96,7 +96,11 @@ class TrainCore:
 
 def structure(core: TrainCore) -> Dict[str, Any]: ...
 def atlas(
-    links: int, dof: int = 1, level: str = "rotation", part: Optional[Tuple[int, int]] = None
+    links: int,
+    dof: int = 1,
+    level: str = "rotation",
+    part: Optional[Tuple[int, int]] = None,
+    fractionation: str = "layout",
 ) -> List[Dict[str, Any]]: ...
 def atlas_member(core: TrainCore, level: str = "rotation") -> Dict[str, Any]: ...
 @final
