@@ -575,9 +575,9 @@ fn has_cut_link(g: &ChainGraph) -> bool {
         let mut stack = vec![start];
         let mut count = 2;
         while let Some(a) = stack.pop() {
-            for b in 0..n {
-                if !seen[b] && g.joint(a, b) != Joint::None {
-                    seen[b] = true;
+            for (b, s) in seen.iter_mut().enumerate() {
+                if !*s && g.joint(a, b) != Joint::None {
+                    *s = true;
                     count += 1;
                     stack.push(b);
                 }
