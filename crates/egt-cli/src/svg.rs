@@ -204,3 +204,27 @@ pub fn legend(svg: &mut String, labels: &[String]) {
         );
     }
 }
+
+/// Opens a time-series plot document of `height`: the style sheet, a white
+/// background, the title and a subtitle line.
+pub fn open_plot(svg: &mut String, height: f64, title: &str, subtitle: &str) {
+    let _ = writeln!(
+        svg,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{WIDTH}" height="{height}" viewBox="0 0 {WIDTH} {height}" font-family="sans-serif">"#
+    );
+    svg.push_str(PLOT_STYLE);
+    let _ = writeln!(
+        svg,
+        r#"<rect width="{WIDTH}" height="{height}" fill="white"/>"#
+    );
+    let _ = writeln!(
+        svg,
+        r#"<text x="{LEFT}" y="28" class="title">{}</text>"#,
+        esc(title)
+    );
+    let _ = writeln!(
+        svg,
+        r#"<text x="{LEFT}" y="48" class="sub">{}</text>"#,
+        esc(subtitle)
+    );
+}

@@ -18,7 +18,7 @@ use egt_core::shift_dynamics::{
 use crate::cli::{OutputFormat, SpecArgs};
 use crate::input;
 use crate::report::{self, Table};
-use crate::svg::{GAP, LEFT, Line, PLOT_H, Panel, TOP, WIDTH, esc, legend, panel};
+use crate::svg::{GAP, Line, PLOT_H, Panel, TOP, legend, panel};
 
 /// How `egt shift-sim` prints its result.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -336,34 +336,19 @@ fn csv(out: &mut dyn Write, train: &Train, r: &ShiftResult) -> anyhow::Result<()
 /// The standard shift plot: link speeds; the two elements' torques; the
 /// output torque.
 fn plot(train: &Train, title: &str, r: &ShiftResult) -> String {
-    use std::fmt::Write as _;
     let s = &r.samples;
     let t_end = s.last().map_or(1.0, |x| x.t).max(f64::MIN_POSITIVE);
     let height = TOP + 3.0 * (PLOT_H + GAP) + 10.0;
     let mut svg = String::new();
-    let _ = writeln!(
-        svg,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{WIDTH}" height="{height}" viewBox="0 0 {WIDTH} {height}" font-family="sans-serif">"#
-    );
-    svg.push_str(crate::svg::PLOT_STYLE);
-    let _ = writeln!(
-        svg,
-        r#"<rect width="{WIDTH}" height="{height}" fill="white"/>"#
-    );
-    let _ = writeln!(
-        svg,
-        r#"<text x="{LEFT}" y="28" class="title">{}</text>"#,
-        esc(title)
-    );
-    let _ = writeln!(
-        svg,
-        r#"<text x="{LEFT}" y="48" class="sub">off-going `{}`, on-coming `{}`; shift time {} s; output torque {} .. {} N m</text>"#,
-        esc(&r.elements[0]),
-        esc(&r.elements[1]),
+    let subtitle = format!(
+        "off-going `{}`, on-coming `{}`; shift time {} s; output torque {} .. {} N m",
+        r.elements[0],
+        r.elements[1],
         opt(r.shift_time),
         report::float(r.output_torque_range[1]),
         report::float(r.output_torque_range[0]),
     );
+    crate::svg::open_plot(&mut svg, height, title, &subtitle);
     let time = |i: usize| s[i].t;
     let links: Vec<usize> = train.coordinates().iter().map(|l| l.index()).collect();
     let speeds: Vec<Box<dyn Fn(usize) -> f64 + '_>> = links

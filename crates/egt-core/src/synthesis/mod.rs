@@ -537,19 +537,27 @@ fn level_name(l: usize) -> String {
     (letters[l % 26] as char).to_string() + &"'".repeat(l / 26)
 }
 
+/// The links of each level (sorted), level by level.
+fn level_links(turning: &[(usize, usize)], levels: &[usize]) -> Vec<Vec<usize>> {
+    (0..levels.iter().max().map_or(0, |m| m + 1))
+        .map(|l| {
+            let mut links: Vec<usize> = turning
+                .iter()
+                .zip(levels)
+                .filter(|&(_, &x)| x == l)
+                .flat_map(|(&(a, b), _)| [a, b])
+                .collect();
+            links.sort_unstable();
+            links.dedup();
+            links
+        })
+        .collect()
+}
+
 /// Links on the most populated axis: those joined by turning pairs of the level used most.
 fn coaxial(turning: &[(usize, usize)], levels: &[usize]) -> Vec<String> {
-    let axes = levels.iter().max().map_or(0, |m| m + 1);
     let mut best: Vec<usize> = Vec::new();
-    for l in 0..axes {
-        let mut links: Vec<usize> = turning
-            .iter()
-            .zip(levels)
-            .filter(|&(_, &x)| x == l)
-            .flat_map(|(&(a, b), _)| [a, b])
-            .collect();
-        links.sort_unstable();
-        links.dedup();
+    for links in level_links(turning, levels) {
         if links.len() > best.len() {
             best = links;
         }
@@ -608,20 +616,7 @@ fn checked_form(g: &ChainGraph, levels: &[usize]) -> Option<Emitted> {
         )) => {}
         Err(_) => return None,
     }
-    let turning = g.pairs(Joint::Turning);
-    let classes: Vec<Vec<usize>> = (0..levels.iter().max().map_or(0, |m| m + 1))
-        .map(|l| {
-            let mut links: Vec<usize> = turning
-                .iter()
-                .zip(levels)
-                .filter(|&(_, &x)| x == l)
-                .flat_map(|(&(a, b), _)| [a, b])
-                .collect();
-            links.sort_unstable();
-            links.dedup();
-            links
-        })
-        .collect();
+    let classes = level_links(&g.pairs(Joint::Turning), levels);
     // one Prüfer sequence per level: digit i of level c runs over its links
     let digits: Vec<(usize, usize)> = classes
         .iter()

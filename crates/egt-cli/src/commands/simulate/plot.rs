@@ -6,7 +6,7 @@
 
 use std::fmt::Write as _;
 
-use crate::svg::{GAP, LEFT, Line, PLOT_H, Panel, TOP, WIDTH, esc, panel};
+use crate::svg::{GAP, LEFT, Line, PLOT_H, Panel, TOP, panel};
 use egt_core::{LinkId, Simulation, Train};
 
 /// The plot as an SVG document: the link speeds, and their deviation from
@@ -23,31 +23,17 @@ pub fn speeds_svg(
     let panels = if equilibrium.is_some() { 2.0 } else { 1.0 };
     let height = TOP + panels * (PLOT_H + GAP) + 10.0;
     let mut svg = String::new();
-    let _ = writeln!(
-        svg,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{WIDTH}" height="{height}" viewBox="0 0 {WIDTH} {height}" font-family="sans-serif">"#
-    );
-    svg.push_str(crate::svg::PLOT_STYLE);
-    let _ = writeln!(
-        svg,
-        r#"<rect width="{WIDTH}" height="{height}" fill="white"/>"#
-    );
-    let _ = writeln!(
-        svg,
-        r#"<text x="{LEFT}" y="28" class="title">{}</text>"#,
-        esc(title)
-    );
     let eig: Vec<String> = sim.eigenvalues.iter().map(|v| format!("{v:.4}")).collect();
-    let _ = writeln!(
-        svg,
-        r#"<text x="{LEFT}" y="48" class="sub">{}, dt = {:e} s, {} steps; eigenvalues [1/s]: {}; max Willis drift {:.1e}; energy balance {:.1e}</text>"#,
+    let subtitle = format!(
+        "{}, dt = {:e} s, {} steps; eigenvalues [1/s]: {}; max Willis drift {:.1e}; energy balance {:.1e}",
         sim.method,
         sim.dt,
         sim.steps,
-        esc(&eig.join(", ")),
+        eig.join(", "),
         sim.max_drift,
         sim.energy_error
     );
+    crate::svg::open_plot(&mut svg, height, title, &subtitle);
     let time = |i: usize| samples[i].t;
     let speeds: Vec<Box<dyn Fn(usize) -> f64 + '_>> = links
         .iter()

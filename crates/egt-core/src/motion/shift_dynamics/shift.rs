@@ -918,6 +918,18 @@ mod tests {
         (a - b).abs() / b.abs().max(1e-300)
     }
 
+    /// The run ends in `gear`: input over output speed is its ratio (egt shift).
+    fn assert_ends_in(train: &Train, r: &ShiftResult, gear: &str) {
+        let ratio = train.analyse_gear(gear).unwrap().ratio;
+        let last = r.samples.last().unwrap();
+        let t = train.checked_transmission().unwrap();
+        let ends = last.speed[t.input.index()] / last.speed[t.output.index()];
+        assert!(
+            rel(ends, ratio) < 1e-9,
+            "ends at {ends}, gear {gear} is {ratio}"
+        );
+    }
+
     #[test]
     fn the_2_3_upshift_releases_the_band_then_locks_the_clutch_in_third() {
         let train = simpson();
@@ -1030,15 +1042,7 @@ mod tests {
                 .all(|s| s.slip[0] > 0.0 && s.element_torque[0] == 0.0)
         );
         assert!(r.lock_loss >= 0.0);
-        let second = train.analyse_gear("2").unwrap();
-        let last = r.samples.last().unwrap();
-        let t = train.checked_transmission().unwrap();
-        assert!(
-            rel(
-                last.speed[t.input.index()] / last.speed[t.output.index()],
-                second.ratio
-            ) < 1e-9
-        );
+        assert_ends_in(&train, &r, "2");
     }
 
     #[test]
@@ -1065,15 +1069,7 @@ mod tests {
         let r = sim.run(&train).unwrap();
         assert_eq!(r.changes.first().unwrap().element, "reverse_high_clutch");
         assert!(r.lock_time.is_some(), "{:?}", r.changes);
-        let second = train.analyse_gear("2").unwrap();
-        let last = r.samples.last().unwrap();
-        let t = train.checked_transmission().unwrap();
-        assert!(
-            rel(
-                last.speed[t.input.index()] / last.speed[t.output.index()],
-                second.ratio
-            ) < 1e-9
-        );
+        assert_ends_in(&train, &r, "2");
         assert!(r.max_energy_residual < 1e-7 * (r.dissipated[0] + r.dissipated[1]));
     }
 
@@ -1088,7 +1084,6 @@ mod tests {
     #[test]
     fn every_8hp_single_swap_upshift_and_downshift_ends_in_its_gear_with_energy_balanced() {
         let train = zf();
-        let t = train.checked_transmission().unwrap().clone();
         let forward: Vec<&str> = ["1", "2", "3", "4", "5", "6", "7", "8"].into();
         let mut runs = 0;
         for w in forward.windows(2) {
@@ -1117,15 +1112,7 @@ mod tests {
                 };
                 let r = sim.run(&train).unwrap();
                 assert!(r.lock_time.is_some(), "{from} -> {to}: {:?}", r.changes);
-                let gear = train.analyse_gear(to).unwrap();
-                let last = r.samples.last().unwrap();
-                assert!(
-                    rel(
-                        last.speed[t.input.index()] / last.speed[t.output.index()],
-                        gear.ratio
-                    ) < 1e-9,
-                    "{from} -> {to}"
-                );
+                assert_ends_in(&train, &r, to);
                 let dissipated = r.dissipated[0] + r.dissipated[1];
                 assert!(
                     r.max_energy_residual < 1e-7 * dissipated.max(1.0),
@@ -1248,14 +1235,7 @@ mod tests {
             "holds in drive: {}",
             last.element_torque[1]
         );
-        let first = train.analyse_gear("1").unwrap();
-        let t = train.checked_transmission().unwrap();
-        assert!(
-            rel(
-                last.speed[t.input.index()] / last.speed[t.output.index()],
-                first.ratio
-            ) < 1e-9
-        );
+        assert_ends_in(&train, &r, "1");
         // No energy is created at the engagement.
         assert!(r.lock_loss >= 0.0);
         // Little is dissipated here (the band slips briefly, the one-way not
