@@ -308,9 +308,16 @@ impl Simulation {
         reference: &[f64],
         from: f64,
     ) -> Option<f64> {
+        // sqrt(2 K(dw)), with dw scaled to unit size first: K is quadratic, and
+        // squaring a deviation of 1e-200 would underflow to a zero norm.
         let norm = |s: &Sample| {
             let dw: Vec<f64> = s.speed.iter().zip(reference).map(|(a, b)| a - b).collect();
-            (2.0 * train.kinetic_energy(mass, &dw)).max(0.0).sqrt()
+            let size = dw.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+            if size == 0.0 || !size.is_finite() {
+                return size;
+            }
+            let unit: Vec<f64> = dw.iter().map(|v| v / size).collect();
+            size * (2.0 * train.kinetic_energy(mass, &unit)).max(0.0).sqrt()
         };
         let last = self.samples.last()?;
         let first = self.samples.iter().find(|s| s.t >= from)?;
