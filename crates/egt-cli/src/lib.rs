@@ -10,6 +10,7 @@
 mod args;
 pub mod cli;
 pub mod commands;
+pub mod document;
 mod input;
 mod report;
 mod svg;

@@ -122,12 +122,20 @@ pub fn exact(q: &Q) -> String {
 /// # Errors
 /// I/O errors (a closed pipe among them).
 pub fn json(out: &mut dyn Write, value: &impl Serialize) -> anyhow::Result<()> {
-    // Every report says which egt wrote it, so that stored results can be traced.
+    json_document(out, &value_of(value)?)
+}
+
+/// A report as a JSON value, with the `version` field every report carries
+/// (so that stored results can be traced to the egt that wrote them).
+///
+/// # Errors
+/// A value serde cannot represent (none of the reports has one).
+pub fn value_of(value: &impl Serialize) -> serde_json::Result<serde_json::Value> {
     let mut value = serde_json::to_value(value)?;
     if let serde_json::Value::Object(map) = &mut value {
         map.insert("version".into(), env!("CARGO_PKG_VERSION").into());
     }
-    json_document(out, &value)
+    Ok(value)
 }
 
 /// Pretty JSON of a document as it is (the JSON Schema, which carries no version field).

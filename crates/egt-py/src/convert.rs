@@ -120,3 +120,19 @@ pub fn to_py<'py>(py: Python<'py>, value: &impl serde::Serialize) -> Result<Boun
     let text = serde_json::to_string(value).map_err(|e| value_error(e.to_string()))?;
     Ok(py.import("json")?.call_method1("loads", (text,))?)
 }
+
+/// A core result with the CLI's JSON document of it (`egt_cli::document`),
+/// as the pair `[result, document]`: the Python result classes read the
+/// first and return the second from `to_dict()`, so that the CLI and Python
+/// give one shape.
+///
+/// # Errors
+/// A result or document that does not serialize.
+pub fn documented<'py>(
+    py: Python<'py>,
+    value: &impl serde::Serialize,
+    document: serde_json::Result<serde_json::Value>,
+) -> Result<Bound<'py, PyAny>> {
+    let document = document.map_err(|e| value_error(e.to_string()))?;
+    to_py(py, &(value, document))
+}

@@ -56,7 +56,9 @@ pub fn stability<'py>(
                 .map(|s| convert::valued(t, &s, "speeds"))
                 .transpose()?,
         };
-        to_py(py, &t.stability(&req)?)
+        let rep = t.stability(&req)?;
+        let doc = egt_cli::document::stability(t, &core.source, &rep);
+        convert::documented(py, &rep, doc)
     })
 }
 
@@ -150,7 +152,9 @@ pub fn simulate<'py>(
                 .transpose()?,
         };
         let req = SimulationRequest::resolve(t, &over)?;
-        let sim = match (&torque, &curves) {
+        // The curves the run used (None: a Python torque function), for the
+        // document's equilibrium.
+        let (sim, used) = match (&torque, &curves) {
             (Some(_), Some(_)) => {
                 return Err(value_error("give either `curves` or `torque`, not both"));
             }
@@ -169,14 +173,22 @@ pub fn simulate<'py>(
                 if let Some(e) = model.error.into_inner() {
                     return Err(Error::Py(e));
                 }
-                result?
+                (result?, None)
             }
             (None, Some(c)) => {
-                t.simulate_with(&req, &LinearCurves::new(t, &self::curves(t, c)?)?)?
+                let c = self::curves(t, c)?;
+                (t.simulate_with(&req, &LinearCurves::new(t, &c)?)?, Some(c))
             }
-            (None, None) => t.simulate(&req)?,
+            (None, None) => (t.simulate(&req)?, Some(t.analysis().curves.clone())),
         };
-        to_py(py, &sim)
+        let doc = egt_cli::document::simulation(
+            t,
+            &core.source,
+            &sim,
+            req.options.t_end,
+            used.as_deref(),
+        );
+        convert::documented(py, &sim, doc)
     })
 }
 
@@ -255,5 +267,10 @@ pub fn shift_sim<'py>(
         atol,
         method,
     };
-    guard(|| to_py(py, &sim.run(&core.train)?))
+    // The document is the run's serde form (and the version): one payload.
+    guard(|| {
+        let doc = egt_cli::document::shift_simulation(&sim.run(&core.train)?)
+            .map_err(|e| value_error(e.to_string()))?;
+        to_py(py, &doc)
+    })
 }

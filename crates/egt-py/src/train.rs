@@ -10,6 +10,8 @@ use numpy::PyArray2;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
+use egt_cli::document;
+
 use crate::convert::{self, dmatrix, to_py};
 use crate::errors::{Result, guard, value_error};
 
@@ -18,6 +20,8 @@ use crate::errors::{Result, guard, value_error};
 #[derive(Debug)]
 pub struct TrainCore {
     pub(crate) train: Train,
+    /// The name the spec was read under: the `source` of every document.
+    pub(crate) source: String,
 }
 
 /// One prescribed input speed as the Python side passes it: link, float, exact text.
@@ -107,7 +111,10 @@ impl TrainCore {
         let format = format_of(format)?;
         guard(|| {
             let train = py.detach(|| Train::from_str(text, format, source))?;
-            Ok(TrainCore { train })
+            Ok(TrainCore {
+                train,
+                source: source.to_string(),
+            })
         })
     }
 
@@ -290,7 +297,9 @@ impl TrainCore {
     fn kinematics<'py>(&self, py: Python<'py>, inputs: Vec<InputArg>) -> Result<Bound<'py, PyAny>> {
         guard(|| {
             let inputs = self.speed_inputs(&inputs)?;
-            to_py(py, &self.train.kinematics(&inputs)?)
+            let speeds = self.train.kinematics(&inputs)?;
+            let doc = document::kinematics(&self.train, &self.source, &inputs, &speeds);
+            convert::documented(py, &speeds, doc)
         })
     }
 
@@ -323,7 +332,9 @@ impl TrainCore {
                 &engaged,
             )?;
             let mass = self.mass_for(&req, inertia)?;
-            to_py(py, &self.train.inverse_dynamics(&req, mass.as_ref())?)
+            let r = self.train.inverse_dynamics(&req, mass.as_ref())?;
+            let doc = document::dynamics(&self.train, &self.source, &req, &r, None);
+            convert::documented(py, &r, doc)
         })
     }
 
@@ -354,7 +365,18 @@ impl TrainCore {
                 dynamics,
                 losses,
             };
-            to_py(py, &self.train.power_flow(&req, mass.as_ref())?)
+            let pf = self.train.power_flow(&req, mass.as_ref())?;
+            // The power document, and those of its speeds and dynamics (the
+            // documents `egt kinematics` and `egt dynamics` print for them).
+            let t = &self.train;
+            let doc = (|| {
+                Ok(serde_json::json!({
+                    "power": document::power(t, &self.source, &pf, losses)?,
+                    "speeds": document::kinematics(t, &self.source, &req.speeds, &pf.speeds)?,
+                    "dynamics": document::dynamics(t, &self.source, &req.dynamics, &pf.dynamics, None)?,
+                }))
+            })();
+            convert::documented(py, &pf, doc)
         })
     }
 

@@ -58,6 +58,7 @@ def test_python_and_the_cli_give_the_same_shift() -> None:
     cli = json.loads(out.stdout)
     assert cli["lock_time"] == s.lock_time
     assert cli["dissipated"] == list(s.energy)
+    assert s.to_dict() == cli
 
 
 def test_bad_shifts_raise_egt_errors_naming_the_field() -> None:

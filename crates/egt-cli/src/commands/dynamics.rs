@@ -57,7 +57,7 @@ struct MeshRow {
 }
 
 #[derive(Debug, Serialize)]
-struct Report {
+pub(crate) struct Report {
     source: String,
     name: Option<String>,
     dof: usize,
@@ -98,20 +98,20 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         Some(n) => Some(train.resolve(n, &format!("--reduce-to {n}"))?),
         None => train.analysis().reduce_to,
     };
-    let report = build(train, &loaded.source, &req, &r, reduce_to)?;
+    let report = build(train, &loaded.source, &req, &r, reduce_to);
     match args.spec.format {
         OutputFormat::Json => report::json(out, &report),
         OutputFormat::Table => write_table(out, train, &loaded.source, &report),
     }
 }
 
-fn build(
+pub(crate) fn build(
     train: &Train,
     source: &str,
     req: &DynamicsRequest,
     r: &InverseDynamics,
     reduce_to: Option<LinkId>,
-) -> anyhow::Result<Report> {
+) -> Report {
     let name = |l: LinkId| train.link_name(l).to_string();
     let links = train
         .links()
@@ -188,7 +188,7 @@ fn build(
             }
         }
     }
-    Ok(Report {
+    Report {
         source: source.to_string(),
         name: train.name().map(str::to_string),
         dof: train.dof(),
@@ -205,7 +205,7 @@ fn build(
         reduced_mass_matrix,
         conditions: r.conditions,
         warnings,
-    })
+    }
 }
 
 fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> anyhow::Result<()> {

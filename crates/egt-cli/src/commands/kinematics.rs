@@ -59,7 +59,7 @@ struct RelativeRow {
 }
 
 #[derive(Debug, Serialize)]
-struct Report {
+pub(crate) struct Report {
     source: String,
     name: Option<String>,
     dof: usize,
@@ -99,7 +99,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
     }
 }
 
-fn build(train: &Train, source: &str, inputs: &[SpeedInput], s: &Speeds) -> Report {
+pub(crate) fn build(train: &Train, source: &str, inputs: &[SpeedInput], s: &Speeds) -> Report {
     let one_dof = inputs.len() == 1;
     let is_input = |l: LinkId| inputs.iter().any(|i| i.link == l);
     let exact_of = |l: LinkId| s.exact.as_ref().map(|e| &e[l.index()]);

@@ -53,7 +53,7 @@ struct MeshRow {
 }
 
 #[derive(Debug, Serialize)]
-struct Report {
+pub(crate) struct Report {
     source: String,
     name: Option<String>,
     losses: bool,
@@ -95,7 +95,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
     }
 }
 
-fn build(train: &Train, source: &str, pf: &PowerFlow, losses: bool) -> Report {
+pub(crate) fn build(train: &Train, source: &str, pf: &PowerFlow, losses: bool) -> Report {
     let name = |l: LinkId| train.link_name(l).to_string();
     let links = pf
         .links

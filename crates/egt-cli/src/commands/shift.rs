@@ -225,7 +225,7 @@ fn exact_str(q: Option<&egt_core::numerics::exact::Q>) -> Option<String> {
     q.map(report::exact)
 }
 
-fn build(train: &Train, source: &str, table: &ShiftTable) -> Report {
+pub(crate) fn build(train: &Train, source: &str, table: &ShiftTable) -> Report {
     let name = |l: egt_core::LinkId| train.link_name(l).to_string();
     let element_name = |e: egt_core::ElementId| train.elements()[e.index()].name.clone();
     let state = |k: usize| table.gears[k].state.clone();
@@ -284,7 +284,7 @@ fn build(train: &Train, source: &str, table: &ShiftTable) -> Report {
     }
 }
 
-fn gear_row(train: &Train, g: &GearAnalysis, forward: bool) -> GearRow {
+pub(crate) fn gear_row(train: &Train, g: &GearAnalysis, forward: bool) -> GearRow {
     let name = |l: egt_core::LinkId| train.link_name(l).to_string();
     let element_name = |e: egt_core::ElementId| train.elements()[e.index()].name.clone();
     let shaft = |l: egt_core::LinkId| {

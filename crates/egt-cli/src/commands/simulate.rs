@@ -10,6 +10,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Context;
+use egt_core::model::train::Curve;
 use egt_core::{
     LinearCurves, LinkId, Method, ReducedDynamics, Simulation, SimulationOverrides,
     SimulationRequest, Train,
@@ -92,7 +93,7 @@ struct SampleOut {
 }
 
 #[derive(Debug, Serialize)]
-struct MeshOut {
+pub(crate) struct MeshOut {
     gear: String,
     multiplier: f64,
     torque_i: f64,
@@ -101,7 +102,7 @@ struct MeshOut {
 }
 
 #[derive(Debug, Serialize)]
-struct Report {
+pub(crate) struct Report {
     source: String,
     name: Option<String>,
     dof: usize,
@@ -150,22 +151,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         .simulate(&initial, &req.options)
         .with_context(ctx)?;
 
-    // The equilibrium of the curves, to plot and to measure the deviation against.
-    let equilibrium = if curves.is_empty() {
-        None
-    } else {
-        let coords = dynamics.model().coordinates.clone();
-        train
-            .reduced_model(&coords, &curves)
-            .ok()
-            .and_then(|m| m.equilibrium().ok())
-            .map(|(e, _)| e)
-    };
-    let observed_rate = equilibrium.as_ref().and_then(|e| {
-        let mass = train.mass_matrix().ok()?;
-        let half = sim.samples.last()?.t / 2.0;
-        sim.growth_rate(train, &mass, e, half)
-    });
+    let (equilibrium, observed_rate) = equilibrium(train, &curves, &sim);
     let reactions = if args.reactions {
         let last = sim.samples.last().context("no samples")?;
         let r = dynamics
@@ -263,7 +249,32 @@ impl Report {
     }
 }
 
-fn build(
+/// The equilibrium of the curves (link speeds, when unique), to plot and to
+/// measure the deviation against, and the observed growth rate of that
+/// deviation over the second half of the run.
+pub(crate) fn equilibrium(
+    train: &Train,
+    curves: &[Curve],
+    sim: &Simulation,
+) -> (Option<Vec<f64>>, Option<f64>) {
+    if curves.is_empty() {
+        return (None, None);
+    }
+    let equilibrium = train
+        .automatic_coordinates()
+        .and_then(|coords| train.reduced_model(&coords, curves))
+        .ok()
+        .and_then(|m| m.equilibrium().ok())
+        .map(|(e, _)| e);
+    let observed_rate = equilibrium.as_ref().and_then(|e| {
+        let mass = train.mass_matrix().ok()?;
+        let half = sim.samples.last()?.t / 2.0;
+        sim.growth_rate(train, &mass, e, half)
+    });
+    (equilibrium, observed_rate)
+}
+
+pub(crate) fn build(
     train: &Train,
     source: &str,
     sim: &Simulation,

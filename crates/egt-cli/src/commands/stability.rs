@@ -70,7 +70,7 @@ struct OperatingOut {
 }
 
 #[derive(Debug, Serialize)]
-struct Report {
+pub(crate) struct Report {
     source: String,
     name: Option<String>,
     dof: usize,
@@ -141,7 +141,7 @@ fn values(train: &Train, v: &[f64], skip_frame: bool) -> Vec<LinkValue> {
         .collect()
 }
 
-fn build(train: &Train, source: &str, rep: &StabilityReport) -> Report {
+pub(crate) fn build(train: &Train, source: &str, rep: &StabilityReport) -> Report {
     let m = &rep.model;
     let st = &rep.stability;
     let op = &rep.operating;

@@ -129,6 +129,10 @@ pub struct InverseDynamics {
     /// Per gear pair: multiplier, torques, tangential forces.
     pub meshes: Vec<MeshLoad>,
     /// Condition estimates of \[Psi_w\] (eq. 8) and of the force system (eq. 10).
+    /// The first is 1.0 when eq. (8) was not factored: no acceleration was
+    /// prescribed and no speed system with the same matrix was solved (a
+    /// static analysis); a power flow, which solves the speeds, reports the
+    /// estimate of that shared matrix instead.
     pub conditions: [f64; 2],
     /// The velocity-squared torques of a mass matrix that varies with the
     /// configuration ([`Train::velocity_torques`]), by link; zero otherwise.

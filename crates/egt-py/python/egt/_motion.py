@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any, Dict, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
-from ._results import _pandas
+from ._results import _Documented, _document_field, _pandas
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas
@@ -88,8 +88,10 @@ class MasslessDirection:
 
 
 @dataclass(frozen=True, eq=False)
-class StabilityReport:
-    """Stability of a train about an operating point (paper section 5, any DOF)."""
+class StabilityReport(_Documented):
+    """Stability of a train about an operating point (paper section 5, any DOF).
+
+    ``to_dict()`` is ``egt stability --format json``."""
 
     coordinates: Tuple[str, ...]
     """The F driving links (columns of [V])."""
@@ -120,17 +122,21 @@ class StabilityReport:
     stiffness: Optional[float]
     residual: float
     warnings: Tuple[str, ...]
+    _document: Dict[str, Any] = _document_field()
 
     @property
     def stable(self) -> bool:
         return self.verdict == "stable"
 
     @classmethod
-    def _from_core(cls, links: Tuple[str, ...], d: Mapping[str, Any]) -> "StabilityReport":
-        """From the core's `StabilityReport` (its serde form: ids are indices)."""
+    def _from_core(cls, links: Tuple[str, ...], raw: Sequence[Any]) -> "StabilityReport":
+        """From the core's `StabilityReport` (its serde form: ids are indices)
+        and the CLI's document of it."""
+        d, document = raw
         m, o, st = d["model"], d["operating"], d["stability"]
         eq = o["equilibrium"]
         return cls(
+            _document=document,
             coordinates=tuple(links[c] for c in m["coordinates"]),
             source=m["source"],
             velocity_matrix=_matrix(m["velocity"]),
@@ -179,39 +185,13 @@ class StabilityReport:
 
         return plot.eigenvalues(self, ax)
 
-    def to_dict(self) -> Dict[str, Any]:
-        return {
-            "coordinates": list(self.coordinates),
-            "source": self.source,
-            "velocity_matrix": self.velocity_matrix.tolist(),
-            "mass_matrix": self.mass_matrix.tolist(),
-            "slope_matrix": self.slope_matrix.tolist(),
-            "eigenvalues": self.eigenvalues.tolist(),
-            "modes": [
-                {
-                    "eigenvalue": m.eigenvalue,
-                    "time_constant": m.time_constant,
-                    "coordinates": m.coordinates.tolist(),
-                    "speeds": m.speeds.tolist(),
-                }
-                for m in self.modes
-            ],
-            "verdict": self.verdict,
-            "reason": self.reason,
-            "margin": self.margin,
-            "operating": {
-                "source": self.operating.source,
-                "speeds": self.operating.speeds.tolist(),
-                "steady": self.operating.steady,
-                "residual": self.operating.residual,
-            },
-            "warnings": list(self.warnings),
-        }
-
 
 @dataclass(frozen=True, eq=False)
-class Simulation:
-    """A simulated time series (eq. 12 in reduced coordinates) and its checks."""
+class Simulation(_Documented):
+    """A simulated time series (eq. 12 in reduced coordinates) and its checks.
+
+    ``to_dict()`` is ``egt simulate --format json`` (with the equilibrium of
+    the curves when the torques came from curves, not a Python function)."""
 
     links: Tuple[str, ...]
     method: str
@@ -236,10 +216,13 @@ class Simulation:
     newton_iterations: int
     halvings: int
     warnings: Tuple[str, ...]
+    _document: Dict[str, Any] = _document_field()
 
     @classmethod
-    def _from_core(cls, links: Tuple[str, ...], d: Mapping[str, Any]) -> "Simulation":
-        """From the core's `Simulation` (its serde form: one record per sample)."""
+    def _from_core(cls, links: Tuple[str, ...], raw: Sequence[Any]) -> "Simulation":
+        """From the core's `Simulation` (its serde form: one record per
+        sample) and the CLI's document of it."""
+        d, document = raw
         samples = d["samples"]
         div = d["diverged"]
 
@@ -247,6 +230,7 @@ class Simulation:
             return _array([x[key] for x in samples])
 
         return cls(
+            _document=document,
             links=links,
             method=d["method"],
             dt=d["dt"],
@@ -279,22 +263,6 @@ class Simulation:
 
         return plot.simulation(self, ax, links)
 
-    def to_dict(self) -> Dict[str, Any]:
-        return {
-            "links": list(self.links),
-            "method": self.method,
-            "dt": self.dt,
-            "steps": self.steps,
-            "t": self.t.tolist(),
-            "speeds": self.speeds.tolist(),
-            "energy": self.energy.tolist(),
-            "work": self.work.tolist(),
-            "max_drift": self.max_drift,
-            "energy_error": self.energy_error,
-            "diverged": None if self.diverged is None else list(self.diverged),
-            "warnings": list(self.warnings),
-        }
-
     def to_pandas(self) -> "pandas.DataFrame":
         pd = _pandas()
         df = pd.DataFrame(self.speeds, columns=list(self.links), index=pd.Index(self.t, name="t"))
@@ -304,11 +272,11 @@ class Simulation:
 
 
 @dataclass(frozen=True, eq=False)
-class ShiftSimulation:
+class ShiftSimulation(_Documented):
     """A gear change in time (``Train.simulate_shift``; docs/shift_dynamics.md).
 
     Element arrays have two columns: the off-going element, then the
-    on-coming one (``elements``).
+    on-coming one (``elements``). ``to_dict()`` is ``egt shift-sim --format json``.
     """
 
     links: Tuple[str, ...]
@@ -348,9 +316,11 @@ class ShiftSimulation:
     stiff: Optional[Tuple[float, float, float]]
     """(time, explicit step, decay rate 1/s) where a stiff mode began to limit
     the explicit steps, if one did."""
+    _document: Dict[str, Any] = _document_field()
 
     @classmethod
-    def _from_core(cls, links: Tuple[str, ...], d: Mapping[str, Any]) -> "ShiftSimulation":
+    def _from_core(cls, links: Tuple[str, ...], d: Dict[str, Any]) -> "ShiftSimulation":
+        """From the CLI's document of the run (the core's `ShiftResult` and a version)."""
         samples = d["samples"]
         n = len(samples)
 
@@ -361,6 +331,7 @@ class ShiftSimulation:
             return np.asarray([x[key] for x in samples], dtype=np.float64).reshape(n, 2)
 
         return cls(
+            _document=d,
             links=links,
             elements=(d["elements"][0], d["elements"][1]),
             kept=tuple(d["kept"]),

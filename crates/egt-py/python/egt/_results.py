@@ -1,9 +1,15 @@
 """Records and result classes returned by :class:`egt.Train`.
 
 Every class is a frozen dataclass of plain Python values and NumPy arrays,
-with ``to_dict()`` (JSON-ready: arrays become lists, fractions strings) and,
-where a table is natural, ``to_pandas()`` (pandas is optional and imported
-only there).
+with ``to_dict()`` and, where a table is natural, ``to_pandas()`` (pandas is
+optional and imported only there).
+
+``to_dict()`` of an analysis result is the document the CLI prints for the
+same analysis with ``--format json`` (``Kinematics`` is ``egt kinematics``,
+``Dynamics`` is ``egt dynamics``, ``PowerFlow`` is ``egt power``, and so on):
+one shape whichever front end made the result, built by the same Rust code.
+The records of the spec (``Link``, ``GearPair``, ``Circuit``) give their
+fields.
 """
 
 from __future__ import annotations
@@ -11,6 +17,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Dict, Iterable, Iterator, Mapping, Optional, Sequence, Tuple
+
+import copy
 
 import numpy as np
 
@@ -59,6 +67,45 @@ def _html_table(caption: str, headers: Sequence[str], rows: Iterable[Sequence[An
     head = "".join(f"<th>{escape(h)}</th>" for h in headers)
     body = "".join("<tr>" + "".join(f"<td>{cell(v)}</td>" for v in r) + "</tr>" for r in rows)
     return f"<table><caption>{escape(caption)}</caption><tr>{head}</tr>{body}</table>"
+
+
+def _convert_document(
+    doc: Dict[str, Any], unit: str, k: float, q: Optional[Fraction]
+) -> Dict[str, Any]:
+    """A kinematics document in another unit: speeds times ``k``, exact
+    speeds times ``q`` (None where the factor is not rational); ratios stay."""
+    doc = copy.deepcopy(doc)
+
+    def convert(rec: Dict[str, Any]) -> None:
+        if rec.get("speed") is not None:
+            rec["speed"] = rec["speed"] * k
+        if rec.get("exact") is not None:
+            rec["exact"] = None if q is None else str(Fraction(rec["exact"]) * q)
+
+    for key in ("inputs", "links", "relative"):
+        for rec in doc.get(key, ()):
+            convert(rec)
+    if unit == "rad/s":
+        doc.pop("unit", None)
+    else:
+        doc["unit"] = unit
+    return doc
+
+
+def _document_field() -> Any:
+    """The private ``_document`` field of a :class:`_Documented` result."""
+    return field(default_factory=dict, repr=False, compare=False)
+
+
+class _Documented:
+    """A result whose ``to_dict()`` is the CLI's JSON document of it."""
+
+    _document: Dict[str, Any]
+
+    def to_dict(self) -> Dict[str, Any]:
+        """The document the CLI prints for the same analysis with
+        ``--format json`` (a fresh copy: JSON-ready, names not indices)."""
+        return copy.deepcopy(self._document)
 
 
 def _frac(text: Optional[str]) -> Optional[Fraction]:
@@ -156,11 +203,13 @@ class RelativeSpeed:
 
 
 @dataclass(frozen=True, eq=False)
-class Kinematics(Mapping[str, float]):
+class Kinematics(_Documented, Mapping[str, float]):
     """Speeds of every link for one set of inputs.
 
     A read-only mapping link name -> speed [rad/s]; the arrays follow
-    ``links`` (link order, the frame's speed is 0).
+    ``links`` (link order, the frame's speed is 0). ``to_dict()`` is
+    ``egt kinematics --format json`` (with a ``unit`` field when the unit is
+    not rad/s).
     """
 
     links: Tuple[str, ...]
@@ -176,14 +225,19 @@ class Kinematics(Mapping[str, float]):
     warnings: Tuple[str, ...]
     unit: str = "rad/s"
     """The unit of ``speeds``, ``exact`` and the relative speeds."""
+    _document: Dict[str, Any] = _document_field()
 
     @classmethod
     def _from_core(
-        cls, links: Tuple[str, ...], d: Mapping[str, Any], unit: str = "rad/s"
+        cls, links: Tuple[str, ...], d: Mapping[str, Any], document: Dict[str, Any], unit: str = "rad/s"
     ) -> "Kinematics":
-        """From the core's `Speeds` (its serde form: ids are indices, exact values text)."""
+        """From the core's `Speeds` (its serde form: ids are indices, exact
+        values text) and the CLI's document of it."""
         exact = d["exact"]
+        if unit != "rad/s":
+            document = {**document, "unit": unit}
         return cls(
+            _document=document,
             unit=unit,
             links=links,
             speeds=np.asarray(d["speed"], dtype=np.float64),
@@ -217,6 +271,7 @@ class Kinematics(Mapping[str, float]):
         q = Fraction(1) if self.unit == unit else exact_factors.get((self.unit, unit))
         return replace(
             self,
+            _document=_convert_document(self._document, unit, k, q),
             unit=unit,
             speeds=self.speeds * k,
             exact=None if self.exact is None or q is None else {n: x * q for n, x in self.exact.items()},
@@ -238,26 +293,6 @@ class Kinematics(Mapping[str, float]):
     def __len__(self) -> int:
         return len(self.links)
 
-    def to_dict(self) -> Dict[str, Any]:
-        return {
-            "speeds": {n: float(v) for n, v in zip(self.links, self.speeds)},
-            "known": {n: bool(v) for n, v in zip(self.links, self.known)},
-            "exact": None
-            if self.exact is None
-            else {n: str(v) for n, v in self.exact.items()},
-            "relative": [
-                {
-                    "link": r.link,
-                    "carrier": r.carrier,
-                    "speed": r.speed,
-                    "exact": _fstr(r.exact),
-                }
-                for r in self.relative
-            ],
-            "residual": self.residual,
-            "condition": self.condition,
-            "warnings": list(self.warnings),
-        }
 
     def to_pandas(self) -> "pandas.DataFrame":
         pd = _pandas()
@@ -311,8 +346,10 @@ class MeshLoad:
 
 
 @dataclass(frozen=True, eq=False)
-class Dynamics:
-    """Inverse dynamics (eq. 6-11): accelerations, torques, multipliers, mesh loads."""
+class Dynamics(_Documented):
+    """Inverse dynamics (eq. 6-11): accelerations, torques, multipliers, mesh loads.
+
+    ``to_dict()`` is ``egt dynamics --format json``."""
 
     links: Tuple[str, ...]
     accelerations: np.ndarray
@@ -326,13 +363,16 @@ class Dynamics:
     meshes: Tuple[MeshLoad, ...]
     conditions: Tuple[float, float]
     warnings: Tuple[str, ...]
+    _document: Dict[str, Any] = _document_field()
 
     @classmethod
     def _from_core(
-        cls, links: Tuple[str, ...], gears: Tuple[str, ...], d: Mapping[str, Any]
+        cls, links: Tuple[str, ...], gears: Tuple[str, ...], d: Mapping[str, Any], document: Dict[str, Any]
     ) -> "Dynamics":
-        """From the core's `InverseDynamics` (its serde form: ids are indices)."""
+        """From the core's `InverseDynamics` (its serde form: ids are indices)
+        and the CLI's document of it."""
         return cls(
+            _document=document,
             links=links,
             accelerations=np.asarray(d["acceleration"], dtype=np.float64),
             torques=np.asarray(d["torque"], dtype=np.float64),
@@ -362,20 +402,6 @@ class Dynamics:
         )
         return _html_table("inverse dynamics", ["link", "acceleration", "torque"], rows) + meshes
 
-    def to_dict(self) -> Dict[str, Any]:
-        return {
-            "accelerations": {n: float(v) for n, v in zip(self.links, self.accelerations)},
-            "torques": {n: float(v) for n, v in zip(self.links, self.torques)},
-            "driving_torques": dict(self.driving_torques),
-            "multipliers": self.multipliers.tolist(),
-            "element_torques": self.element_torques.tolist(),
-            "meshes": [
-                {**m.__dict__, "force": None if m.force is None else list(m.force)}
-                for m in self.meshes
-            ],
-            "conditions": list(self.conditions),
-            "warnings": list(self.warnings),
-        }
 
     def to_pandas(self) -> "pandas.DataFrame":
         pd = _pandas()
@@ -410,8 +436,10 @@ class LinkPower:
 
 
 @dataclass(frozen=True, eq=False)
-class PowerFlow:
-    """Power flow through every mesh, with or without mesh losses."""
+class PowerFlow(_Documented):
+    """Power flow through every mesh, with or without mesh losses.
+
+    ``to_dict()`` is ``egt power --format json``."""
 
     speeds: Kinematics
     dynamics: Dynamics
@@ -429,16 +457,19 @@ class PowerFlow:
     """The meshes and shafts carrying more than the input power."""
     iterations: int
     notes: Tuple[str, ...] = field(default_factory=tuple)
+    _document: Dict[str, Any] = _document_field()
 
     @classmethod
     def _from_core(
-        cls, links: Tuple[str, ...], gears: Tuple[str, ...], d: Mapping[str, Any]
+        cls, links: Tuple[str, ...], gears: Tuple[str, ...], d: Mapping[str, Any], documents: Mapping[str, Any]
     ) -> "PowerFlow":
-        """From the core's `PowerFlow` (its serde form: ids are indices)."""
+        """From the core's `PowerFlow` (its serde form: ids are indices) and
+        the CLI's documents of it, of its speeds and of its dynamics."""
         circ = d["circulating"]
         return cls(
-            speeds=Kinematics._from_core(links, d["speeds"]),
-            dynamics=Dynamics._from_core(links, gears, d["dynamics"]),
+            _document=documents["power"],
+            speeds=Kinematics._from_core(links, d["speeds"], documents["speeds"]),
+            dynamics=Dynamics._from_core(links, gears, d["dynamics"], documents["dynamics"]),
             meshes=tuple(
                 MeshPower(
                     gear=gears[m["gear"]],
@@ -481,25 +512,6 @@ class PowerFlow:
             ["gear pair", "rolling power", "driver", "efficiency", "loss"],
             ((m.gear, m.rolling, m.driver, m.efficiency, m.loss) for m in self.meshes),
         )
-
-    def to_dict(self) -> Dict[str, Any]:
-        return {
-            "speeds": self.speeds.to_dict(),
-            "dynamics": self.dynamics.to_dict(),
-            "meshes": [{**m.__dict__, "absolute": list(m.absolute)} for m in self.meshes],
-            "links": [dict(p.__dict__) for p in self.links],
-            "input_power": self.input_power,
-            "output_power": self.output_power,
-            "loss": self.loss,
-            "kinetic_rate": self.kinetic_rate,
-            "efficiency": self.efficiency,
-            "circulation_ratio": self.circulation_ratio,
-            "circulating": None
-            if self.circulating is None
-            else [list(self.circulating[0]), list(self.circulating[1])],
-            "iterations": self.iterations,
-            "notes": list(self.notes),
-        }
 
     def to_pandas(self) -> "pandas.DataFrame":
         pd = _pandas()

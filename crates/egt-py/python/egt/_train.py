@@ -350,8 +350,8 @@ class Train:
         ``.to(unit)`` converts afterwards.
         """
         _units.factor(unit)
-        raw = self._core.kinematics(self._speeds(inputs, unit))
-        return Kinematics._from_core(self._links, raw, unit)
+        raw, doc = self._core.kinematics(self._speeds(inputs, unit))
+        return Kinematics._from_core(self._links, raw, doc, unit)
 
     def willis_jacobian(self) -> np.ndarray:
         """[psi_w] of eq. (2): rows are circuits, columns the :attr:`coordinates`."""
@@ -391,8 +391,8 @@ class Train:
         spec's ``[analysis]`` section. ``inertia=False`` ignores [M].
         """
         t, a, d = self._loads(torques, accelerations, driving)
-        raw = self._core.dynamics(t, a, d, _names(engaged, "engaged"), inertia)
-        return Dynamics._from_core(self._links, self._gears, raw)
+        raw, doc = self._core.dynamics(t, a, d, _names(engaged, "engaged"), inertia)
+        return Dynamics._from_core(self._links, self._gears, raw, doc)
 
     def power(
         self,
@@ -416,8 +416,8 @@ class Train:
         if unit != "rad/s":
             k = _units.factor(unit)
             speeds = [(n, v * k, None) for n, v, _ in speeds]
-        raw = self._core.power(speeds, t, a, d, _names(engaged, "engaged"), losses, inertia)
-        return PowerFlow._from_core(self._links, self._gears, raw)
+        raw, docs = self._core.power(speeds, t, a, d, _names(engaged, "engaged"), losses, inertia)
+        return PowerFlow._from_core(self._links, self._gears, raw, docs)
 
     def velocity_matrix(
         self, inputs: Optional[Sequence[str]] = None, *, engaged: Sequence[str] = ()
@@ -692,7 +692,8 @@ class Train:
 
     def gear(self, state: str) -> GearState:
         """One gear state of the transmission, per unit input speed and torque."""
-        return GearState._from_core(self._names(), _gear(self._core, str(state)))
+        raw, row = _gear(self._core, str(state))
+        return GearState._from_core(self._names(), raw, row)
 
     def shift_table(self) -> ShiftTable:
         """Every gear state (ratios, element torques, power flow) and the

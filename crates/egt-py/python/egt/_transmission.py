@@ -5,10 +5,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Dict, Mapping, Optional, Tuple
+from typing import TYPE_CHECKING, Any, Dict, Mapping, Optional, Sequence, Tuple
 
 from ._args import ArgumentError, ArgumentKeyError
-from ._results import _pandas
+from ._results import _Documented, _document_field, _pandas
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas
@@ -58,8 +58,10 @@ class GearPowerFlow:
 
 
 @dataclass(frozen=True)
-class GearState:
-    """One gear state: ratio, speeds, element torques, power flow."""
+class GearState(_Documented):
+    """One gear state: ratio, speeds, element torques, power flow.
+
+    ``to_dict()`` is this state's row of ``egt shift --format json``'s ``gears``."""
 
     state: str
     index: int
@@ -82,14 +84,17 @@ class GearState:
     torque_balance: float
     warnings: Tuple[str, ...]
     notes: Tuple[str, ...]
+    _document: Dict[str, Any] = _document_field()
 
     @classmethod
-    def _from_core(cls, names: Names, d: Mapping[str, Any]) -> "GearState":
-        """From the core's `GearAnalysis` (its serde form: ids are indices, exact values text)."""
+    def _from_core(cls, names: Names, d: Mapping[str, Any], document: Dict[str, Any]) -> "GearState":
+        """From the core's `GearAnalysis` (its serde form: ids are indices,
+        exact values text) and its row of the CLI's shift document."""
         links, gears, elements = names
         p = d["power"]
         exact = d["speed_exact"]
         return cls(
+            _document=document,
             state=d["state"],
             index=d["index"],
             engaged=tuple(elements[e] for e in d["engaged"]),
@@ -132,21 +137,6 @@ class GearState:
             notes=tuple(d["notes"]),
         )
 
-    def to_dict(self) -> Dict[str, Any]:
-        return {
-            "state": self.state,
-            "engaged": list(self.engaged),
-            "ratio": self.ratio,
-            "ratio_exact": None if self.ratio_exact is None else str(self.ratio_exact),
-            "speeds": dict(self.speeds),
-            "output_torque": self.output_torque,
-            "housing_torque": self.housing_torque,
-            "elements": [dict(e.__dict__) for e in self.elements],
-            "efficiency": None if self.power is None else self.power.efficiency,
-            "warnings": list(self.warnings),
-        }
-
-
 @dataclass(frozen=True)
 class Step:
     """The step between two forward gears adjacent in the list."""
@@ -181,8 +171,10 @@ class Shift:
 
 
 @dataclass(frozen=True)
-class ShiftTable:
-    """Every gear state of a transmission and the table across them."""
+class ShiftTable(_Documented):
+    """Every gear state of a transmission and the table across them.
+
+    ``to_dict()`` is ``egt shift --format json``."""
 
     input: str
     output: str
@@ -192,12 +184,15 @@ class ShiftTable:
     spread: Optional[Spread]
     shifts: Tuple[Shift, ...]
     warnings: Tuple[str, ...]
+    _document: Dict[str, Any] = _document_field()
 
     @classmethod
-    def _from_core(cls, names: Names, d: Mapping[str, Any]) -> "ShiftTable":
-        """From the core's `ShiftTable` (its serde form: ids and gear states are indices)."""
+    def _from_core(cls, names: Names, raw: Sequence[Any]) -> "ShiftTable":
+        """From the core's `ShiftTable` (its serde form: ids and gear states
+        are indices) and the CLI's document of it."""
+        d, document = raw
         links, _, elements = names
-        gears = tuple(GearState._from_core(names, g) for g in d["gears"])
+        gears = tuple(GearState._from_core(names, g, row) for g, row in zip(d["gears"], document["gears"]))
 
         def name(i: int) -> str:
             return gears[i].state
@@ -207,6 +202,7 @@ class ShiftTable:
 
         sp = d["spread"]
         return cls(
+            _document=document,
             input=links[d["input"]],
             output=links[d["output"]],
             gears=gears,
@@ -237,21 +233,6 @@ class ShiftTable:
             if g.state == state:
                 return g
         raise ArgumentKeyError(state)
-
-    def to_dict(self) -> Dict[str, Any]:
-        return {
-            "input": self.input,
-            "output": self.output,
-            "gears": [g.to_dict() for g in self.gears],
-            "forward": list(self.forward),
-            "steps": [{"lower": s.lower, "upper": s.upper, "value": s.value} for s in self.steps],
-            "spread": None if self.spread is None else {"lowest": self.spread.lowest, "highest": self.spread.highest, "value": self.spread.value},
-            "shifts": [
-                {"from": s.source, "to": s.target, "kind": s.kind, "off": list(s.off), "on": list(s.on)}
-                for s in self.shifts
-            ],
-            "warnings": list(self.warnings),
-        }
 
     def plot(self, kind: str = "ladder", ax: Any = None) -> Any:
         """``"ladder"``: the speed ladder of every gear state
