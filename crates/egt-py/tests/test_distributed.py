@@ -15,7 +15,7 @@ import pytest
 
 import egt
 
-distributed = pytest.importorskip("dask.distributed")
+import dask.distributed as distributed
 
 ROOT = Path(__file__).resolve().parents[3]
 C4 = ROOT / "examples" / "synth" / "ford_c4_simpson.toml"

@@ -9,7 +9,7 @@ import pytest
 
 import egt
 
-matplotlib = pytest.importorskip("matplotlib")
+import matplotlib
 matplotlib.use("Agg")
 
 

@@ -14,7 +14,7 @@ import pytest
 
 import egt
 
-sp = pytest.importorskip("sympy")
+import sympy as sp
 
 
 @pytest.fixture
