@@ -94,6 +94,59 @@ fn finds_the_c4_simpson_sets() {
     }
 }
 
+/// Ravigneaux sets in the search: the 6HP26 (a simple set and a Ravigneaux
+/// set, six tooth counts free) comes out with its real teeth; the AOD's
+/// Ravigneaux set with its real basic ratios 72/30 and 72/36. Every
+/// candidate's written spec, re-run through `egt shift`, gives the reported
+/// exact ratios.
+#[test]
+fn finds_ravigneaux_sets_and_every_candidate_passes_egt_shift() {
+    let dir = std::env::temp_dir().join(format!("egt-synth-rv-{}", std::process::id()));
+    // Each search writes its candidates' specs to its own folder.
+    let run = |spec: &str, sub: &str| {
+        let out = dir.join(sub).display().to_string();
+        synth(&["synth", spec, "--format", "json", "--write-specs", &out])["candidates"]
+            .as_array()
+            .unwrap()
+            .clone()
+    };
+    let lepelletier = run("examples/synth/zf_6hp26_lepelletier.toml", "6hp26");
+    let best = &lepelletier[0]["sets"];
+    assert_eq!(
+        (best[0]["sun"].clone(), best[0]["ring"].clone()),
+        (37.into(), 71.into())
+    );
+    let rv = &best[1];
+    assert_eq!(
+        [&rv["sun"], &rv["sun2"], &rv["ring"]],
+        [&Value::from(31), &Value::from(38), &Value::from(85)]
+    );
+    assert_eq!(
+        (rv["basic"].as_str(), rv["basic2"].as_str()),
+        (Some("85/31"), Some("85/38"))
+    );
+    let aod = run("examples/synth/ford_aod_ravigneaux.toml", "aod");
+    assert!(aod.iter().any(|c| {
+        let s = &c["sets"][0];
+        s["basic"] == "12/5" && s["basic2"] == "2" && s["alternatives"].as_u64().unwrap() >= 2
+    }));
+    for c in lepelletier.iter().chain(&aod) {
+        let spec = c["spec"].as_str().unwrap();
+        let shift: Value =
+            serde_json::from_str(&stdout(&["shift", spec, "--format", "json"])).unwrap();
+        for r in c["ratios"].as_array().unwrap() {
+            let g = shift["gears"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|g| g["state"] == r["state"])
+                .unwrap();
+            assert_eq!(g["ratio_exact"], r["exact"], "{spec} state {}", r["state"]);
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn partitions_merge_to_the_whole_search() {
     let whole = synth(&[

@@ -9,7 +9,7 @@ use pyo3::prelude::*;
 use std::path::Path;
 
 use crate::convert::to_py;
-use crate::errors::{Result, guard};
+use crate::errors::{Result, guard, value_error};
 use crate::train::format_of;
 
 /// A prepared design search (see `egt.synth`).
@@ -79,14 +79,34 @@ impl SearchCore {
     }
 
     /// The base train's spec with a candidate's teeth written in, as JSON
-    /// text (`teeth`: one `(sun, ring, planet)` per unknown set).
-    fn candidate_spec(&self, teeth: Vec<(i64, i64, i64)>) -> Result<String> {
-        let teeth: Vec<egt_core::design::Teeth> = teeth
-            .into_iter()
-            .map(|(sun, ring, planet)| egt_core::design::Teeth { sun, ring, planet })
-            .collect();
+    /// text (`teeth`: one record per unknown set, as in a candidate).
+    fn candidate_spec(&self, teeth: &str) -> Result<String> {
+        let teeth: Vec<egt_core::design::Teeth> =
+            serde_json::from_str(teeth).map_err(|e| value_error(format!("teeth: {e}")))?;
         serde_json::to_string(&self.search.candidate_spec(&teeth))
-            .map_err(|e| crate::errors::value_error(e.to_string()))
+            .map_err(|e| value_error(e.to_string()))
+    }
+
+    /// Partitions' results (`run`'s, as JSON text) merged as one search's by
+    /// the core (`design::merge`): ranked together, counts summed, `top` kept.
+    fn merge<'py>(&self, py: Python<'py>, results: &str, top: usize) -> Result<Bound<'py, PyAny>> {
+        #[derive(serde::Deserialize)]
+        struct Part {
+            candidates: Vec<egt_core::design::Candidate>,
+            stats: egt_core::design::Stats,
+        }
+        let parts: Vec<Part> =
+            serde_json::from_str(results).map_err(|e| value_error(format!("results: {e}")))?;
+        let (candidates, stats) = egt_core::design::merge(
+            parts.into_iter().map(|p| (p.candidates, p.stats)).collect(),
+            top,
+        );
+        guard(|| {
+            to_py(
+                py,
+                &serde_json::json!({ "candidates": candidates, "stats": stats }),
+            )
+        })
     }
 }
 

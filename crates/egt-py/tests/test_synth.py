@@ -60,3 +60,18 @@ def test_bad_search_specs_are_spec_errors(tmp_path: Path) -> None:
         egt.synth(bad)
     with pytest.raises(egt.SpecSyntaxError):
         egt.synth("base = 3\n")
+
+
+def test_synth_finds_the_6hp26_ravigneaux_teeth() -> None:
+    r = egt.synth(ROOT / "examples" / "synth" / "zf_6hp26_lepelletier.toml")
+    best = r.candidates[0]
+    rv = best.sets["RV"]
+    assert (best.sets["P1"].sun, best.sets["P1"].ring) == (37, 71)
+    assert (rv.sun, rv.sun2, rv.ring) == (31, 38, 85)
+    assert (rv.basic, rv.basic2) == (Fraction(85, 31), Fraction(85, 38))
+    assert rv.planet2 is not None and rv.ring - rv.sun2 - 2 * rv.planet2 in (0, 1)
+    # The real train's exact ratios are the candidate's.
+    real = egt.load(str(ROOT / "examples" / "zf_6hp26_lepelletier.toml")).shift_table()
+    assert {g.state: g.ratio_exact for g in real.gears} == best.ratios
+    df = r.to_pandas()
+    assert list(df["RV.sun2"]) == [c.sets["RV"].sun2 for c in r.candidates]

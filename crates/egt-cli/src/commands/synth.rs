@@ -53,10 +53,20 @@ pub struct Args {
 #[derive(Debug, Serialize)]
 struct SetTeeth {
     set: String,
+    /// ring/sun (the small sun of a Ravigneaux set).
     basic: String,
+    /// ring/large sun of a Ravigneaux set.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    basic2: Option<String>,
     sun: i64,
     ring: i64,
+    /// The planet meshing the sun (a Ravigneaux set's short pinion).
     planet: i64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    sun2: Option<i64>,
+    /// A Ravigneaux set's long pinion.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    planet2: Option<i64>,
     alternatives: usize,
 }
 
@@ -172,14 +182,17 @@ fn row(search: &Search, c: &Candidate, rank: usize, spec: Option<String>) -> Row
             .set_names()
             .iter()
             .zip(&c.teeth)
-            .zip(&c.basic)
+            .zip(c.basic.iter().zip(&c.basic2))
             .zip(&c.alternatives)
-            .map(|(((set, t), basic), &alternatives)| SetTeeth {
+            .map(|(((set, t), (basic, basic2)), &alternatives)| SetTeeth {
                 set: set.clone(),
                 basic: basic.clone(),
+                basic2: basic2.clone(),
                 sun: t.sun,
                 ring: t.ring,
                 planet: t.planet,
+                sun2: t.sun2,
+                planet2: t.planet2,
                 alternatives,
             })
             .collect(),
@@ -236,12 +249,13 @@ fn write_table(out: &mut dyn Write, r: &Report) -> anyhow::Result<()> {
         return Ok(());
     };
     let mut headers: Vec<String> = vec!["rank".into(), "score".into()];
-    headers.extend(
-        first
-            .sets
-            .iter()
-            .map(|s| format!("{} sun/ring/planet (k)", s.set)),
-    );
+    headers.extend(first.sets.iter().map(|s| {
+        if s.sun2.is_some() {
+            format!("{} sun/sun2/ring/planet/planet2 (k, k2)", s.set)
+        } else {
+            format!("{} sun/ring/planet (k)", s.set)
+        }
+    }));
     headers.extend(first.ratios.iter().map(|x| format!("i{}", x.state)));
     let refs: Vec<&str> = headers.iter().map(String::as_str).collect();
     let mut t = Table::new(&refs).right(&[0, 1]);
@@ -253,7 +267,13 @@ fn write_table(out: &mut dyn Write, r: &Report) -> anyhow::Result<()> {
             } else {
                 String::new()
             };
-            format!("{}/{}/{} ({}){alt}", s.sun, s.ring, s.planet, s.basic)
+            match (s.sun2, s.planet2, &s.basic2) {
+                (Some(s2), Some(p2), Some(k2)) => format!(
+                    "{}/{s2}/{}/{}/{p2} ({}, {k2}){alt}",
+                    s.sun, s.ring, s.planet, s.basic
+                ),
+                _ => format!("{}/{}/{} ({}){alt}", s.sun, s.ring, s.planet, s.basic),
+            }
         }));
         cells.extend(c.ratios.iter().map(|x| format!("{:.4}", x.ratio)));
         t.row(cells);
@@ -261,7 +281,7 @@ fn write_table(out: &mut dyn Write, r: &Report) -> anyhow::Result<()> {
     t.write(out, 2)?;
     writeln!(
         out,
-        "(k = ring/sun; +N: N other tooth triples with the same k; ratios are exact, e.g. {} = {})",
+        "(k = ring/sun, k2 = ring/sun2; +N: N other tooth sets with the same k; ratios are exact, e.g. {} = {})",
         first.ratios.first().map_or("", |x| x.state.as_str()),
         first.ratios.first().map_or("", |x| x.exact.as_str()),
     )?;

@@ -1,9 +1,13 @@
 //! The tooth-count search: branch and bound over the basic ratios k = z_ring /
 //! z_sun of the unknown sets, then exact confirmation of every survivor.
 //!
-//! Per gear state the Willis rows (eq. 2 of the paper, one per simple set:
-//! w_s - w_c + k (w_r - w_c) = 0), the engaged elements' rows and w_in = 1 form
-//! a square system A(k) w = e. Each k_i sits in one row, so det A and the
+//! Per gear state the Willis rows (eq. 2 of the paper: w_s - w_c + s k (w_r -
+//! w_c) = 0 with s = +1 for a simple set and a Ravigneaux set's large sun, -1
+//! for its small sun and a double-pinion set), the engaged elements' rows and
+//! w_in = 1 form a square system A(k) w = e. A simple set has one searched k, a
+//! Ravigneaux set two (ring/small sun, ring/large sun: one ring, so not every
+//! pair is made of teeth; the pairs that are, are checked at the leaves).
+//! Each k_i sits in one row, so det A and the
 //! Cramer numerator of w_out are affine in each k_i: on a box of k values, if
 //! det A keeps one sign at every vertex it has no zero inside, and w_out is
 //! monotone in each k_i, so its range over the box is spanned by the vertex
@@ -17,7 +21,7 @@ use std::collections::HashMap;
 
 use nalgebra::{DMatrix, DVector};
 use num_rational::Ratio;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::spec::{Constraints, SetRange, SynthSpec};
 use crate::model::train::Train;
@@ -67,15 +71,23 @@ impl From<DesignError> for crate::Error {
     }
 }
 
-/// One way to build a set: sun, ring and planet teeth.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+/// One way to build a set: sun, ring and planet teeth (and for a Ravigneaux
+/// set the large sun and the short pinion).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Teeth {
-    /// Sun.
+    /// Sun (the small, forward sun of a Ravigneaux set).
     pub sun: i64,
     /// Ring.
     pub ring: i64,
-    /// Planet.
+    /// Planet meshing the sun (the short pinion of a Ravigneaux set), as the spec's `planet`.
     pub planet: i64,
+    /// Large sun of a Ravigneaux set.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sun2: Option<i64>,
+    /// Long pinion of a Ravigneaux set (meshing the short pinion, the large
+    /// sun and the ring), as the spec's `planet2`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub planet2: Option<i64>,
 }
 
 /// A basic ratio k = ring / sun (reduced) and every admissible tooth triple giving it.
@@ -85,11 +97,27 @@ struct Basic {
     teeth: Vec<Teeth>,
 }
 
-/// A gear state's square system with the unknown sets' rows marked.
+/// One searched basic ratio: its distinct values, ascending, and the sign of
+/// its Willis row w_s + sign k w_r - (1 + sign k) w_c = 0.
+#[derive(Debug, Clone)]
+struct Dim {
+    ks: Vec<f64>,
+    sign: f64,
+}
+
+/// An unknown set: its dimensions (one, or two for a Ravigneaux set) and the
+/// admissible teeth of every combination of their indices that teeth can make.
+#[derive(Debug, Clone)]
+struct Unknown {
+    dims: Vec<usize>,
+    teeth: HashMap<Vec<usize>, Vec<Teeth>>,
+}
+
+/// A gear state's square system with the searched rows marked.
 #[derive(Debug, Clone)]
 struct StateSystem {
     matrix: DMatrix<f64>,
-    /// Per unknown set: (row, sun col, ring col, carrier col).
+    /// Per dimension: (row, sun col, ring col, carrier col).
     rows: Vec<(usize, usize, usize, usize)>,
     output: usize,
     input_row: usize,
@@ -102,18 +130,23 @@ pub struct Search {
     spec: SynthSpec,
     base: Spec,
     set_names: Vec<String>,
-    basics: Vec<Vec<Basic>>,
+    dims: Vec<Dim>,
+    unknowns: Vec<Unknown>,
     states: Vec<StateSystem>,
 }
 
-/// One candidate returned by the search.
-#[derive(Debug, Clone, Serialize)]
+/// One candidate returned by the search (it reads back from its serde form,
+/// so that partitions run elsewhere can be merged by [`merge`]).
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Candidate {
     /// Per unknown set (in spec order): the basic ratio ring/sun as a fraction.
     pub basic: Vec<String>,
-    /// Per unknown set: the smallest-sun tooth triple giving that ratio.
+    /// Per unknown set: ring/large sun of a Ravigneaux set (None for a simple set).
+    pub basic2: Vec<Option<String>>,
+    /// Per unknown set: the smallest-sun teeth giving those basic ratios.
     pub teeth: Vec<Teeth>,
-    /// Per unknown set: every admissible triple with the same ratio (same gear ratios).
+    /// Per unknown set: how many admissible tooth sets give the same basic
+    /// ratios (and so the same gear ratios).
     pub alternatives: Vec<usize>,
     /// Per gear state (base order): name, ratio (float), exact ratio.
     pub ratios: Vec<(String, f64, String)>,
@@ -124,11 +157,12 @@ pub struct Candidate {
 }
 
 /// Counts of a finished search.
-#[derive(Debug, Clone, Default, Serialize)]
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct Stats {
     /// Product of the per-set counts of admissible tooth triples (the naive space).
     pub tooth_space: f64,
-    /// Product of the per-set counts of distinct basic ratios (the searched space).
+    /// Product of the per-set counts of distinct basic ratios (pairs of them
+    /// for a Ravigneaux set): the searched space.
     pub ratio_space: f64,
     /// Branch-and-bound nodes visited.
     pub nodes: u64,
@@ -139,14 +173,38 @@ pub struct Stats {
 /// Most (sun, ring) pairs one set's ranges may span (each is visited once).
 pub const MAX_SET_PAIRS: i64 = 10_000_000;
 
-/// Admissible tooth triples of one set, grouped by reduced ring/sun, sorted by k.
-fn basics(name: &str, r: &SetRange, c: &Constraints) -> Result<Vec<Basic>, DesignError> {
-    let bad = |f: &str, m: &str| DesignError::Invalid {
-        field: format!("sets.{name}.{f}"),
-        message: m.into(),
-    };
-    if r.sun[0] < 3 || r.sun[0] > r.sun[1] {
-        return Err(bad("sun", "need 3 <= min <= max"));
+/// The planet between a sun and a ring on one axis (the coaxial condition,
+/// within the profile-shift allowance), if the constraints admit it; the
+/// non-interference and assembly tests of `planets` equally spaced copies.
+fn coaxial_planet(sun: i64, ring: i64, planets: i64, c: &Constraints) -> Option<i64> {
+    let diff = ring - sun;
+    if diff <= 0 {
+        return None;
+    }
+    let planet = diff / 2;
+    if (diff - 2 * planet).abs() > c.profile_shift || planet < c.min_planet {
+        return None;
+    }
+    if c.assembly && (sun + ring) % planets != 0 {
+        return None;
+    }
+    if c.non_interference && planets > 1 {
+        let s = (std::f64::consts::PI / planets as f64).sin();
+        if (sun + planet) as f64 * s <= (planet + 2) as f64 {
+            return None;
+        }
+    }
+    Some(planet)
+}
+
+/// The checks every unknown set's ranges share; `bad(field, message)` names the field.
+fn check_ranges(r: &SetRange, bad: &dyn Fn(&str, &str) -> DesignError) -> Result<(), DesignError> {
+    for (field, range) in [("sun", Some(r.sun)), ("sun2", r.sun2)] {
+        if let Some([lo, hi]) = range
+            && (lo < 3 || lo > hi)
+        {
+            return Err(bad(field, "need 3 <= min <= max"));
+        }
     }
     if r.ring[0] > r.ring[1] || r.ring[1] <= r.sun[0] {
         return Err(bad(
@@ -157,53 +215,55 @@ fn basics(name: &str, r: &SetRange, c: &Constraints) -> Result<Vec<Basic>, Desig
     if r.planets < 1 {
         return Err(bad("planets", "need at least one planet"));
     }
-    // Bounded work per set: every (sun, ring) pair of the ranges is visited once.
     let max = crate::error::MAX_TEETH;
-    if r.sun[1] > max || r.ring[1] > max {
+    if r.sun[1] > max || r.ring[1] > max || r.sun2.is_some_and(|s| s[1] > max) {
         return Err(bad(
             "sun",
             &format!("tooth counts above {max} are not searched"),
         ));
     }
-    let pairs = (r.sun[1] - r.sun[0] + 1).saturating_mul(r.ring[1] - r.ring[0] + 1);
-    if pairs > MAX_SET_PAIRS {
+    // Bounded work per set: every tooth combination of the ranges is visited once.
+    let span = |x: [i64; 2]| x[1] - x[0] + 1;
+    let combos = span(r.sun)
+        .saturating_mul(span(r.ring))
+        .saturating_mul(r.sun2.map_or(1, span));
+    if combos > MAX_SET_PAIRS {
         return Err(bad(
             "ring",
             &format!(
-                "{pairs} (sun, ring) pairs in this set; at most {MAX_SET_PAIRS} are searched per set"
+                "{combos} tooth combinations in this set; at most {MAX_SET_PAIRS} are searched per set"
             ),
         ));
     }
+    Ok(())
+}
+
+/// Admissible tooth triples of one simple set, grouped by reduced ring/sun, sorted by k.
+fn basics(name: &str, r: &SetRange, c: &Constraints) -> Result<Vec<Basic>, DesignError> {
+    let bad = |f: &str, m: &str| DesignError::Invalid {
+        field: format!("sets.{name}.{f}"),
+        message: m.into(),
+    };
+    check_ranges(r, &bad)?;
     let mut map: HashMap<Ratio<i64>, Vec<Teeth>> = HashMap::new();
     for sun in r.sun[0]..=r.sun[1] {
         for ring in r.ring[0]..=r.ring[1] {
-            let diff = ring - sun;
-            if diff <= 0 {
+            let Some(planet) = coaxial_planet(sun, ring, r.planets, c) else {
                 continue;
-            }
-            // Planet from the coaxial condition, within the profile-shift allowance.
-            let planet = diff / 2;
-            if (diff - 2 * planet).abs() > c.profile_shift || planet < c.min_planet {
-                continue;
-            }
-            if c.assembly && (sun + ring) % r.planets != 0 {
-                continue;
-            }
-            if c.non_interference && r.planets > 1 {
-                let s = (std::f64::consts::PI / r.planets as f64).sin();
-                if (sun + planet) as f64 * s <= (planet + 2) as f64 {
-                    continue;
-                }
-            }
+            };
             let k = ring as f64 / sun as f64;
             if let Some([lo, hi]) = c.ring_sun
                 && (k < lo || k > hi)
             {
                 continue;
             }
-            map.entry(Ratio::new(ring, sun))
-                .or_default()
-                .push(Teeth { sun, ring, planet });
+            map.entry(Ratio::new(ring, sun)).or_default().push(Teeth {
+                sun,
+                ring,
+                planet,
+                sun2: None,
+                planet2: None,
+            });
         }
     }
     let mut out: Vec<Basic> = map
@@ -224,6 +284,89 @@ fn basics(name: &str, r: &SetRange, c: &Constraints) -> Result<Vec<Basic>, Desig
         ));
     }
     Ok(out)
+}
+
+/// Admissible teeth of one Ravigneaux set: the two searched dimensions
+/// (ring/small sun, ring/large sun: distinct values, ascending) and the teeth
+/// of every index pair that teeth can make.
+///
+/// Geometry (in modules): the long pinion meshes the ring and the large sun
+/// on one axis (the coaxial condition, with the allowance, assembly and
+/// non-interference of a simple set); the short pinion meshes the small sun
+/// and the long pinion: its centre distance to the long pinion reaches it
+/// when 2 p_short >= s_large - s_small, and its tip clears the ring when
+/// s_small + 2 p_short + 4 <= ring. The short pinion is the smallest count
+/// meeting both and `min_planet`; the small sun is smaller than the large.
+#[allow(clippy::type_complexity)]
+fn ravigneaux(
+    name: &str,
+    r: &SetRange,
+    c: &Constraints,
+) -> Result<(Vec<f64>, Vec<f64>, HashMap<Vec<usize>, Vec<Teeth>>), DesignError> {
+    let bad = |f: &str, m: &str| DesignError::Invalid {
+        field: format!("sets.{name}.{f}"),
+        message: m.into(),
+    };
+    check_ranges(r, &bad)?;
+    let large = r
+        .sun2
+        .ok_or_else(|| bad("sun2", "a Ravigneaux set needs the large sun's range"))?;
+    let mut found: HashMap<(Ratio<i64>, Ratio<i64>), Vec<Teeth>> = HashMap::new();
+    for ring in r.ring[0]..=r.ring[1] {
+        for sun2 in large[0]..=large[1] {
+            let Some(long) = coaxial_planet(sun2, ring, r.planets, c) else {
+                continue;
+            };
+            for sun in r.sun[0]..=r.sun[1].min(sun2 - 1) {
+                let short = c.min_planet.max((sun2 - sun + 1) / 2);
+                if sun + 2 * short + 4 > ring {
+                    continue;
+                }
+                let k = ring as f64 / sun as f64;
+                if let Some([lo, hi]) = c.ring_sun
+                    && (k < lo || k > hi)
+                {
+                    continue;
+                }
+                found
+                    .entry((Ratio::new(ring, sun), Ratio::new(ring, sun2)))
+                    .or_default()
+                    .push(Teeth {
+                        sun,
+                        ring,
+                        planet: short,
+                        sun2: Some(sun2),
+                        planet2: Some(long),
+                    });
+            }
+        }
+    }
+    if found.is_empty() {
+        return Err(bad(
+            "sun",
+            "no tooth counts in these ranges meet the constraints",
+        ));
+    }
+    let sorted = |pick: fn(&(Ratio<i64>, Ratio<i64>)) -> Ratio<i64>| {
+        let mut v: Vec<Ratio<i64>> = found.keys().map(pick).collect();
+        v.sort();
+        v.dedup();
+        v
+    };
+    let (k1, k2) = (sorted(|k| k.0), sorted(|k| k.1));
+    let value = |q: &Ratio<i64>| *q.numer() as f64 / *q.denom() as f64;
+    let mut teeth = HashMap::new();
+    for ((a, b), mut t) in found {
+        t.sort_by_key(|t| (t.sun, t.sun2, t.ring));
+        let i = k1.binary_search(&a).unwrap_or_default();
+        let j = k2.binary_search(&b).unwrap_or_default();
+        teeth.insert(vec![i, j], t);
+    }
+    Ok((
+        k1.iter().map(value).collect(),
+        k2.iter().map(value).collect(),
+        teeth,
+    ))
 }
 
 impl Search {
@@ -260,41 +403,110 @@ impl Search {
                 links.len() - 1
             }
         };
-        // Willis rows of every simple set: known sets get their k now.
+        // The Willis rows of every set (name, sun, ring, carrier, k, sign):
+        // one for a simple or double-pinion set, two for a Ravigneaux set
+        // (small sun, then large sun). Known sets get their k now.
         let mut willis = Vec::new();
         for p in &base.planetary {
             let ring = p.ring.clone().ok_or_else(|| DesignError::Invalid {
                 field: format!("planetary.{}", p.name),
-                message: "synth handles simple sets (sun, ring, carrier) only".into(),
+                message: "synth handles sets with a ring (simple, double-pinion, Ravigneaux)"
+                    .into(),
             })?;
-            if p.kind != PlanetaryKind::Simple {
-                return Err(DesignError::Invalid {
-                    field: format!("planetary.{}", p.name),
-                    message: "synth handles simple sets only".into(),
-                });
-            }
+            let k = |z: Option<i64>| match (z, p.teeth.ring) {
+                (Some(zs), Some(zr)) => zr as f64 / zs as f64,
+                _ => f64::NAN,
+            };
             let (s, r, c) = (
                 col(&p.sun, &mut links),
                 col(&ring, &mut links),
                 col(&p.carrier, &mut links),
             );
-            let k = match (p.teeth.sun, p.teeth.ring) {
-                (Some(zs), Some(zr)) => zr as f64 / zs as f64,
-                _ => f64::NAN,
-            };
-            willis.push((p.name.clone(), s, r, c, k));
+            match p.kind {
+                PlanetaryKind::Simple => {
+                    willis.push((p.name.clone(), s, r, c, k(p.teeth.sun), 1.0))
+                }
+                PlanetaryKind::DoublePinion => {
+                    willis.push((p.name.clone(), s, r, c, k(p.teeth.sun), -1.0));
+                }
+                PlanetaryKind::Ravigneaux => {
+                    let large = p.sun2.as_deref().ok_or_else(|| DesignError::Invalid {
+                        field: format!("planetary.{}.sun2", p.name),
+                        message: "a Ravigneaux set needs its large sun".into(),
+                    })?;
+                    let s2 = col(large, &mut links);
+                    willis.push((p.name.clone(), s, r, c, k(p.teeth.sun), -1.0));
+                    willis.push((p.name.clone(), s2, r, c, k(p.teeth.sun2), 1.0));
+                }
+                _ => {
+                    return Err(DesignError::Invalid {
+                        field: format!("planetary.{}", p.name),
+                        message: "synth handles simple, double-pinion and Ravigneaux sets".into(),
+                    });
+                }
+            }
         }
         let set_names: Vec<String> = spec.sets.keys().cloned().collect();
-        let mut unknown_of = Vec::new();
-        for n in &set_names {
-            let i = willis
+        // Per Willis row, the searched dimension it carries (if any).
+        let mut dim_of: Vec<Option<usize>> = vec![None; willis.len()];
+        let mut dims = Vec::new();
+        let mut unknowns = Vec::new();
+        for (name, range) in &spec.sets {
+            let rows: Vec<usize> = (0..willis.len())
+                .filter(|&i| &willis[i].0 == name)
+                .collect();
+            let kind = base
+                .planetary
                 .iter()
-                .position(|w| &w.0 == n)
-                .ok_or_else(|| DesignError::UnknownSet(n.clone()))?;
-            unknown_of.push(i);
+                .find(|p| &p.name == name)
+                .map(|p| p.kind);
+            let field = |f: &str| format!("sets.{name}.{f}");
+            let unknown = match (kind, rows.as_slice()) {
+                (None, _) => return Err(DesignError::UnknownSet(name.clone())),
+                (Some(PlanetaryKind::Simple), &[row]) => {
+                    if range.sun2.is_some() {
+                        return Err(DesignError::Invalid {
+                            field: field("sun2"),
+                            message: "a simple set has one sun".into(),
+                        });
+                    }
+                    let b = basics(name, range, &spec.constraints)?;
+                    dim_of[row] = Some(dims.len());
+                    dims.push(Dim {
+                        ks: b.iter().map(|x| x.k).collect(),
+                        sign: 1.0,
+                    });
+                    Unknown {
+                        dims: vec![dims.len() - 1],
+                        teeth: b
+                            .into_iter()
+                            .enumerate()
+                            .map(|(i, x)| (vec![i], x.teeth))
+                            .collect(),
+                    }
+                }
+                (Some(PlanetaryKind::Ravigneaux), &[small, large]) => {
+                    let (k1, k2, teeth) = ravigneaux(name, range, &spec.constraints)?;
+                    dim_of[small] = Some(dims.len());
+                    dims.push(Dim { ks: k1, sign: -1.0 });
+                    dim_of[large] = Some(dims.len());
+                    dims.push(Dim { ks: k2, sign: 1.0 });
+                    Unknown {
+                        dims: vec![dims.len() - 2, dims.len() - 1],
+                        teeth,
+                    }
+                }
+                _ => {
+                    return Err(DesignError::Invalid {
+                        field: format!("sets.{name}"),
+                        message: "the search finds the teeth of simple and Ravigneaux sets".into(),
+                    });
+                }
+            };
+            unknowns.push(unknown);
         }
         for (i, w) in willis.iter().enumerate() {
-            if w.4.is_nan() && !unknown_of.contains(&i) {
+            if w.4.is_nan() && dim_of[i].is_none() {
                 return Err(DesignError::Invalid {
                     field: format!("planetary.{}.teeth", w.0),
                     message: "give sun and ring teeth, or list the set under [sets]".into(),
@@ -314,13 +526,14 @@ impl Search {
         for (name, engaged) in &tx.states {
             let mut rows: Vec<Vec<f64>> = Vec::new();
             let mut marks = Vec::new();
-            for (i, &(_, s, r, c, k)) in willis.iter().enumerate() {
+            for (i, &(_, s, r, c, k, sign)) in willis.iter().enumerate() {
                 let mut row = vec![0.0; n];
+                let k = if k.is_nan() { 0.0 } else { sign * k };
                 row[s] += 1.0;
-                row[r] += if k.is_nan() { 0.0 } else { k };
-                row[c] -= 1.0 + if k.is_nan() { 0.0 } else { k };
-                if let Some(u) = unknown_of.iter().position(|&j| j == i) {
-                    marks.push((u, rows.len(), s, r, c));
+                row[r] += k;
+                row[c] -= 1.0 + k;
+                if let Some(d) = dim_of[i] {
+                    marks.push((d, rows.len(), s, r, c));
                 }
                 rows.push(row);
             }
@@ -375,15 +588,12 @@ impl Search {
                 target: spec.targets.ratios.get(name).copied(),
             });
         }
-        let mut basics_all = Vec::new();
-        for (name, r) in &spec.sets {
-            basics_all.push(basics(name, r, &spec.constraints)?);
-        }
         Ok(Search {
             spec,
             base,
             set_names,
-            basics: basics_all,
+            dims,
+            unknowns,
             states,
         })
     }
@@ -400,7 +610,7 @@ impl Search {
 
     /// Number of partitions the first unknown set's ratios can be split into.
     pub fn max_partitions(&self) -> usize {
-        self.basics[0].len()
+        self.dims.first().map_or(0, |d| d.ks.len())
     }
 
     /// Run partition `part` of `parts` (contiguous slices of the first set's
@@ -421,23 +631,23 @@ impl Search {
             });
         }
         // In u128: part and parts come from the command line and may be huge.
-        let len = self.basics[0].len() as u128;
+        let len = self.max_partitions() as u128;
         let slice =
             |p: usize| usize::try_from(len * p as u128 / parts as u128).unwrap_or(usize::MAX);
         let (lo, hi) = (slice(part), slice(part + 1));
         let mut stats = Stats {
             tooth_space: self
-                .basics
+                .unknowns
                 .iter()
-                .map(|b| b.iter().map(|x| x.teeth.len() as f64).sum::<f64>())
+                .map(|u| u.teeth.values().map(|t| t.len() as f64).sum::<f64>())
                 .product(),
-            ratio_space: self.basics.iter().map(|b| b.len() as f64).product(),
+            ratio_space: self.unknowns.iter().map(|u| u.teeth.len() as f64).product(),
             ..Stats::default()
         };
         if lo >= hi {
             return Ok((Vec::new(), stats));
         }
-        let mut bounds: Vec<(usize, usize)> = self.basics.iter().map(|b| (0, b.len())).collect();
+        let mut bounds: Vec<(usize, usize)> = self.dims.iter().map(|d| (0, d.ks.len())).collect();
         bounds[0] = (lo, hi);
         let nodes = std::sync::atomic::AtomicU64::new(0);
         let leaves = std::sync::atomic::AtomicU64::new(0);
@@ -465,19 +675,12 @@ impl Search {
         mut progress: impl FnMut(usize, usize),
     ) -> Result<(Vec<Candidate>, Stats), DesignError> {
         let parts = parts.clamp(1, self.max_partitions().max(1));
-        let mut found = Vec::new();
-        let mut total = Stats::default();
+        let mut done = Vec::with_capacity(parts);
         for part in 0..parts {
-            let (c, s) = self.run_partition(part, parts)?;
-            found.extend(c);
-            total.tooth_space = s.tooth_space;
-            total.ratio_space = s.ratio_space;
-            total.nodes += s.nodes;
-            total.leaves += s.leaves;
+            done.push(self.run_partition(part, parts)?);
             progress(part + 1, parts);
         }
-        rank(&mut found, self.spec.top);
-        Ok((found, total))
+        Ok(merge(done, self.spec.top))
     }
 
     /// Run the whole space (one partition) on all cores.
@@ -499,7 +702,7 @@ impl Search {
             for (u, &(row, s, r, c)) in st.rows.iter().enumerate() {
                 let (b0, b1) = bounds[u];
                 let idx = if v >> u & 1 == 1 { b1 - 1 } else { b0 };
-                let k = self.basics[u][idx].k;
+                let k = self.dims[u].sign * self.dims[u].ks[idx];
                 for j in 0..a.ncols() {
                     a[(row, j)] = 0.0;
                 }
@@ -559,8 +762,13 @@ impl Search {
             .unwrap_or(0);
         let (b0, b1) = bounds[widest];
         if b1 - b0 <= 1 {
+            // A single point: teeth must make it (a Ravigneaux set's two
+            // ratios share the ring), then the box test above was exact up
+            // to round-off; check the spread.
+            if self.teeth_of(bounds).is_none() {
+                return Vec::new();
+            }
             leaves.fetch_add(1, Relaxed);
-            // A single point: the box test above was exact up to round-off; check spread.
             return if self.leaf_ok(bounds) {
                 vec![bounds.iter().map(|b| b.0).collect()]
             } else {
@@ -608,6 +816,18 @@ impl Search {
         true
     }
 
+    /// Per unknown set, the admissible teeth of a point (one index per
+    /// dimension); None when some set's ratios cannot be made of teeth.
+    fn teeth_of(&self, bounds: &[(usize, usize)]) -> Option<Vec<&Vec<Teeth>>> {
+        self.unknowns
+            .iter()
+            .map(|u| {
+                let key: Vec<usize> = u.dims.iter().map(|&d| bounds[d].0).collect();
+                u.teeth.get(&key)
+            })
+            .collect()
+    }
+
     /// The base spec with the candidate's teeth written in.
     pub fn candidate_spec(&self, teeth: &[Teeth]) -> Spec {
         let mut spec = self.base.clone();
@@ -616,6 +836,10 @@ impl Search {
                 p.teeth.sun = Some(t.sun);
                 p.teeth.ring = Some(t.ring);
                 p.teeth.planet = Some(t.planet);
+                if t.sun2.is_some() {
+                    p.teeth.sun2 = t.sun2;
+                    p.teeth.planet2 = t.planet2;
+                }
             }
         }
         spec
@@ -623,11 +847,12 @@ impl Search {
 
     /// Rebuild the train with the candidate's teeth and solve it exactly.
     fn confirm(&self, ks: &[usize]) -> Result<Candidate, DesignError> {
-        let teeth: Vec<Teeth> = ks
-            .iter()
-            .enumerate()
-            .map(|(u, &i)| self.basics[u][i].teeth[0])
-            .collect();
+        let point: Vec<(usize, usize)> = ks.iter().map(|&i| (i, i + 1)).collect();
+        let sets = self.teeth_of(&point).ok_or_else(|| DesignError::Invalid {
+            field: "sets".into(),
+            message: "a leaf without teeth reached confirmation".into(),
+        })?;
+        let teeth: Vec<Teeth> = sets.iter().map(|t| t[0]).collect();
         let train = Train::from_spec(&self.candidate_spec(&teeth))?;
         let table = train.shift_table()?;
         let mut ratios = Vec::new();
@@ -645,21 +870,17 @@ impl Search {
             }
             ratios.push((g.state.clone(), g.ratio, exact));
         }
+        let ratio = |ring: i64, sun: i64| {
+            crate::numerics::exact::display(&crate::numerics::exact::frac(ring, sun))
+        };
         Ok(Candidate {
-            basic: ks
+            basic: teeth.iter().map(|t| ratio(t.ring, t.sun)).collect(),
+            basic2: teeth
                 .iter()
-                .enumerate()
-                .map(|(u, &i)| {
-                    let t = self.basics[u][i].teeth[0];
-                    crate::numerics::exact::display(&crate::numerics::exact::frac(t.ring, t.sun))
-                })
+                .map(|t| t.sun2.map(|s2| ratio(t.ring, s2)))
                 .collect(),
+            alternatives: sets.iter().map(|t| t.len()).collect(),
             teeth,
-            alternatives: ks
-                .iter()
-                .enumerate()
-                .map(|(u, &i)| self.basics[u][i].teeth.len())
-                .collect(),
             ratios,
             spread: table.spread.as_ref().map(|s| s.value),
             score: if nt > 0 {
@@ -671,12 +892,28 @@ impl Search {
     }
 }
 
+/// Partitions' results as one search's: the candidates ranked together
+/// ([`rank`]) and the counts summed (the spaces are the whole search's).
+pub fn merge(parts: Vec<(Vec<Candidate>, Stats)>, top: usize) -> (Vec<Candidate>, Stats) {
+    let mut found = Vec::new();
+    let mut total = Stats::default();
+    for (c, s) in parts {
+        found.extend(c);
+        total.tooth_space = s.tooth_space;
+        total.ratio_space = s.ratio_space;
+        total.nodes += s.nodes;
+        total.leaves += s.leaves;
+    }
+    rank(&mut found, top);
+    (found, total)
+}
+
 /// Sort by score (then by the teeth, so that the order is canonical) and keep `top`.
 pub fn rank(c: &mut Vec<Candidate>, top: usize) {
     c.sort_by(|a, b| {
         a.score.total_cmp(&b.score).then_with(|| {
-            let ka: Vec<_> = a.teeth.iter().map(|t| (t.sun, t.ring)).collect();
-            let kb: Vec<_> = b.teeth.iter().map(|t| (t.sun, t.ring)).collect();
+            let ka: Vec<_> = a.teeth.iter().map(|t| (t.sun, t.sun2, t.ring)).collect();
+            let kb: Vec<_> = b.teeth.iter().map(|t| (t.sun, t.sun2, t.ring)).collect();
             ka.cmp(&kb)
         })
     });
@@ -766,6 +1003,62 @@ mod tests {
         let key = |c: &Vec<Candidate>| c.iter().map(|x| x.teeth.clone()).collect::<Vec<_>>();
         assert_eq!(key(&whole), key(&parts));
         assert_eq!(ws.tooth_space, ps.tooth_space);
+    }
+
+    const AOD: &str = include_str!(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/ford_aod_ravigneaux.toml"
+    ));
+
+    /// A Ravigneaux set's two searched ratios: the branch and bound keeps
+    /// exactly the tooth sets that an exhaustive run of the exact transmission
+    /// analysis over every admissible (small sun, large sun, ring) accepts.
+    #[test]
+    fn ravigneaux_search_equals_exhaustive_exact_analysis() {
+        let text = "base = \"aod\"\ntop = 100000\n[sets]\nR = { sun = [24, 36], sun2 = [28, 44], ring = [60, 84] }\n[targets]\ntolerance = 0.03\nratios = { \"1\" = 2.40, \"2\" = 1.47, \"4\" = 0.67, \"R\" = -2.00 }\n";
+        let spec: SynthSpec = toml::from_str(text).expect("test input");
+        let s = Search::new(
+            spec,
+            parse_spec(AOD, Format::Toml, "aod").expect("test input"),
+        )
+        .expect("test input");
+        let (found, stats) = s.run().expect("test input");
+        let mut got: Vec<(String, String)> = found
+            .iter()
+            .map(|c| (c.basic[0].clone(), c.basic2[0].clone().expect("Ravigneaux")))
+            .collect();
+        got.sort();
+        // Every admissible tooth set, analysed exactly; its basic ratios kept
+        // when every targeted ratio is within the tolerance.
+        let mut want = std::collections::BTreeSet::new();
+        let teeth: Vec<Teeth> = s.unknowns[0].teeth.values().map(|t| t[0]).collect();
+        assert_eq!(teeth.len() as f64, stats.ratio_space);
+        for t in teeth {
+            let table = Train::from_spec(&s.candidate_spec(&[t]))
+                .expect("admissible teeth make a train")
+                .shift_table()
+                .expect("every state solves");
+            let ok = table.gears.iter().all(|g| {
+                s.spec
+                    .targets
+                    .ratios
+                    .get(&g.state)
+                    .is_none_or(|&r| (g.ratio - r).abs() <= 0.03)
+            });
+            if ok {
+                let q = |z: i64| {
+                    crate::numerics::exact::display(&crate::numerics::exact::frac(t.ring, z))
+                };
+                want.insert((q(t.sun), q(t.sun2.expect("Ravigneaux"))));
+            }
+        }
+        let want: Vec<_> = want.into_iter().collect();
+        assert!(
+            want.len() > 3,
+            "a loose tolerance admits several sets: {want:?}"
+        );
+        assert_eq!(got, want);
+        assert!(got.contains(&("12/5".into(), "2".into())));
     }
 
     #[test]

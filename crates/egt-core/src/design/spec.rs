@@ -29,12 +29,16 @@ fn default_top() -> usize {
     20
 }
 
-/// Inclusive tooth ranges of one simple set.
+/// Inclusive tooth ranges of one unknown set (simple or Ravigneaux).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SetRange {
-    /// Sun teeth `[min, max]`.
+    /// Sun teeth `[min, max]` (the small, forward sun of a Ravigneaux set).
     pub sun: [i64; 2],
+    /// Large sun teeth `[min, max]`: required for a Ravigneaux set, refused
+    /// for a simple one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sun2: Option<[i64; 2]>,
     /// Ring teeth `[min, max]`.
     pub ring: [i64; 2],
     /// Number of equally spaced planets (assembly and non-interference). Default 3.

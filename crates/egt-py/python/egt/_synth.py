@@ -5,6 +5,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import time
 from dataclasses import dataclass
@@ -28,14 +29,23 @@ search text, its format and name, base text, its format and name, top."""
 
 @dataclass(frozen=True)
 class SetTeeth:
-    """One unknown set of a candidate: the smallest-sun tooth triple of its
-    basic ratio k = ring / sun, and how many other triples give the same k."""
+    """One unknown set of a candidate: the smallest-sun teeth of its basic
+    ratio k = ring / sun (and k2 = ring / sun2 for a Ravigneaux set), and how
+    many tooth sets give the same basic ratios (so the same gear ratios)."""
 
     sun: int
+    """The sun (a Ravigneaux set's small sun)."""
     ring: int
     planet: int
+    """The planet meshing the sun (a Ravigneaux set's short pinion)."""
     basic: Fraction
     alternatives: int
+    sun2: Optional[int] = None
+    """A Ravigneaux set's large sun."""
+    planet2: Optional[int] = None
+    """A Ravigneaux set's long pinion."""
+    basic2: Optional[Fraction] = None
+    """ring / sun2 of a Ravigneaux set."""
 
 
 @dataclass(frozen=True)
@@ -61,13 +71,16 @@ class SynthResult:
     partitions: int
 
     def to_pandas(self) -> "pandas.DataFrame":
-        """One row per candidate: score, spread, each set's sun/ring/planet, each ratio."""
+        """One row per candidate: score, spread, each set's sun/ring/planet
+        (and sun2/planet2 of a Ravigneaux set), each ratio."""
         pd = _pandas()
         rows: List[Dict[str, Any]] = []
         for c in self.candidates:
             row: Dict[str, Any] = {"rank": c.rank, "score": c.score, "spread": c.spread}
             for name, t in c.sets.items():
                 row.update({f"{name}.sun": t.sun, f"{name}.ring": t.ring, f"{name}.planet": t.planet})
+                if t.sun2 is not None:
+                    row.update({f"{name}.sun2": t.sun2, f"{name}.planet2": t.planet2})
             row.update({f"ratio.{s}": float(x) for s, x in c.ratios.items()})
             rows.append(row)
         return pd.DataFrame(rows).set_index("rank") if rows else pd.DataFrame()
@@ -126,24 +139,25 @@ def _candidate(rank: int, sets: Sequence[str], c: Mapping[str, Any]) -> Candidat
         score=c["score"],
         spread=c["spread"],
         sets={
-            name: SetTeeth(t["sun"], t["ring"], t["planet"], Fraction(b), alt)
-            for name, t, b, alt in zip(sets, c["teeth"], c["basic"], c["alternatives"])
+            name: SetTeeth(
+                t["sun"], t["ring"], t["planet"], Fraction(b), alt,
+                t.get("sun2"), t.get("planet2"), None if b2 is None else Fraction(b2),
+            )
+            for name, t, b, b2, alt in zip(sets, c["teeth"], c["basic"], c["basic2"], c["alternatives"])
         },
         ratios={state: Fraction(exact) for state, _, exact in c["ratios"]},
     )
 
 
 def _merge(core: SearchCore, results: Sequence[Mapping[str, Any]], top: int, seconds: float) -> SynthResult:
-    """Partitions' candidates ranked together, by the core's order
-    (``design::rank``: score, then the sets' (sun, ring))."""
-    found = [c for r in results for c in r["candidates"]]
-    found.sort(key=lambda c: (c["score"], [(t["sun"], t["ring"]) for t in c["teeth"]]))
-    stats: Dict[str, float] = dict(results[0]["stats"]) if results else {}
-    for key in ("nodes", "leaves"):
-        stats[key] = sum(r["stats"][key] for r in results)
+    """Partitions' candidates ranked together and their counts summed, by the
+    core (``design::merge``: score, then the sets' teeth)."""
+    merged = core.merge(json.dumps(list(results)), top)
+    found = merged["candidates"]
+    stats: Dict[str, float] = dict(merged["stats"]) if results else {}
     sets = core.sets
     return SynthResult(
-        candidates=tuple(_candidate(k + 1, sets, c) for k, c in enumerate(found[:top])),
+        candidates=tuple(_candidate(k + 1, sets, c) for k, c in enumerate(found)),
         stats=stats,
         seconds=seconds,
         partitions=len(results),
