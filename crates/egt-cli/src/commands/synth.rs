@@ -236,11 +236,12 @@ fn write_table(out: &mut dyn Write, r: &Report) -> anyhow::Result<()> {
     )?;
     writeln!(
         out,
-        "{:.3e} tooth combinations, {:.3e} distinct ratio combinations, {} nodes, {} leaves, {:.2} s; {} candidates",
+        "{:.3e} tooth combinations, {:.3e} distinct ratio combinations, {} nodes, {} leaves ({} failed the analysis targets), {:.2} s; {} candidates",
         r.stats.tooth_space,
         r.stats.ratio_space,
         r.stats.nodes,
         r.stats.leaves,
+        r.stats.rejected,
         r.seconds,
         r.candidates.len()
     )?;

@@ -168,6 +168,10 @@ pub struct Stats {
     pub nodes: u64,
     /// Leaves (full ratio vectors) evaluated.
     pub leaves: u64,
+    /// Leaves that met the ratio targets but failed a target only the exact
+    /// analysis can check (steps, progression, efficiency, element or mesh torque).
+    #[serde(default)]
+    pub rejected: u64,
 }
 
 /// Most (sun, ring) pairs one set's ranges may span (each is visited once).
@@ -383,11 +387,29 @@ impl Search {
                 field: "base".into(),
                 message: "the base train has no [transmission] section".into(),
             })?;
-        if !(spec.targets.tolerance > 0.0 && spec.targets.tolerance.is_finite()) {
-            return Err(DesignError::Invalid {
-                field: "targets.tolerance".into(),
-                message: "must be positive".into(),
-            });
+        let t = &spec.targets;
+        for (field, v) in [
+            ("tolerance", Some(t.tolerance)),
+            ("efficiency", t.efficiency),
+            ("max_element_torque", t.max_element_torque),
+            ("max_mesh_torque", t.max_mesh_torque),
+        ] {
+            if v.is_some_and(|v| !(v > 0.0 && v.is_finite())) {
+                return Err(DesignError::Invalid {
+                    field: format!("targets.{field}"),
+                    message: "must be a positive number".into(),
+                });
+            }
+        }
+        for (field, v) in [("spread", t.spread), ("steps", t.steps)] {
+            if let Some([lo, hi]) = v
+                && !(lo.is_finite() && hi.is_finite() && lo <= hi)
+            {
+                return Err(DesignError::Invalid {
+                    field: format!("targets.{field}"),
+                    message: "need [min, max] with min <= max".into(),
+                });
+            }
         }
         for s in spec.targets.ratios.keys() {
             if !tx.states.contains_key(s) {
@@ -656,7 +678,10 @@ impl Search {
         stats.leaves = leaves.into_inner();
         let mut out = Vec::new();
         for ks in found {
-            out.push(self.confirm(&ks)?);
+            match self.confirm(&ks)? {
+                Some(c) => out.push(c),
+                None => stats.rejected += 1,
+            }
         }
         rank(&mut out, self.spec.top);
         Ok((out, stats))
@@ -845,8 +870,40 @@ impl Search {
         spec
     }
 
-    /// Rebuild the train with the candidate's teeth and solve it exactly.
-    fn confirm(&self, ks: &[usize]) -> Result<Candidate, DesignError> {
+    /// The targets only the exact analysis checks: every step in range, a
+    /// progressive set, and per targeted state the efficiency, the element
+    /// torques and the mesh torques.
+    fn meets_analysis_targets(&self, table: &crate::ShiftTable) -> bool {
+        let t = &self.spec.targets;
+        if let Some([lo, hi]) = t.steps
+            && table
+                .steps
+                .iter()
+                .any(|s| !(s.value >= lo && s.value <= hi))
+        {
+            return false;
+        }
+        if t.progressive && table.steps.windows(2).any(|w| w[1].value > w[0].value) {
+            return false;
+        }
+        table
+            .gears
+            .iter()
+            .filter(|g| t.ratios.contains_key(&g.state))
+            .all(|g| {
+                let efficiency = g.power.as_ref().map(|p| p.efficiency);
+                t.efficiency
+                    .is_none_or(|min| efficiency.is_some_and(|e| e >= min))
+                    && t.max_element_torque
+                        .is_none_or(|max| g.elements.iter().all(|e| e.torque.abs() <= max))
+                    && t.max_mesh_torque
+                        .is_none_or(|max| g.meshes.iter().all(|m| m.multiplier.abs() <= max))
+            })
+    }
+
+    /// Rebuild the train with the candidate's teeth and solve it exactly;
+    /// None when it fails a target only that analysis can check.
+    fn confirm(&self, ks: &[usize]) -> Result<Option<Candidate>, DesignError> {
         let point: Vec<(usize, usize)> = ks.iter().map(|&i| (i, i + 1)).collect();
         let sets = self.teeth_of(&point).ok_or_else(|| DesignError::Invalid {
             field: "sets".into(),
@@ -855,6 +912,9 @@ impl Search {
         let teeth: Vec<Teeth> = sets.iter().map(|t| t[0]).collect();
         let train = Train::from_spec(&self.candidate_spec(&teeth))?;
         let table = train.shift_table()?;
+        if !self.meets_analysis_targets(&table) {
+            return Ok(None);
+        }
         let mut ratios = Vec::new();
         let mut err2 = 0.0;
         let mut nt = 0;
@@ -873,7 +933,7 @@ impl Search {
         let ratio = |ring: i64, sun: i64| {
             crate::numerics::exact::display(&crate::numerics::exact::frac(ring, sun))
         };
-        Ok(Candidate {
+        Ok(Some(Candidate {
             basic: teeth.iter().map(|t| ratio(t.ring, t.sun)).collect(),
             basic2: teeth
                 .iter()
@@ -888,7 +948,7 @@ impl Search {
             } else {
                 0.0
             },
-        })
+        }))
     }
 }
 
@@ -903,6 +963,7 @@ pub fn merge(parts: Vec<(Vec<Candidate>, Stats)>, top: usize) -> (Vec<Candidate>
         total.ratio_space = s.ratio_space;
         total.nodes += s.nodes;
         total.leaves += s.leaves;
+        total.rejected += s.rejected;
     }
     rank(&mut found, top);
     (found, total)
@@ -931,8 +992,13 @@ mod tests {
     ));
 
     fn zf_search(sets: &str) -> Search {
+        zf_search_with(sets, "")
+    }
+
+    /// The 8HP search with more lines under `[targets]`.
+    fn zf_search_with(sets: &str, targets: &str) -> Search {
         let text = format!(
-            "base = \"zf_8hp70.toml\"\ntop = 5\n{sets}\n[targets]\nratios = {{ \"1\" = 4.696, \"2\" = 3.130, \"3\" = 2.104, \"4\" = 1.667, \"5\" = 1.285, \"6\" = 1.000, \"7\" = 0.839, \"8\" = 0.667, \"R\" = -3.297 }}\n"
+            "base = \"zf_8hp70.toml\"\ntop = 5\n{sets}\n[targets]\nratios = {{ \"1\" = 4.696, \"2\" = 3.130, \"3\" = 2.104, \"4\" = 1.667, \"5\" = 1.285, \"6\" = 1.000, \"7\" = 0.839, \"8\" = 0.667, \"R\" = -3.297 }}\n{targets}\n"
         );
         let spec: SynthSpec = toml::from_str(&text).expect("test input");
         Search::new(
@@ -968,6 +1034,40 @@ mod tests {
                 assert!((ratio - t).abs() <= 5e-4, "{state}: {ratio} vs {t}");
             }
         }
+    }
+
+    /// Targets only the exact analysis checks, at the edges of the real
+    /// 8HP's figures (`egt shift examples/zf_8hp70.toml`): largest element
+    /// torque 2.642 (brake B in R), lowest efficiency 0.9462 (R), steps from
+    /// 1.192 to 1.500, not progressive (1.262 then 1.297). Each target passes
+    /// the real teeth on one side of its figure and rejects them on the other.
+    #[test]
+    fn analysis_targets_accept_and_reject_the_real_8hp() {
+        let sets = "[sets]\nP3 = { sun = [66, 72], ring = [108, 114] }\nP4 = { sun = [21, 25], ring = [82, 88] }";
+        let found = |targets: &str| {
+            let (c, stats) = zf_search_with(sets, targets).run().expect("test input");
+            (c.len(), stats.rejected)
+        };
+        assert_eq!(found(""), (1, 0));
+        for (pass, fail) in [
+            ("max_element_torque = 2.65", "max_element_torque = 2.6"),
+            ("efficiency = 0.946", "efficiency = 0.95"),
+            ("steps = [1.19, 1.5001]", "steps = [1.2, 1.6]"),
+            ("progressive = false", "progressive = true"),
+            ("max_mesh_torque = 100.0", "max_mesh_torque = 0.5"),
+        ] {
+            assert_eq!(found(pass), (1, 0), "{pass}");
+            assert_eq!(found(fail), (0, 1), "{fail}");
+        }
+        let bad = SynthSpec::from_str(
+            "base = \"x\"\n[sets]\nP3 = { sun = [66, 72], ring = [108, 114] }\n[targets]\nratios = { \"1\" = 4.7 }\nefficiency = -1\n",
+            Format::Toml,
+            "s",
+        )
+        .expect("test input");
+        let err = Search::new(bad, parse_spec(ZF, Format::Toml, "zf").expect("test input"))
+            .expect_err("must refuse");
+        assert!(err.to_string().contains("targets.efficiency"), "{err}");
     }
 
     /// Partitions are disjoint and cover the space: their merged candidates

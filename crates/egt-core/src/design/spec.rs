@@ -106,6 +106,25 @@ pub struct Targets {
     /// Accepted spread (largest / smallest forward ratio) `[min, max]`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub spread: Option<[f64; 2]>,
+    /// Accepted step between adjacent forward gears `[min, max]` (every step).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub steps: Option<[f64; 2]>,
+    /// A progressive ratio set: no step larger than the one below it.
+    #[serde(default)]
+    pub progressive: bool,
+    /// Lowest accepted efficiency of a targeted gear state (with the base
+    /// train's mesh efficiencies; 1 where none are given).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub efficiency: Option<f64>,
+    /// Largest accepted |torque| of an engaged shift element, per unit input
+    /// torque, in a targeted gear state.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_element_torque: Option<f64>,
+    /// Largest accepted |mesh torque| (a mesh's multiplier, eq. 7: the torque
+    /// it puts on its gear i, all planets together), per unit input torque,
+    /// in a targeted gear state.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_mesh_torque: Option<f64>,
 }
 
 fn default_tolerance() -> f64 {
