@@ -78,12 +78,12 @@ impl SearchCore {
         })
     }
 
-    /// The base train's spec with a candidate's teeth written in, as JSON
-    /// text (`teeth`: one record per unknown set, as in a candidate).
-    fn candidate_spec(&self, teeth: &str) -> Result<String> {
-        let teeth: Vec<egt_core::design::Teeth> =
-            serde_json::from_str(teeth).map_err(|e| value_error(format!("teeth: {e}")))?;
-        serde_json::to_string(&self.search.candidate_spec(&teeth))
+    /// The base train's spec with a candidate's teeth (and layout) written
+    /// in, as JSON text (`candidate`: one candidate of `run`, as JSON text).
+    fn candidate_spec(&self, candidate: &str) -> Result<String> {
+        let c: egt_core::design::Candidate =
+            serde_json::from_str(candidate).map_err(|e| value_error(format!("candidate: {e}")))?;
+        serde_json::to_string(&self.search.candidate_spec(&c.teeth, &c.layout))
             .map_err(|e| value_error(e.to_string()))
     }
 

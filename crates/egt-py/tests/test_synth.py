@@ -75,3 +75,16 @@ def test_synth_finds_the_6hp26_ravigneaux_teeth() -> None:
     assert {g.state: g.ratio_exact for g in real.gears} == best.ratios
     df = r.to_pandas()
     assert list(df["RV.sun2"]) == [c.sets["RV"].sun2 for c in r.candidates]
+
+
+def test_synth_with_free_element_positions_reports_the_layout() -> None:
+    text = (ROOT / "examples" / "synth" / "zf_8hp70.toml").read_text()
+    text = text.replace('base = "../zf_8hp70.toml"', f'base = "{ROOT / "examples" / "zf_8hp70.toml"}"')
+    text = text.replace("[targets]", '[layout]\nD = "any"\nE = "any"\n\n[targets]')
+    r = egt.synth(text)
+    assert r.stats["layouts"] + r.stats["skipped_layouts"] == 28 * 28
+    assert len(r.candidates) == 3
+    for c in r.candidates:
+        assert sorted(c.layout["D"]) == ["carrier3", "output"]
+        assert [t.basic for t in c.sets.values()] == [Fraction(2), Fraction(2), Fraction(37, 23), Fraction(85, 23)]
+    assert "layout.E" in r.to_pandas().columns

@@ -83,6 +83,9 @@ struct Row {
     score: f64,
     spread: Option<f64>,
     sets: Vec<SetTeeth>,
+    /// The freed elements' links (`[layout]`), element -> links.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    layout: Vec<(String, Vec<String>)>,
     ratios: Vec<RatioRow>,
     spec: Option<String>,
 }
@@ -205,6 +208,7 @@ fn row(search: &Search, c: &Candidate, rank: usize, spec: Option<String>) -> Row
                 exact: exact.clone(),
             })
             .collect(),
+        layout: c.layout.clone(),
         spec,
     }
 }
@@ -218,7 +222,7 @@ fn write_spec(
 ) -> anyhow::Result<String> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let path = dir.join(format!("candidate-{rank}.json"));
-    let text = serde_json::to_string_pretty(&search.candidate_spec(&c.teeth))?;
+    let text = serde_json::to_string_pretty(&search.candidate_spec(&c.teeth, &c.layout))?;
     std::fs::write(&path, text + "\n").with_context(|| format!("writing {}", path.display()))?;
     Ok(path.display().to_string())
 }
@@ -234,6 +238,13 @@ fn write_table(out: &mut dyn Write, r: &Report) -> anyhow::Result<()> {
         },
         r.base
     )?;
+    if r.stats.layouts > 1 || r.stats.skipped_layouts > 0 {
+        writeln!(
+            out,
+            "{} element layouts searched, {} skipped (an element doubled, a state not one DOF or singular for any teeth)",
+            r.stats.layouts, r.stats.skipped_layouts
+        )?;
+    }
     writeln!(
         out,
         "{:.3e} tooth combinations, {:.3e} distinct ratio combinations, {} nodes, {} leaves ({} failed the analysis targets), {:.2} s; {} candidates",
@@ -258,6 +269,9 @@ fn write_table(out: &mut dyn Write, r: &Report) -> anyhow::Result<()> {
         }
     }));
     headers.extend(first.ratios.iter().map(|x| format!("i{}", x.state)));
+    if !first.layout.is_empty() {
+        headers.push("layout".into());
+    }
     let refs: Vec<&str> = headers.iter().map(String::as_str).collect();
     let mut t = Table::new(&refs).right(&[0, 1]);
     for c in &r.candidates {
@@ -277,6 +291,14 @@ fn write_table(out: &mut dyn Write, r: &Report) -> anyhow::Result<()> {
             }
         }));
         cells.extend(c.ratios.iter().map(|x| format!("{:.4}", x.ratio)));
+        if !c.layout.is_empty() {
+            let placed: Vec<String> = c
+                .layout
+                .iter()
+                .map(|(e, links)| format!("{e}={}", links.join("+")))
+                .collect();
+            cells.push(placed.join(" "));
+        }
         t.row(cells);
     }
     t.write(out, 2)?;

@@ -124,7 +124,54 @@ struct StateSystem {
     target: Option<f64>,
 }
 
-/// A prepared search: the per-set candidate ratios and the per-state systems.
+/// The freed shift elements and where each may sit (`[layout]`). A layout
+/// is one pick per freed element (empty: the base train's layout).
+#[derive(Debug, Clone, Default)]
+struct Layouts {
+    names: Vec<String>,
+    choices: Vec<Vec<Vec<String>>>,
+}
+
+impl Layouts {
+    fn count(&self) -> usize {
+        self.choices.iter().map(Vec::len).product()
+    }
+
+    /// The `i`-th layout (mixed radix over the freed elements).
+    fn pick(&self, mut i: usize) -> Vec<u32> {
+        self.choices
+            .iter()
+            .map(|c| {
+                let k = i % c.len();
+                i /= c.len();
+                u32::try_from(k).unwrap_or(u32::MAX)
+            })
+            .collect()
+    }
+
+    /// Element -> links of a layout, as a candidate reports it.
+    fn named(&self, pick: &[u32]) -> Vec<(String, Vec<String>)> {
+        self.names
+            .iter()
+            .zip(&self.choices)
+            .zip(pick)
+            .map(|((n, c), &k)| (n.clone(), c[k as usize].clone()))
+            .collect()
+    }
+}
+
+/// What the gear states' systems are built from (kept so that each layout's
+/// systems are rebuilt when it is searched instead of stored for all).
+#[derive(Debug, Clone)]
+struct Rows {
+    tx: crate::spec::TransmissionSpec,
+    willis: Vec<WillisRow>,
+    dim_of: Vec<Option<usize>>,
+    links: Vec<String>,
+}
+
+/// A prepared search: the per-set candidate ratios and, per element layout,
+/// the per-state systems.
 #[derive(Debug, Clone)]
 pub struct Search {
     spec: SynthSpec,
@@ -132,7 +179,30 @@ pub struct Search {
     set_names: Vec<String>,
     dims: Vec<Dim>,
     unknowns: Vec<Unknown>,
-    states: Vec<StateSystem>,
+    rows: Rows,
+    layouts: Layouts,
+    /// The layouts searched (one pick per freed element; one empty pick
+    /// without `[layout]`).
+    variants: Vec<Vec<u32>>,
+    /// Layouts skipped before the search: an element doubled, a gear state
+    /// that is not one DOF, or one whose system is singular for any teeth.
+    skipped_layouts: u64,
+}
+
+/// Most element layouts one search may list.
+pub const MAX_LAYOUTS: usize = 1_000_000;
+
+/// The Willis rows of the sets: (set, sun col, ring col, carrier col, k, sign).
+type WillisRow = (String, usize, usize, usize, f64, f64);
+
+/// A column of `links`, added when new.
+fn col(name: &str, links: &mut Vec<String>) -> usize {
+    if let Some(i) = links.iter().position(|l| l == name) {
+        i
+    } else {
+        links.push(name.to_string());
+        links.len() - 1
+    }
 }
 
 /// One candidate returned by the search (it reads back from its serde form,
@@ -152,6 +222,9 @@ pub struct Candidate {
     pub ratios: Vec<(String, f64, String)>,
     /// Spread of the forward ratios.
     pub spread: Option<f64>,
+    /// Freed elements' links in this candidate's layout (empty without `[layout]`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub layout: Vec<(String, Vec<String>)>,
     /// Score: root mean square of (ratio - target) / target over the targeted states. Lower is better.
     pub score: f64,
 }
@@ -172,6 +245,13 @@ pub struct Stats {
     /// analysis can check (steps, progression, efficiency, element or mesh torque).
     #[serde(default)]
     pub rejected: u64,
+    /// Element layouts searched (1 without `[layout]`).
+    #[serde(default)]
+    pub layouts: u64,
+    /// Layouts skipped before the search (see `egt synth` docs: doubled
+    /// elements, states that are not one DOF, singular states).
+    #[serde(default)]
+    pub skipped_layouts: u64,
 }
 
 /// Most (sun, ring) pairs one set's ranges may span (each is visited once).
@@ -373,6 +453,244 @@ fn ravigneaux(
     ))
 }
 
+/// The element layouts to search: the base layout alone without
+/// `[layout]`; else every combination of the freed elements' placements.
+/// `links`: the sets' central links (the columns so far).
+fn layouts(spec: &SynthSpec, base: &Spec, links: &[String]) -> Result<Layouts, DesignError> {
+    use crate::spec::ElementKind;
+    let tx = base.transmission.as_ref();
+    let (input, output) = tx.map_or((None, None), |t| (Some(&t.input), Some(&t.output)));
+    // Central links: the sets' members and every link an element or the
+    // transmission names (the input shaft may reach the sets only through clutches).
+    let mut central: Vec<String> = links.to_vec();
+    for name in base
+        .elements
+        .iter()
+        .flat_map(|e| e.links.iter())
+        .chain(input)
+        .chain(output)
+    {
+        if !central.contains(name) {
+            central.push(name.clone());
+        }
+    }
+    let mut out = Layouts::default();
+    for (name, placement) in &spec.layout {
+        let field = format!("layout.{name}");
+        let e = base
+            .elements
+            .iter()
+            .find(|e| &e.name == name)
+            .ok_or_else(|| DesignError::Invalid {
+                field: field.clone(),
+                message: "no shift element of that name in the base train".into(),
+            })?;
+        let brake = matches!(e.kind, ElementKind::Brake | ElementKind::OneWayBrake);
+        let choices: Vec<Vec<String>> = match placement {
+            crate::design::Placement::Any(word) if word == "any" => {
+                let free: Vec<&String> = central.iter().filter(|l| **l != base.frame).collect();
+                if brake {
+                    free.into_iter()
+                        .filter(|l| Some(*l) != input && Some(*l) != output)
+                        .map(|l| vec![l.clone()])
+                        .collect()
+                } else {
+                    let mut pairs = Vec::new();
+                    for (i, a) in free.iter().enumerate() {
+                        for b in &free[i + 1..] {
+                            pairs.push(vec![(*a).clone(), (*b).clone()]);
+                        }
+                    }
+                    pairs
+                }
+            }
+            crate::design::Placement::Any(word) => {
+                return Err(DesignError::Invalid {
+                    field,
+                    message: format!("`{word}`: give \"any\" or a list of link lists"),
+                });
+            }
+            crate::design::Placement::Choices(list) => {
+                for (k, c) in list.iter().enumerate() {
+                    let want = if brake { 1 } else { 2 };
+                    if c.len() != want {
+                        return Err(DesignError::Invalid {
+                            field: format!("{field}[{k}]"),
+                            message: format!(
+                                "a {} joins {want} link(s), got {}",
+                                if brake { "brake" } else { "clutch" },
+                                c.len()
+                            ),
+                        });
+                    }
+                    if let Some(l) = c.iter().find(|l| !central.contains(l)) {
+                        return Err(DesignError::Invalid {
+                            field: format!("{field}[{k}]"),
+                            message: format!("`{l}` is not a central link of the base train"),
+                        });
+                    }
+                }
+                list.clone()
+            }
+        };
+        if choices.is_empty() {
+            return Err(DesignError::Invalid {
+                field,
+                message: "no placement to try".into(),
+            });
+        }
+        if out.count().saturating_mul(choices.len()) > MAX_LAYOUTS {
+            return Err(DesignError::Invalid {
+                field: "layout".into(),
+                message: format!("more than {MAX_LAYOUTS} element layouts; free fewer elements"),
+            });
+        }
+        out.names.push(name.clone());
+        out.choices.push(choices);
+    }
+    Ok(out)
+}
+
+/// The base spec with a layout's elements moved.
+fn place(base: &Spec, layout: &[(String, Vec<String>)]) -> Spec {
+    let mut spec = base.clone();
+    for (name, links) in layout {
+        if let Some(e) = spec.elements.iter_mut().find(|e| &e.name == name) {
+            e.links.clone_from(links);
+        }
+    }
+    spec
+}
+
+/// Two elements on the same links (a layout that wastes one).
+fn doubled(elements: &[(&str, &[String])]) -> bool {
+    let mut seen: Vec<Vec<&String>> = Vec::new();
+    for (_, links) in elements {
+        let mut k: Vec<&String> = links.iter().collect();
+        k.sort();
+        if seen.contains(&k) {
+            return true;
+        }
+        seen.push(k);
+    }
+    false
+}
+
+/// Each gear state's square system for `base`'s element layout: the Willis
+/// rows (searched ones marked by `dim_of`), the engaged elements' rows, the
+/// frame and w_in = 1.
+fn states(
+    elements: &[(&str, &[String])],
+    frame: &str,
+    rows0: &Rows,
+    targets: &crate::design::Targets,
+) -> Result<Vec<StateSystem>, DesignError> {
+    let (tx, willis, dim_of) = (&rows0.tx, &rows0.willis, &rows0.dim_of);
+    let mut links = rows0.links.clone();
+    for (_, ls) in elements {
+        for l in *ls {
+            col(l, &mut links);
+        }
+    }
+    let input = col(&tx.input, &mut links);
+    let output = col(&tx.output, &mut links);
+    let frame = links.iter().position(|l| l == frame);
+    let n = links.len();
+    let mut states = Vec::new();
+    for (name, engaged) in &tx.states {
+        let mut rows: Vec<Vec<f64>> = Vec::new();
+        let mut marks = Vec::new();
+        for (i, &(_, s, r, c, k, sign)) in willis.iter().enumerate() {
+            let mut row = vec![0.0; n];
+            let k = if k.is_nan() { 0.0 } else { sign * k };
+            row[s] += 1.0;
+            row[r] += k;
+            row[c] -= 1.0 + k;
+            if let Some(d) = dim_of[i] {
+                marks.push((d, rows.len(), s, r, c));
+            }
+            rows.push(row);
+        }
+        for el in engaged {
+            let (_, e_links) =
+                elements
+                    .iter()
+                    .find(|e| e.0 == el)
+                    .ok_or_else(|| DesignError::Invalid {
+                        field: format!("transmission.states.{name}"),
+                        message: format!("unknown element `{el}`"),
+                    })?;
+            let mut row = vec![0.0; n];
+            let a = col(&e_links[0], &mut links);
+            row[a] += 1.0;
+            if let Some(b) = e_links.get(1) {
+                let b = col(b, &mut links);
+                row[b] -= 1.0;
+            }
+            rows.push(row);
+        }
+        if let Some(f) = frame {
+            let mut row = vec![0.0; n];
+            row[f] = 1.0;
+            rows.push(row);
+        }
+        let input_row = rows.len();
+        let mut row = vec![0.0; n];
+        row[input] = 1.0;
+        rows.push(row);
+        if rows.len() != n {
+            return Err(DesignError::Invalid {
+                field: format!("transmission.states.{name}"),
+                message: format!(
+                    "{} constraint rows for {} links: synth needs one-DOF states of a one-DOF-per-element train",
+                    rows.len(),
+                    n
+                ),
+            });
+        }
+        let matrix = DMatrix::from_fn(n, n, |i, j| rows[i][j]);
+        marks.sort_by_key(|m| m.0);
+        let rows = marks
+            .iter()
+            .map(|&(_, row, s, r, c)| (row, s, r, c))
+            .collect();
+        states.push(StateSystem {
+            matrix,
+            rows,
+            output,
+            input_row,
+            target: targets.ratios.get(name).copied(),
+        });
+    }
+    Ok(states)
+}
+
+/// Whether every gear state's system is regular for generic ratios (two
+/// picks of each searched k): a layout whose state is singular for any teeth
+/// (an element that locks nothing new) would never be bounded, so it is
+/// skipped before the search.
+fn generic(states: &[StateSystem], dims: &[Dim]) -> bool {
+    states.iter().all(|st| {
+        [1usize, 3].iter().any(|&q| {
+            let mut a = st.matrix.clone();
+            for (d, &(row, s, r, c)) in st.rows.iter().enumerate() {
+                let ks = &dims[d].ks;
+                let k = dims[d].sign * ks[(ks.len() * q / 4).min(ks.len() - 1)];
+                for j in 0..a.ncols() {
+                    a[(row, j)] = 0.0;
+                }
+                a[(row, s)] += 1.0;
+                a[(row, r)] += k;
+                a[(row, c)] -= 1.0 + k;
+            }
+            // Regular when the smallest LU pivot is not round-off of the largest.
+            let u = a.lu().u();
+            let pivots = u.diagonal().map(f64::abs);
+            pivots.min() > 1e-10 * pivots.max()
+        })
+    })
+}
+
 impl Search {
     /// Prepare a search: check names against the base train, list each set's
     /// admissible teeth, and build each gear state's system once.
@@ -417,18 +735,10 @@ impl Search {
             }
         }
         let mut links: Vec<String> = Vec::new();
-        let col = |name: &str, links: &mut Vec<String>| -> usize {
-            if let Some(i) = links.iter().position(|l| l == name) {
-                i
-            } else {
-                links.push(name.to_string());
-                links.len() - 1
-            }
-        };
         // The Willis rows of every set (name, sun, ring, carrier, k, sign):
         // one for a simple or double-pinion set, two for a Ravigneaux set
         // (small sun, then large sun). Known sets get their k now.
-        let mut willis = Vec::new();
+        let mut willis: Vec<WillisRow> = Vec::new();
         for p in &base.planetary {
             let ring = p.ring.clone().ok_or_else(|| DesignError::Invalid {
                 field: format!("planetary.{}", p.name),
@@ -535,89 +845,86 @@ impl Search {
                 });
             }
         }
-        for e in &base.elements {
-            for l in &e.links {
-                col(l, &mut links);
-            }
-        }
-        let input = col(&tx.input, &mut links);
-        let output = col(&tx.output, &mut links);
-        let frame = links.iter().position(|l| l == &base.frame);
-        let n = links.len();
-        let mut states = Vec::new();
-        for (name, engaged) in &tx.states {
-            let mut rows: Vec<Vec<f64>> = Vec::new();
-            let mut marks = Vec::new();
-            for (i, &(_, s, r, c, k, sign)) in willis.iter().enumerate() {
-                let mut row = vec![0.0; n];
-                let k = if k.is_nan() { 0.0 } else { sign * k };
-                row[s] += 1.0;
-                row[r] += k;
-                row[c] -= 1.0 + k;
-                if let Some(d) = dim_of[i] {
-                    marks.push((d, rows.len(), s, r, c));
-                }
-                rows.push(row);
-            }
-            for el in engaged {
-                let e = base
-                    .elements
-                    .iter()
-                    .find(|e| &e.name == el)
-                    .ok_or_else(|| DesignError::Invalid {
-                        field: format!("transmission.states.{name}"),
-                        message: format!("unknown element `{el}`"),
-                    })?;
-                let mut row = vec![0.0; n];
-                let a = col(&e.links[0], &mut links);
-                row[a] += 1.0;
-                if let Some(b) = e.links.get(1) {
-                    let b = col(b, &mut links);
-                    row[b] -= 1.0;
-                }
-                rows.push(row);
-            }
-            if let Some(f) = frame {
-                let mut row = vec![0.0; n];
-                row[f] = 1.0;
-                rows.push(row);
-            }
-            let input_row = rows.len();
-            let mut row = vec![0.0; n];
-            row[input] = 1.0;
-            rows.push(row);
-            if rows.len() != n {
-                return Err(DesignError::Invalid {
-                    field: format!("transmission.states.{name}"),
-                    message: format!(
-                        "{} constraint rows for {} links: synth needs one-DOF states of a one-DOF-per-element train",
-                        rows.len(),
-                        n
-                    ),
-                });
-            }
-            let matrix = DMatrix::from_fn(n, n, |i, j| rows[i][j]);
-            marks.sort_by_key(|m| m.0);
-            let rows = marks
-                .iter()
-                .map(|&(_, row, s, r, c)| (row, s, r, c))
-                .collect();
-            states.push(StateSystem {
-                matrix,
-                rows,
-                output,
-                input_row,
-                target: spec.targets.ratios.get(name).copied(),
-            });
-        }
-        Ok(Search {
+        let layouts = layouts(&spec, &base, &links)?;
+        let rows = Rows {
+            tx,
+            willis,
+            dim_of,
+            links,
+        };
+        let mut search = Search {
             spec,
             base,
             set_names,
             dims,
             unknowns,
-            states,
-        })
+            rows,
+            layouts,
+            variants: Vec::new(),
+            skipped_layouts: 0,
+        };
+        if search.layouts.names.is_empty() {
+            // The base layout's errors are the spec's: say them.
+            search.states(&[])?;
+            search.variants.push(Vec::new());
+        } else {
+            // Every layout checked in parallel; only the picks that pass are kept.
+            use rayon::prelude::*;
+            let total = search.layouts.count();
+            let kept: Vec<Vec<u32>> = (0..total)
+                .into_par_iter()
+                .filter_map(|i| {
+                    let pick = search.layouts.pick(i);
+                    let elements = search.elements(&pick);
+                    if doubled(&elements) {
+                        return None;
+                    }
+                    let states = states(
+                        &elements,
+                        &search.base.frame,
+                        &search.rows,
+                        &search.spec.targets,
+                    );
+                    states
+                        .ok()
+                        .filter(|s| generic(s, &search.dims))
+                        .map(|_| pick)
+                })
+                .collect();
+            search.skipped_layouts = (total - kept.len()) as u64;
+            search.variants = kept;
+        }
+        Ok(search)
+    }
+
+    /// Every element's name and links in a layout.
+    fn elements(&self, pick: &[u32]) -> Vec<(&str, &[String])> {
+        self.base
+            .elements
+            .iter()
+            .map(|e| {
+                let placed = self
+                    .layouts
+                    .names
+                    .iter()
+                    .position(|n| n == &e.name)
+                    .and_then(|f| {
+                        pick.get(f)
+                            .map(|&k| self.layouts.choices[f][k as usize].as_slice())
+                    });
+                (e.name.as_str(), placed.unwrap_or(e.links.as_slice()))
+            })
+            .collect()
+    }
+
+    /// The gear states' systems of a layout.
+    fn states(&self, pick: &[u32]) -> Result<Vec<StateSystem>, DesignError> {
+        states(
+            &self.elements(pick),
+            &self.base.frame,
+            &self.rows,
+            &self.spec.targets,
+        )
     }
 
     /// How many of the best candidates a run keeps (the spec's `top`).
@@ -664,6 +971,8 @@ impl Search {
                 .map(|u| u.teeth.values().map(|t| t.len() as f64).sum::<f64>())
                 .product(),
             ratio_space: self.unknowns.iter().map(|u| u.teeth.len() as f64).product(),
+            layouts: self.variants.len() as u64,
+            skipped_layouts: self.skipped_layouts,
             ..Stats::default()
         };
         if lo >= hi {
@@ -673,15 +982,33 @@ impl Search {
         bounds[0] = (lo, hi);
         let nodes = std::sync::atomic::AtomicU64::new(0);
         let leaves = std::sync::atomic::AtomicU64::new(0);
-        let found = self.branch(&bounds, &nodes, &leaves);
+        // Every layout over the partition's box, in parallel (each bound
+        // itself splits its halves with rayon::join).
+        use rayon::prelude::*;
+        let per_layout: Vec<Result<(Vec<Candidate>, u64), DesignError>> = self
+            .variants
+            .par_iter()
+            .map(|pick| {
+                let states = self.states(pick)?;
+                let mut out = Vec::new();
+                let mut rejected = 0;
+                for ks in self.branch(&states, &bounds, &nodes, &leaves) {
+                    match self.confirm(pick, &ks)? {
+                        Some(c) => out.push(c),
+                        None => rejected += 1,
+                    }
+                }
+                rank(&mut out, self.spec.top);
+                Ok((out, rejected))
+            })
+            .collect();
         stats.nodes = nodes.into_inner();
         stats.leaves = leaves.into_inner();
         let mut out = Vec::new();
-        for ks in found {
-            match self.confirm(&ks)? {
-                Some(c) => out.push(c),
-                None => stats.rejected += 1,
-            }
+        for r in per_layout {
+            let (c, rejected) = r?;
+            out.extend(c);
+            stats.rejected += rejected;
         }
         rank(&mut out, self.spec.top);
         Ok((out, stats))
@@ -751,9 +1078,9 @@ impl Search {
     }
 
     /// Does the box possibly hold a solution? (false = every state's window missed by some state.)
-    fn feasible(&self, bounds: &[(usize, usize)]) -> bool {
+    fn feasible(&self, states: &[StateSystem], bounds: &[(usize, usize)]) -> bool {
         let tol = self.spec.targets.tolerance;
-        for st in &self.states {
+        for st in states {
             let Some(t) = st.target else { continue };
             let (a, b) = (t - tol, t + tol);
             if a <= 0.0 && b >= 0.0 {
@@ -773,13 +1100,14 @@ impl Search {
 
     fn branch(
         &self,
+        states: &[StateSystem],
         bounds: &[(usize, usize)],
         nodes: &std::sync::atomic::AtomicU64,
         leaves: &std::sync::atomic::AtomicU64,
     ) -> Vec<Vec<usize>> {
         use std::sync::atomic::Ordering::Relaxed;
         nodes.fetch_add(1, Relaxed);
-        if !self.feasible(bounds) {
+        if !self.feasible(states, bounds) {
             return Vec::new();
         }
         let widest = (0..bounds.len())
@@ -794,7 +1122,7 @@ impl Search {
                 return Vec::new();
             }
             leaves.fetch_add(1, Relaxed);
-            return if self.leaf_ok(bounds) {
+            return if self.leaf_ok(states, bounds) {
                 vec![bounds.iter().map(|b| b.0).collect()]
             } else {
                 Vec::new()
@@ -806,17 +1134,17 @@ impl Search {
         let mut right = bounds.to_vec();
         right[widest] = (mid, b1);
         let (mut l, r) = rayon::join(
-            || self.branch(&left, nodes, leaves),
-            || self.branch(&right, nodes, leaves),
+            || self.branch(states, &left, nodes, leaves),
+            || self.branch(states, &right, nodes, leaves),
         );
         l.extend(r);
         l
     }
 
-    fn leaf_ok(&self, bounds: &[(usize, usize)]) -> bool {
+    fn leaf_ok(&self, states: &[StateSystem], bounds: &[(usize, usize)]) -> bool {
         let tol = self.spec.targets.tolerance;
         let mut fwd = Vec::new();
-        for st in &self.states {
+        for st in states {
             let Some((w, _)) = self.state_range(st, bounds) else {
                 return false;
             };
@@ -853,9 +1181,9 @@ impl Search {
             .collect()
     }
 
-    /// The base spec with the candidate's teeth written in.
-    pub fn candidate_spec(&self, teeth: &[Teeth]) -> Spec {
-        let mut spec = self.base.clone();
+    /// The base spec with a candidate's layout and teeth written in.
+    pub fn candidate_spec(&self, teeth: &[Teeth], layout: &[(String, Vec<String>)]) -> Spec {
+        let mut spec = place(&self.base, layout);
         for (name, t) in self.set_names.iter().zip(teeth) {
             if let Some(p) = spec.planetary.iter_mut().find(|p| &p.name == name) {
                 p.teeth.sun = Some(t.sun);
@@ -903,15 +1231,23 @@ impl Search {
 
     /// Rebuild the train with the candidate's teeth and solve it exactly;
     /// None when it fails a target only that analysis can check.
-    fn confirm(&self, ks: &[usize]) -> Result<Option<Candidate>, DesignError> {
+    /// In a freed layout, a candidate egt cannot analyse (a state it
+    /// refuses) is rejected; in the base layout it is the base train's error.
+    fn confirm(&self, pick: &[u32], ks: &[usize]) -> Result<Option<Candidate>, DesignError> {
+        let layout = self.layouts.named(pick);
         let point: Vec<(usize, usize)> = ks.iter().map(|&i| (i, i + 1)).collect();
         let sets = self.teeth_of(&point).ok_or_else(|| DesignError::Invalid {
             field: "sets".into(),
             message: "a leaf without teeth reached confirmation".into(),
         })?;
         let teeth: Vec<Teeth> = sets.iter().map(|t| t[0]).collect();
-        let train = Train::from_spec(&self.candidate_spec(&teeth))?;
-        let table = train.shift_table()?;
+        let analysed =
+            Train::from_spec(&self.candidate_spec(&teeth, &layout)).and_then(|t| t.shift_table());
+        let table = match analysed {
+            Ok(table) => table,
+            Err(_) if !layout.is_empty() => return Ok(None),
+            Err(e) => return Err(e.into()),
+        };
         if !self.meets_analysis_targets(&table) {
             return Ok(None);
         }
@@ -943,6 +1279,7 @@ impl Search {
             teeth,
             ratios,
             spread: table.spread.as_ref().map(|s| s.value),
+            layout,
             score: if nt > 0 {
                 (err2 / nt as f64).sqrt()
             } else {
@@ -959,8 +1296,11 @@ pub fn merge(parts: Vec<(Vec<Candidate>, Stats)>, top: usize) -> (Vec<Candidate>
     let mut total = Stats::default();
     for (c, s) in parts {
         found.extend(c);
+        // The spaces and layouts are the whole search's in every partition.
         total.tooth_space = s.tooth_space;
         total.ratio_space = s.ratio_space;
+        total.layouts = s.layouts;
+        total.skipped_layouts = s.skipped_layouts;
         total.nodes += s.nodes;
         total.leaves += s.leaves;
         total.rejected += s.rejected;
@@ -975,7 +1315,7 @@ pub fn rank(c: &mut Vec<Candidate>, top: usize) {
         a.score.total_cmp(&b.score).then_with(|| {
             let ka: Vec<_> = a.teeth.iter().map(|t| (t.sun, t.sun2, t.ring)).collect();
             let kb: Vec<_> = b.teeth.iter().map(|t| (t.sun, t.sun2, t.ring)).collect();
-            ka.cmp(&kb)
+            ka.cmp(&kb).then_with(|| a.layout.cmp(&b.layout))
         })
     });
     c.truncate(top);
@@ -1070,6 +1410,60 @@ mod tests {
         assert!(err.to_string().contains("targets.efficiency"), "{err}");
     }
 
+    /// Free element positions: the three clutches anywhere (21 952 layouts)
+    /// with two sets' teeth free. The real layout is found (clutch E on any
+    /// two of P3's members: three equivalent placements, each reported), with
+    /// the real basic ratios; every candidate's written spec, analysed
+    /// exactly, has the reported ratios; bad placements are refused by field.
+    #[test]
+    fn free_clutch_positions_find_the_real_layout() {
+        let sets = "[sets]\nP3 = { sun = [60, 76], ring = [100, 120] }\nP4 = { sun = [20, 28], ring = [76, 92] }\n[layout]\nC = \"any\"\nD = \"any\"\nE = \"any\"";
+        let s = zf_search(sets);
+        let (found, stats) = s.run().expect("test input");
+        assert_eq!(stats.layouts + stats.skipped_layouts, 28 * 28 * 28);
+        let real = |c: &Candidate| {
+            let links = |e: &str| {
+                let mut l = c.layout.iter().find(|x| x.0 == e).expect("freed").1.clone();
+                l.sort();
+                l
+            };
+            links("C") == ["input", "ring3_sun4"] && links("D") == ["carrier3", "output"]
+        };
+        assert_eq!(found.len(), 3, "{found:?}");
+        for c in &found {
+            assert!(real(c), "{:?}", c.layout);
+            assert_eq!(c.basic, ["37/23", "85/23"]);
+            let table = Train::from_spec(&s.candidate_spec(&c.teeth, &c.layout))
+                .expect("candidate spec")
+                .shift_table()
+                .expect("analysis");
+            for (g, (state, _, exact)) in table.gears.iter().zip(&c.ratios) {
+                assert_eq!(&g.state, state);
+                assert_eq!(
+                    &crate::numerics::exact::display(g.ratio_exact.as_ref().expect("exact")),
+                    exact
+                );
+            }
+        }
+        for (layout, field) in [
+            ("C = [[\"input\"]]", "layout.C[0]"),
+            ("C = [[\"input\", \"nowhere\"]]", "layout.C[0]"),
+            ("Z = \"any\"", "layout.Z"),
+            ("C = \"all\"", "layout.C"),
+        ] {
+            let text = format!(
+                "base = \"x\"\n[sets]\nP4 = {{ sun = [20, 28], ring = [76, 92] }}\n[layout]\n{layout}\n[targets]\nratios = {{ \"1\" = 4.7 }}\n"
+            );
+            let spec: SynthSpec = toml::from_str(&text).expect("test input");
+            let err = Search::new(
+                spec,
+                parse_spec(ZF, Format::Toml, "zf").expect("test input"),
+            )
+            .expect_err("must refuse");
+            assert!(err.to_string().starts_with(field), "{layout}: {err}");
+        }
+    }
+
     /// Partitions are disjoint and cover the space: their merged candidates
     /// equal the one-partition run.
     #[test]
@@ -1134,7 +1528,7 @@ mod tests {
         let teeth: Vec<Teeth> = s.unknowns[0].teeth.values().map(|t| t[0]).collect();
         assert_eq!(teeth.len() as f64, stats.ratio_space);
         for t in teeth {
-            let table = Train::from_spec(&s.candidate_spec(&[t]))
+            let table = Train::from_spec(&s.candidate_spec(&[t], &[]))
                 .expect("admissible teeth make a train")
                 .shift_table()
                 .expect("every state solves");

@@ -23,10 +23,26 @@ pub struct SynthSpec {
     /// How many of the best candidates to keep. Default 20.
     #[serde(default = "default_top")]
     pub top: usize,
+    /// Shift elements whose position is free: element name -> where it may
+    /// sit. Elements not listed keep the base train's links.
+    #[serde(default, skip_serializing_if = "IndexMap::is_empty")]
+    pub layout: IndexMap<String, Placement>,
 }
 
 fn default_top() -> usize {
     20
+}
+
+/// Where a freed shift element may sit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Placement {
+    /// `"any"`: a brake on any central link but the frame, the input and the
+    /// output; a clutch between any two central links but the frame.
+    Any(String),
+    /// The alternatives, each the element's links (one for a brake, two for
+    /// a clutch).
+    Choices(Vec<Vec<String>>),
 }
 
 /// Inclusive tooth ranges of one unknown set (simple or Ravigneaux).

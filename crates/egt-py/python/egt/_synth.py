@@ -8,7 +8,7 @@ from __future__ import annotations
 import json
 import os
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
@@ -59,6 +59,8 @@ class Candidate:
     sets: Dict[str, SetTeeth]
     ratios: Dict[str, Fraction]
     """Every gear state's ratio, exactly (float(x) for the float)."""
+    layout: Dict[str, Tuple[str, ...]] = field(default_factory=dict)
+    """The freed shift elements' links (the search spec's ``[layout]``)."""
 
 
 @dataclass(frozen=True)
@@ -82,6 +84,7 @@ class SynthResult:
                 if t.sun2 is not None:
                     row.update({f"{name}.sun2": t.sun2, f"{name}.planet2": t.planet2})
             row.update({f"ratio.{s}": float(x) for s, x in c.ratios.items()})
+            row.update({f"layout.{e}": "+".join(links) for e, links in c.layout.items()})
             rows.append(row)
         return pd.DataFrame(rows).set_index("rank") if rows else pd.DataFrame()
 
@@ -146,6 +149,7 @@ def _candidate(rank: int, sets: Sequence[str], c: Mapping[str, Any]) -> Candidat
             for name, t, b, b2, alt in zip(sets, c["teeth"], c["basic"], c["basic2"], c["alternatives"])
         },
         ratios={state: Fraction(exact) for state, _, exact in c["ratios"]},
+        layout={e: tuple(links) for e, links in c.get("layout", [])},
     )
 
 
