@@ -214,3 +214,49 @@ fn bad_search_specs_are_refused_by_field() {
     assert_ne!(r.code, 0);
     assert!(r.stderr.contains("partition"), "{}", r.stderr);
 }
+
+/// `--stream`: JSON Lines, the best so far after each part (never more than
+/// `top`, improving as parts finish), then the whole report, equal to the
+/// one-shot JSON; `--tables` gives each candidate's `egt shift` document,
+/// whose exact ratios are the candidate's.
+#[test]
+fn stream_gives_the_best_so_far_then_the_report_with_tables() {
+    let text = stdout(&[
+        "synth",
+        "examples/synth/ford_c4_simpson.toml",
+        "--stream",
+        "--tables",
+    ]);
+    let lines: Vec<Value> = text
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let (last, progress) = lines.split_last().unwrap();
+    assert!(progress.len() >= 2);
+    for (k, p) in progress.iter().enumerate() {
+        assert_eq!(p["event"], "progress");
+        assert_eq!(p["done"], k + 1);
+        assert!(p["best"].as_array().unwrap().len() <= 10);
+    }
+    assert_eq!(
+        progress.last().unwrap()["best"].as_array().unwrap().len(),
+        10
+    );
+    assert_eq!(last["event"], "done");
+    let once = synth(&[
+        "synth",
+        "examples/synth/ford_c4_simpson.toml",
+        "--format",
+        "json",
+    ]);
+    let cands = last["candidates"].as_array().unwrap();
+    let key = |v: &Value| v.as_array().unwrap().iter().map(teeth).collect::<Vec<_>>();
+    assert_eq!(key(&last["candidates"]), key(&once["candidates"]));
+    for c in cands {
+        let gears = c["shift"]["gears"].as_array().unwrap();
+        for r in c["ratios"].as_array().unwrap() {
+            let g = gears.iter().find(|g| g["state"] == r["state"]).unwrap();
+            assert_eq!(g["ratio_exact"], r["exact"]);
+        }
+    }
+}

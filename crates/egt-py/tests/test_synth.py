@@ -88,3 +88,9 @@ def test_synth_with_free_element_positions_reports_the_layout() -> None:
         assert sorted(c.layout["D"]) == ["carrier3", "output"]
         assert [t.basic for t in c.sets.values()] == [Fraction(2), Fraction(2), Fraction(37, 23), Fraction(85, 23)]
     assert "layout.E" in r.to_pandas().columns
+    # Each candidate's own train: its elements where the candidate puts them,
+    # its exact ratios the candidate's.
+    for c in r.candidates:
+        t = c.train()
+        assert sorted(t.elements["E"][1]) == sorted(c.layout["E"])
+        assert {g.state: g.ratio_exact for g in t.shift_table().gears} == c.ratios

@@ -48,6 +48,15 @@ pub struct Args {
     /// Write each candidate's train spec to DIR/candidate-<rank>.json.
     #[arg(long, value_name = "DIR")]
     pub write_specs: Option<PathBuf>,
+    /// Give each candidate's whole gear table (`shift`: the document `egt
+    /// shift --format json` prints for its train). JSON and `--stream` only.
+    #[arg(long)]
+    pub tables: bool,
+    /// Stream JSON Lines: the best candidates so far after each part of the
+    /// search (`{"event": "progress", "done", "of", "best"}`), then the whole
+    /// report (`{"event": "done", ...}`).
+    #[arg(long, conflicts_with = "part")]
+    pub stream: bool,
 }
 
 #[derive(Debug, Serialize)]
@@ -88,6 +97,9 @@ struct Row {
     layout: Vec<(String, Vec<String>)>,
     ratios: Vec<RatioRow>,
     spec: Option<String>,
+    /// `--tables`: the candidate's `egt shift --format json` document.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    shift: Option<serde_json::Value>,
 }
 
 #[derive(Debug, Serialize)]
@@ -135,6 +147,18 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
     let start = Instant::now();
     let (found, stats) = match part {
         Some((i, k)) => search.run_partition(i, k),
+        // JSON Lines: the best so far after each part, as it is found.
+        None if args.stream => search.run_in_parts(PROGRESS_PARTS, |done, of, best| {
+            let best: Vec<Row> = best
+                .iter()
+                .enumerate()
+                .map(|(k, c)| row(&search, c, k + 1, None))
+                .collect();
+            let line =
+                serde_json::json!({"event": "progress", "done": done, "of": of, "best": best});
+            // A closed pipe ends the stream at the final write.
+            let _ = writeln!(out, "{line}").and_then(|()| out.flush());
+        }),
         // On a terminal: the space in parts one after another, with a bar and
         // an ETA on stderr (the result is the same; elsewhere one run).
         None if std::io::stderr().is_terminal() => {
@@ -143,7 +167,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
             {
                 bar.set_style(style);
             }
-            let r = search.run_in_parts(PROGRESS_PARTS, |done, of| {
+            let r = search.run_in_parts(PROGRESS_PARTS, |done, of, _| {
                 bar.set_length(of as u64);
                 bar.set_position(done as u64);
             });
@@ -160,7 +184,19 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
             Some(dir) => Some(write_spec(&search, c, dir, k + 1)?),
             None => None,
         };
-        rows.push(row(&search, c, k + 1, written));
+        let mut r = row(&search, c, k + 1, written);
+        if args.tables {
+            let name = r
+                .spec
+                .clone()
+                .unwrap_or_else(|| format!("candidate-{}", k + 1));
+            let train = egt_core::Train::from_spec(&search.candidate_spec(&c.teeth, &c.layout))?;
+            let table = train
+                .shift_table()
+                .with_context(|| format!("{name}: gear table"))?;
+            r.shift = Some(crate::document::shift(&train, &name, &table)?);
+        }
+        rows.push(r);
     }
     let report = Report {
         source,
@@ -170,6 +206,14 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         stats,
         seconds,
     };
+    if args.stream {
+        let mut done = report::value_of(&report)?;
+        if let serde_json::Value::Object(map) = &mut done {
+            map.insert("event".into(), "done".into());
+        }
+        writeln!(out, "{done}")?;
+        return Ok(());
+    }
     match args.format {
         OutputFormat::Json => report::json(out, &report),
         OutputFormat::Table => write_table(out, &report),
@@ -210,6 +254,7 @@ fn row(search: &Search, c: &Candidate, rank: usize, spec: Option<String>) -> Row
             .collect(),
         layout: c.layout.clone(),
         spec,
+        shift: None,
     }
 }
 

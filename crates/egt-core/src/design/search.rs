@@ -1015,8 +1015,9 @@ impl Search {
     }
 
     /// Run the whole space as `parts` partitions one after another (each on
-    /// all cores), calling `progress(done, parts)` after each: what a
-    /// progress bar and an ETA need. Merged and ranked, the result is
+    /// all cores), calling `progress(done, parts, best)` after each with the
+    /// best candidates so far (ranked, at most `top`): what a progress bar, an
+    /// ETA and a stream of results need. Merged and ranked, the result is
     /// [`Search::run`]'s.
     ///
     /// # Errors
@@ -1024,13 +1025,17 @@ impl Search {
     pub fn run_in_parts(
         &self,
         parts: usize,
-        mut progress: impl FnMut(usize, usize),
+        mut progress: impl FnMut(usize, usize, &[Candidate]),
     ) -> Result<(Vec<Candidate>, Stats), DesignError> {
         let parts = parts.clamp(1, self.max_partitions().max(1));
+        let mut best: Vec<Candidate> = Vec::new();
         let mut done = Vec::with_capacity(parts);
         for part in 0..parts {
-            done.push(self.run_partition(part, parts)?);
-            progress(part + 1, parts);
+            let (found, stats) = self.run_partition(part, parts)?;
+            best.extend(found.iter().cloned());
+            rank(&mut best, self.spec.top);
+            progress(part + 1, parts, &best);
+            done.push((found, stats));
         }
         Ok(merge(done, self.spec.top))
     }
@@ -1214,6 +1219,14 @@ impl Search {
         if t.progressive && table.steps.windows(2).any(|w| w[1].value > w[0].value) {
             return false;
         }
+        if t.single_swap
+            && table
+                .shifts
+                .iter()
+                .any(|s| s.kind == crate::ShiftKind::Sequential && !s.single_swap)
+        {
+            return false;
+        }
         table
             .gears
             .iter()
@@ -1394,6 +1407,7 @@ mod tests {
             ("efficiency = 0.946", "efficiency = 0.95"),
             ("steps = [1.19, 1.5001]", "steps = [1.2, 1.6]"),
             ("progressive = false", "progressive = true"),
+            ("single_swap = true", "steps = [1.0, 1.2]"),
             ("max_mesh_torque = 100.0", "max_mesh_torque = 0.5"),
         ] {
             assert_eq!(found(pass), (1, 0), "{pass}");
@@ -1491,7 +1505,10 @@ mod tests {
         let (whole, ws) = s.run().expect("test input");
         let mut seen = Vec::new();
         let (parts, ps) = s
-            .run_in_parts(4, |done, of| seen.push((done, of)))
+            .run_in_parts(4, |done, of, best| {
+                assert!(best.len() <= 5);
+                seen.push((done, of));
+            })
             .expect("test input");
         assert_eq!(seen, [(1, 4), (2, 4), (3, 4), (4, 4)]);
         let key = |c: &Vec<Candidate>| c.iter().map(|x| x.teeth.clone()).collect::<Vec<_>>();

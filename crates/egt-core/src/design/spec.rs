@@ -128,6 +128,10 @@ pub struct Targets {
     /// A progressive ratio set: no step larger than the one below it.
     #[serde(default)]
     pub progressive: bool,
+    /// Every shift between adjacent forward gears releases one element and
+    /// applies one.
+    #[serde(default)]
+    pub single_swap: bool,
     /// Lowest accepted efficiency of a targeted gear state (with the base
     /// train's mesh efficiencies; 1 where none are given).
     #[serde(default, skip_serializing_if = "Option::is_none")]

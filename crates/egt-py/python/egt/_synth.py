@@ -20,6 +20,8 @@ from ._results import _html_table, _pandas
 if TYPE_CHECKING:  # pragma: no cover
     import pandas
 
+    from ._train import Train
+
 __all__ = ["SetTeeth", "Candidate", "SynthResult", "synth", "synth_distributed"]
 
 Job = Tuple[str, str, str, str, str, str, Optional[int]]
@@ -61,6 +63,15 @@ class Candidate:
     """Every gear state's ratio, exactly (float(x) for the float)."""
     layout: Dict[str, Tuple[str, ...]] = field(default_factory=dict)
     """The freed shift elements' links (the search spec's ``[layout]``)."""
+    spec: str = field(default="", repr=False)
+    """The candidate's train spec (JSON text): the base train with these
+    teeth and this layout."""
+
+    def train(self) -> "Train":
+        """The candidate's train, for every analysis (e.g. ``.shift_table()``)."""
+        from ._train import Train
+
+        return Train.from_str(self.spec, "json", f"candidate-{self.rank}")
 
 
 @dataclass(frozen=True)
@@ -136,8 +147,9 @@ def _run_part(job: Job, part: int, parts: int, fail_once: Optional[str] = None) 
     return out
 
 
-def _candidate(rank: int, sets: Sequence[str], c: Mapping[str, Any]) -> Candidate:
+def _candidate(core: SearchCore, rank: int, sets: Sequence[str], c: Mapping[str, Any]) -> Candidate:
     return Candidate(
+        spec=core.candidate_spec(json.dumps(c)),
         rank=rank,
         score=c["score"],
         spread=c["spread"],
@@ -161,7 +173,7 @@ def _merge(core: SearchCore, results: Sequence[Mapping[str, Any]], top: int, sec
     stats: Dict[str, float] = dict(merged["stats"]) if results else {}
     sets = core.sets
     return SynthResult(
-        candidates=tuple(_candidate(k + 1, sets, c) for k, c in enumerate(found)),
+        candidates=tuple(_candidate(core, k + 1, sets, c) for k, c in enumerate(found)),
         stats=stats,
         seconds=seconds,
         partitions=len(results),
