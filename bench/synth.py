@@ -38,7 +38,15 @@ def main() -> None:
     loose = loose.replace('base = "../zf_8hp70.toml"', f'base = "{ROOT / "examples" / "zf_8hp70.toml"}"')
     print(f"{cores} cores; times are the best of 5 runs")
     print("search | tooth combinations | nodes | leaves | candidates | time | leaves/s/core")
-    for name, search in [("8HP, 3 decimals", ZF), ("C4 Simpson", C4), ("8HP, tolerance 0.02", loose)]:
+    synth = ROOT / "examples" / "synth"
+    for name, search in [
+        ("8HP, 3 decimals", ZF),
+        ("C4 Simpson", C4),
+        ("8HP, tolerance 0.02", loose),
+        ("6HP26 Lepelletier (Ravigneaux)", synth / "zf_6hp26_lepelletier.toml"),
+        ("AOD Ravigneaux", synth / "ford_aod_ravigneaux.toml"),
+        ("8HP, all 5 element positions free too", synth / "zf_8hp70_layout.toml"),
+    ]:
         secs, r = best_of(lambda: egt.synth(search))
         s = r.stats
         print(f"{name} | {s['tooth_space']:.3g} | {s['nodes']:.0f} | {s['leaves']:.0f} | {len(r.candidates)} "
