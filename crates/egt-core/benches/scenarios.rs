@@ -90,6 +90,50 @@ fn scenario_same_ratios(b: Bencher, t: &Train, compute: Compute) {
     });
 }
 
+/// Rows of a sweep: the spec's row with the input speed, the prescribed
+/// accelerations and the applied torques varied row by row (a load sweep);
+/// with `ratio_ulps`, the first ratio also moves by one ulp every other row,
+/// so that every row is a different train (the rows the linear path cannot take).
+fn sweep_rows(p: &BatchPlan, rows: usize, ratio_ulps: bool) -> Vec<f64> {
+    let linear: Vec<usize> = p
+        .parameters()
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| {
+            ["speed.", "accel.", "torque."]
+                .iter()
+                .any(|k| n.starts_with(k))
+        })
+        .map(|(c, _)| c)
+        .collect();
+    let mut out = Vec::with_capacity(rows * p.parameters().len());
+    for r in 0..rows {
+        let mut row = p.base().to_vec();
+        for (k, &c) in linear.iter().enumerate() {
+            row[c] += ((r * 7 + k * 3) % 101) as f64 * 0.25;
+        }
+        if ratio_ulps && r % 2 == 1 {
+            row[0] = f64::from_bits(row[0].to_bits() + 1);
+        }
+        out.extend(row);
+    }
+    out
+}
+
+/// 10 000 rows of a sweep through `BatchPlan::run` on one thread, per row.
+fn sweep(b: Bencher, t: &Train, ratio_ulps: bool) {
+    const ROWS: usize = 10_000;
+    let p = plan(t, Compute::Dynamics);
+    let params = sweep_rows(&p, ROWS, ratio_ulps);
+    let mut out = vec![0.0; ROWS * p.outputs().len()];
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap_or_else(|e| panic!("{e}"));
+    b.counter(ItemsCount::new(ROWS))
+        .bench_local(|| pool.install(|| p.run(black_box(&params), black_box(&mut out))));
+}
+
 macro_rules! phases {
     ($module:ident, $sizes:expr, $make:expr) => {
         mod $module {
@@ -140,6 +184,19 @@ macro_rules! phases {
             #[divan::bench(args = $sizes)]
             fn inverse_dynamics_same_ratios(b: Bencher, links: usize) {
                 scenario_same_ratios(b, &build(&$make(links)), Compute::Dynamics);
+            }
+
+            /// A load sweep (ratios fixed): the linear blocks of `run`, one core.
+            #[divan::bench(args = $sizes)]
+            fn sweep_loads(b: Bencher, links: usize) {
+                sweep(b, &build(&$make(links)), false);
+            }
+
+            /// The same sweep with the ratio moving by one ulp every other
+            /// row: every row solved, one core.
+            #[divan::bench(args = $sizes)]
+            fn sweep_loads_and_ratios(b: Bencher, links: usize) {
+                sweep(b, &build(&$make(links)), true);
             }
         }
     };

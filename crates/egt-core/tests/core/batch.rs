@@ -302,3 +302,79 @@ fn reused_factorisations_give_the_numbers_of_a_fresh_worker() {
         }
     }
 }
+
+/// The linear block path (a block whose ratios, inertias and masses are
+/// shared, with speeds, accelerations and torques varying) gives what a
+/// worker solving each row gives, to round-off: every output column, the
+/// conditions of rows with and without prescribed accelerations, and the
+/// rows refused for a bad value. Trains: a nest (bodies on carriers on
+/// carriers), a planetary chain and the paper's Fig. 3, kinematics and dynamics.
+#[test]
+fn linear_blocks_equal_row_by_row_solves() {
+    for t in [
+        train(&crate::lab::families::nest(6)),
+        train(&crate::lab::families::planetary_chain(3)),
+        crate::util::example("fig3_example61.toml"),
+    ] {
+        for compute in [Compute::Kinematics, Compute::Dynamics] {
+            let p = plan(&t, compute);
+            let (np, nq) = (p.parameters().len(), p.outputs().len());
+            let linear: Vec<usize> = p
+                .parameters()
+                .iter()
+                .enumerate()
+                .filter(|(_, n)| {
+                    ["speed.", "accel.", "torque."]
+                        .iter()
+                        .any(|k| n.starts_with(k))
+                })
+                .map(|(c, _)| c)
+                .collect();
+            assert!(!linear.is_empty());
+            let rows = 700;
+            let mut params = Vec::with_capacity(rows * np);
+            for r in 0..rows {
+                let mut row = p.base().to_vec();
+                for (k, &c) in linear.iter().enumerate() {
+                    // Every linear column varies; accelerations are zero in
+                    // every third row (no eq. (8) there).
+                    let name = &p.parameters()[c];
+                    row[c] = if name.starts_with("accel.") && r % 3 == 0 {
+                        0.0
+                    } else {
+                        (r as f64 * 0.37 + k as f64).sin() * 100.0
+                    };
+                }
+                params.extend(row);
+            }
+            params[5 * np + linear[0]] = f64::NAN;
+            // The path under test: every block of 256 rows is a linear one.
+            for block in params.chunks(256 * np) {
+                assert!(p.is_linear_block(block));
+            }
+            let mut mixed = params[..16 * np].to_vec();
+            mixed[3 * np] *= 1.5; // a ratio differs: solved row by row
+            assert!(!p.is_linear_block(&mixed));
+            let mut out = vec![0.0; rows * nq];
+            let errors = p.run(&params, &mut out);
+            assert_eq!(errors.iter().map(|e| e.row).collect::<Vec<_>>(), [5]);
+            let mut one = vec![0.0; nq];
+            for r in 0..rows {
+                let res = p.worker().eval(&params[r * np..(r + 1) * np], &mut one);
+                assert_eq!(res.is_err(), r == 5);
+                let got = &out[r * nq..(r + 1) * nq];
+                let scale = one
+                    .iter()
+                    .filter(|v| v.is_finite())
+                    .fold(1.0_f64, |m, v| m.max(v.abs()));
+                for (c, (a, b)) in one.iter().zip(got).enumerate() {
+                    assert!(
+                        (a.is_nan() && b.is_nan()) || (a - b).abs() <= 1e-13 * scale,
+                        "{compute:?} row {r} {}: {a} vs {b}",
+                        p.outputs()[c]
+                    );
+                }
+            }
+        }
+    }
+}
