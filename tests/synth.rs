@@ -25,6 +25,20 @@ fn teeth(c: &Value) -> Vec<(i64, i64)> {
         .collect()
 }
 
+/// A candidate's exact ratios are those of an `egt shift` document's gears.
+fn assert_gear_ratios(shift: &Value, candidate: &Value) {
+    for r in candidate["ratios"].as_array().unwrap() {
+        let g = shift["gears"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|g| g["state"] == r["state"])
+            .unwrap();
+        assert_eq!(g["ratio_exact"], r["exact"], "state {}", r["state"]);
+        assert_eq!(g["ratio"], r["ratio"], "state {}", r["state"]);
+    }
+}
+
 #[test]
 fn rediscovers_the_8hp_and_every_candidate_passes_egt_shift() {
     let dir = std::env::temp_dir().join(format!("egt-synth-{}", std::process::id()));
@@ -53,16 +67,7 @@ fn rediscovers_the_8hp_and_every_candidate_passes_egt_shift() {
         let spec = c["spec"].as_str().unwrap();
         let shift: Value =
             serde_json::from_str(&stdout(&["shift", spec, "--format", "json"])).unwrap();
-        for r in c["ratios"].as_array().unwrap() {
-            let g = shift["gears"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .find(|g| g["state"] == r["state"])
-                .unwrap();
-            assert_eq!(g["ratio_exact"], r["exact"], "{spec} state {}", r["state"]);
-            assert_eq!(g["ratio"], r["ratio"]);
-        }
+        assert_gear_ratios(&shift, c);
     }
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -134,15 +139,7 @@ fn finds_ravigneaux_sets_and_every_candidate_passes_egt_shift() {
         let spec = c["spec"].as_str().unwrap();
         let shift: Value =
             serde_json::from_str(&stdout(&["shift", spec, "--format", "json"])).unwrap();
-        for r in c["ratios"].as_array().unwrap() {
-            let g = shift["gears"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .find(|g| g["state"] == r["state"])
-                .unwrap();
-            assert_eq!(g["ratio_exact"], r["exact"], "{spec} state {}", r["state"]);
-        }
+        assert_gear_ratios(&shift, c);
     }
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -253,10 +250,6 @@ fn stream_gives_the_best_so_far_then_the_report_with_tables() {
     let key = |v: &Value| v.as_array().unwrap().iter().map(teeth).collect::<Vec<_>>();
     assert_eq!(key(&last["candidates"]), key(&once["candidates"]));
     for c in cands {
-        let gears = c["shift"]["gears"].as_array().unwrap();
-        for r in c["ratios"].as_array().unwrap() {
-            let g = gears.iter().find(|g| g["state"] == r["state"]).unwrap();
-            assert_eq!(g["ratio_exact"], r["exact"]);
-        }
+        assert_gear_ratios(&c["shift"], c);
     }
 }

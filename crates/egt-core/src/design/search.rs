@@ -665,6 +665,15 @@ fn states(
     Ok(states)
 }
 
+/// Write a searched Willis row w_s + k w_r - (1 + k) w_c = 0 (k signed) into
+/// row `row` of `a`.
+fn willis_into(a: &mut DMatrix<f64>, (row, s, r, c): (usize, usize, usize, usize), k: f64) {
+    a.row_mut(row).fill(0.0);
+    a[(row, s)] += 1.0;
+    a[(row, r)] += k;
+    a[(row, c)] -= 1.0 + k;
+}
+
 /// Whether every gear state's system is regular for generic ratios (two
 /// picks of each searched k): a layout whose state is singular for any teeth
 /// (an element that locks nothing new) would never be bounded, so it is
@@ -676,12 +685,7 @@ fn generic(states: &[StateSystem], dims: &[Dim]) -> bool {
             for (d, &(row, s, r, c)) in st.rows.iter().enumerate() {
                 let ks = &dims[d].ks;
                 let k = dims[d].sign * ks[(ks.len() * q / 4).min(ks.len() - 1)];
-                for j in 0..a.ncols() {
-                    a[(row, j)] = 0.0;
-                }
-                a[(row, s)] += 1.0;
-                a[(row, r)] += k;
-                a[(row, c)] -= 1.0 + k;
+                willis_into(&mut a, (row, s, r, c), k);
             }
             // Regular when the smallest LU pivot is not round-off of the largest.
             let u = a.lu().u();
@@ -1060,12 +1064,7 @@ impl Search {
                 let (b0, b1) = bounds[u];
                 let idx = if v >> u & 1 == 1 { b1 - 1 } else { b0 };
                 let k = self.dims[u].sign * self.dims[u].ks[idx];
-                for j in 0..a.ncols() {
-                    a[(row, j)] = 0.0;
-                }
-                a[(row, s)] += 1.0;
-                a[(row, r)] += k;
-                a[(row, c)] -= 1.0 + k;
+                willis_into(&mut a, (row, s, r, c), k);
             }
             let lu = a.clone().lu();
             let det = lu.determinant();
