@@ -77,7 +77,8 @@ def error(sol: dict[str, np.ndarray], exact: dict[str, list[float]]) -> float:
 # --- NumPy, one scenario at a time ------------------------------------------
 
 
-def numpy_scenario(st: dict[str, Any], c: int, v: dict[str, list[float]]) -> dict[str, np.ndarray]:
+def numpy_matrices(st: dict[str, Any], c: int, v: dict[str, list[float]]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The speed, acceleration and force matrices (eq. 2, 8, 10) and [M] of one scenario."""
     n = st["n"]
     base = np.zeros((n, n))
     for m, cols in enumerate(st["circuits"]):
@@ -97,12 +98,6 @@ def numpy_scenario(st: dict[str, Any], c: int, v: dict[str, list[float]]) -> dic
             a[c + r, col] = value
         return a
 
-    b = np.zeros(n)
-    b[c:] = v["speeds"]
-    w = np.linalg.solve(with_rows(st["inputs"], 1.0), b)
-    b = np.zeros(n)
-    b[c:] = v["accelerations"]
-    acc = np.linalg.solve(with_rows(st["accelerated"], 1.0), b)
     mass = np.zeros((n, n))
     for e in st["mass"]:
         if e["spin"] is not None:
@@ -113,8 +108,20 @@ def numpy_scenario(st: dict[str, Any], c: int, v: dict[str, list[float]]) -> dic
             for a, da in e["float"]["terms"]:
                 for bb, db in e["float"]["terms"]:
                     mass[a, bb] += wgt * da * db
+    return with_rows(st["inputs"], 1.0), with_rows(st["accelerated"], 1.0), with_rows(st["driving"], -1.0).T, mass
+
+
+def numpy_scenario(st: dict[str, Any], c: int, v: dict[str, list[float]]) -> dict[str, np.ndarray]:
+    n = st["n"]
+    aw, aa, ax, mass = numpy_matrices(st, c, v)
+    b = np.zeros(n)
+    b[c:] = v["speeds"]
+    w = np.linalg.solve(aw, b)
+    b = np.zeros(n)
+    b[c:] = v["accelerations"]
+    acc = np.linalg.solve(aa, b)
     r = np.asarray(v["torques"]) - mass @ acc
-    x = np.linalg.solve(with_rows(st["driving"], -1.0).T, r)
+    x = np.linalg.solve(ax, r)
     return {"speeds": w, "accelerations": acc, "multipliers": x[:c], "torques": x[c:]}
 
 

@@ -26,7 +26,7 @@ import numpy as np
 import sympy as sp
 
 sys.path.insert(0, "bench")
-from routes import per_call, sympy_derive  # noqa: E402
+from routes import numpy_matrices, per_call, sympy_derive  # noqa: E402
 
 BATCH = 10_000
 
@@ -51,29 +51,7 @@ def main() -> None:
 
         # NumPy: the matrices once, every right-hand side in one solve.
         n = st["n"]
-        base = np.zeros((n, n))
-        for m, cols in enumerate(st["circuits"]):
-            for col, coef in zip(cols, (1.0, -v["ratios"][m], v["ratios"][m] - 1.0)):
-                if col is not None:
-                    base[m, col] += coef
-
-        def with_rows(cols: list[int], value: float) -> np.ndarray:
-            a = base.copy()
-            for r, col in enumerate(cols):
-                a[c + r, col] = value
-            return a
-
-        aw, aa, ax = with_rows(st["inputs"], 1.0), with_rows(st["accelerated"], 1.0), with_rows(st["driving"], -1.0).T
-        mass = np.zeros((n, n))
-        for e in st["mass"]:
-            if e["spin"] is not None:
-                k = e["spin"]["column"]
-                mass[k, k] += e["copies"] * v["inertia"][e["spin"]["slot"]]
-            if e["float"] is not None:
-                wgt = e["copies"] * v["mass"][e["float"]["slot"]]
-                for a, da in e["float"]["terms"]:
-                    for b, db in e["float"]["terms"]:
-                        mass[a, b] += wgt * da * db
+        aw, aa, ax, mass = numpy_matrices(st, c, v)
         w_in = np.stack([x + rng.standard_normal(BATCH) for x in v["speeds"]])
         a_in = np.stack([x + rng.standard_normal(BATCH) for x in v["accelerations"]])
         torques = np.stack([x + rng.standard_normal(BATCH) for x in v["torques"]])
