@@ -24,8 +24,19 @@
 //! multiply-add over the outputs that the compiler vectorises. A load,
 //! speed or acceleration sweep costs a few nanoseconds per row instead of a
 //! solve; other blocks (ratio, inertia or efficiency sweeps, power flow with
-//! its direction-dependent losses) are solved row by row. Both give the same
-//! numbers to round-off (tested).
+//! its direction-dependent losses) are solved by the lanes or row by row.
+//! Both give the same numbers to round-off (tested).
+//!
+//! **Lanes.** Other blocks of kinematics or ideal dynamics (ratio, inertia or
+//! mass sweeps, every row its own train) are solved eight rows at a time,
+//! the rows in the lanes of every matrix entry (structure of arrays), with
+//! the vector instructions the machine has (AVX2 through `pulp` when
+//! present). The eight share one pivot order; a row whose partial pivoting
+//! would choose another, whose system is singular or past the refusal
+//! threshold, or that holds a bad value, leaves its group and is solved on
+//! its own, which gives its error. A row solved in the lanes gets the numbers
+//! a fresh [`Worker`] gives it, condition estimates included (tested bit for
+//! bit); power flow is always row by row.
 //!
 //! ```
 //! use egt_core::batch::{BatchPlan, BatchSpec};
@@ -88,6 +99,8 @@ use rayon::prelude::*;
 
 use crate::error::{AnalysisError, Error, Result};
 use crate::model::train::{LinkId, Train};
+use crate::numerics::lanes::{LANES, Lane};
+use crate::solve::prepared::LaneWorkspace;
 use crate::solve::prepared::{Compute, PreparedTrain, Scenario, Workspace};
 use crate::solve::rows::Extra;
 
@@ -419,6 +432,23 @@ impl BatchPlan {
             .all(|r| (0..p).all(|c| !fixed(c) || r[c].to_bits() == row0[c].to_bits()))
     }
 
+    /// Whether [`BatchPlan::run`] solves a block of rows (row-major) by the
+    /// lanes: kinematics or ideal dynamics and at least [`LANES_MIN_ROWS`] rows.
+    pub fn lanes_apply(&self, rows: &[f64]) -> bool {
+        let n = rows.len().checked_div(self.parameters.len()).unwrap_or(0);
+        matches!(self.compute, Compute::Kinematics | Compute::Dynamics) && n >= LANES_MIN_ROWS
+    }
+
+    fn lanes(&self) -> Lanes {
+        let n = self.prepared.n();
+        Lanes {
+            w: self.prepared.lane_workspace(),
+            speed: vec![0.0; n],
+            accel: vec![0.0; n],
+            x: vec![0.0; n],
+        }
+    }
+
     /// Solve every row of `params` (row-major, `parameters().len()` columns)
     /// into `out` (row-major, `outputs().len()` columns), in parallel on the
     /// current rayon pool. Failed rows get NaN outputs and are returned, in row order.
@@ -443,14 +473,19 @@ impl BatchPlan {
             .zip(out.par_chunks_mut(q * ROWS_PER_TASK))
             .enumerate()
             .map_init(
-                || (self.worker(), Linear::default()),
-                |(w, lin), (task, (pin, pout))| {
+                || (self.worker(), Linear::default(), self.lanes()),
+                |(w, lin, lanes), (task, (pin, pout))| {
                     let mut errors = Vec::new();
-                    if !w.eval_linear(lin, pin, pout, task * ROWS_PER_TASK, &mut errors) {
+                    let first = task * ROWS_PER_TASK;
+                    if w.eval_linear(lin, pin, pout, first, &mut errors) {
+                        // Solved as y0 + sum p_j R_j.
+                    } else if self.lanes_apply(pin) {
+                        w.eval_lanes(lanes, pin, pout, first, &mut errors);
+                    } else {
                         for (r, (row, o)) in pin.chunks(p).zip(pout.chunks_mut(q)).enumerate() {
                             if let Err(error) = w.eval(row, o) {
                                 errors.push(RowError {
-                                    row: task * ROWS_PER_TASK + r,
+                                    row: first + r,
                                     error,
                                 });
                             }
@@ -468,6 +503,8 @@ impl BatchPlan {
 
 /// Fewest rows in a block for the linear path (below it, row by row is as fast).
 const LINEAR_MIN_ROWS: usize = 8;
+/// Fewest rows in a block for the lanes.
+pub const LANES_MIN_ROWS: usize = 4;
 
 /// Buffers of the linear path: the varying columns, the base row, the
 /// response columns and the conditions.
@@ -493,6 +530,16 @@ struct Linear {
     static_base: bool,
     /// A response is held.
     valid: bool,
+}
+
+/// Buffers of the lanes path: the group's structure of arrays and one lane's
+/// results, gathered for the output writer.
+#[derive(Debug)]
+struct Lanes {
+    w: LaneWorkspace,
+    speed: Vec<f64>,
+    accel: Vec<f64>,
+    x: Vec<f64>,
 }
 
 /// Evaluates rows one at a time with buffers of its own.
@@ -540,52 +587,108 @@ impl Worker<'_> {
         let pt = &plan.prepared;
         pt.solve(&mut self.ws, &s, plan.compute)?;
         let ws = &self.ws;
-        let mut o = 0;
-        let mut put = |v: f64| {
-            out[o] = v;
-            o += 1;
-        };
-        for &k in &plan.known {
-            put(ws.speeds()[k]);
-        }
-        if plan.compute != Compute::Kinematics {
-            for &k in &plan.known {
-                put(ws.accelerations()[k]);
-            }
-            for &v in ws.multipliers(pt) {
-                put(v);
-            }
-            for &v in ws.driving_torques(pt) {
-                put(v);
-            }
-            for &(m, r) in &plan.forces {
-                put(ws.multipliers(pt)[m] / r);
-            }
-        }
-        if plan.compute == Compute::Power {
-            let p = ws.power();
-            put(p.input);
-            put(p.output);
-            put(p.loss);
-            put(p.kinetic_rate);
-            put(if p.input > 0.0 {
-                crate::analysis::power::efficiency(p.input, p.loss, p.kinetic_rate)
-            } else {
-                f64::NAN
-            });
-        }
-        let cond = ws.conditions();
-        put(cond[0]);
-        if plan.compute != Compute::Kinematics {
-            put(cond[1]);
-            put(cond[2]);
-        }
+        let power = (plan.compute == Compute::Power).then(|| ws.power());
+        write_outputs(
+            plan,
+            Solution {
+                speeds: ws.speeds(),
+                accelerations: ws.accelerations(),
+                multipliers: ws.multipliers(pt),
+                driving: ws.driving_torques(pt),
+                cond: ws.conditions(),
+                power,
+            },
+            out,
+        );
         Ok(())
     }
 
     /// The workspace of the last row (all coordinates, multipliers, mass matrix).
     pub fn workspace(&self) -> &Workspace {
         &self.ws
+    }
+
+    /// A block of rows by the lanes ([`LANES`] rows solved at once, see the
+    /// module docs); rows the lanes leave (a bad parameter, another pivot
+    /// order, a singular or ill-conditioned system) are solved one at a time.
+    /// Returns how many rows the lanes solved.
+    fn eval_lanes(
+        &mut self,
+        lanes: &mut Lanes,
+        rows: &[f64],
+        out: &mut [f64],
+        first: usize,
+        errors: &mut Vec<RowError>,
+    ) -> usize {
+        let plan = self.plan;
+        let g = plan.groups;
+        let pt = &plan.prepared;
+        let (p, q) = (plan.parameters.len(), plan.outputs.len());
+        let lw = &mut lanes.w;
+        let mut solved = 0;
+        for (k, (group, gout)) in rows
+            .chunks(p * LANES)
+            .zip(out.chunks_mut(q * LANES))
+            .enumerate()
+        {
+            let count = group.len() / p;
+            let mut live = [false; LANES];
+            for (l, row) in group.chunks(p).enumerate() {
+                live[l] = check(plan, row).is_ok();
+            }
+            if let Some(f) = live.iter().position(|&x| x) {
+                // Padding and bad rows take the first good row's values.
+                for l in 0..LANES {
+                    let row = &group[if live[l] { l } else { f } * p..][..p];
+                    let put = |dst: &mut [Lane], from: usize| {
+                        for (d, &v) in dst.iter_mut().zip(&row[from..]) {
+                            d[l] = v;
+                        }
+                    };
+                    put(&mut lw.ratios, g.ratio);
+                    put(&mut lw.speeds, g.speed);
+                    put(&mut lw.accelerations, g.accel);
+                    put(&mut lw.torques, g.torque);
+                    put(&mut lw.inertia, g.inertia);
+                    put(&mut lw.mass, g.mass);
+                }
+                pt.solve_lanes(lw, &mut live, plan.compute);
+            }
+            for (l, (row, o)) in group.chunks(p).zip(gout.chunks_mut(q)).enumerate() {
+                if live[l] {
+                    solved += 1;
+                    let lane = |v: &[Lane], buf: &mut [f64]| {
+                        for (b, x) in buf.iter_mut().zip(v) {
+                            *b = x[l];
+                        }
+                    };
+                    lane(&lw.speed, &mut lanes.speed);
+                    lane(&lw.accel, &mut lanes.accel);
+                    lane(&lw.x, &mut lanes.x);
+                    let c = pt.constraints().min(lanes.x.len());
+                    let (mult, driving) = lanes.x.split_at(c);
+                    write_outputs(
+                        plan,
+                        Solution {
+                            speeds: &lanes.speed,
+                            accelerations: &lanes.accel,
+                            multipliers: mult,
+                            driving,
+                            cond: [lw.cond[0][l], lw.cond[1][l], lw.cond[2][l]],
+                            power: None,
+                        },
+                        o,
+                    );
+                } else if let Err(error) = self.eval(row, o) {
+                    errors.push(RowError {
+                        row: first + k * LANES + l,
+                        error,
+                    });
+                }
+            }
+            debug_assert!(count <= LANES);
+        }
+        solved
     }
 
     /// A block of rows by the linear path when it applies (see the module
@@ -606,8 +709,13 @@ impl Worker<'_> {
         if plan.compute == Compute::Power || n < LINEAR_MIN_ROWS {
             return false;
         }
-        // One pass: which columns differ from the first row's.
         let row0 = &rows[..p];
+        let fixed = |c: usize| c < g.speed || c >= g.inertia;
+        // A ratio sweep leaves at its second row, before the whole pass.
+        if (0..p).any(|c| fixed(c) && rows[p + c].to_bits() != row0[c].to_bits()) {
+            return false;
+        }
+        // One pass: which columns differ from the first row's.
         lin.diff.clear();
         lin.diff.resize(p, false);
         for r in rows.chunks(p) {
@@ -615,11 +723,7 @@ impl Worker<'_> {
                 *d |= a.to_bits() != b.to_bits();
             }
         }
-        if lin.diff[..g.speed]
-            .iter()
-            .chain(&lin.diff[g.inertia..])
-            .any(|&d| d)
-        {
+        if (0..p).any(|c| fixed(c) && lin.diff[c]) {
             return false;
         }
         // The base row: the varying columns at zero. The response of the
@@ -743,6 +847,58 @@ impl Worker<'_> {
     }
 }
 
+/// One row's results, wherever they were solved.
+struct Solution<'a> {
+    speeds: &'a [f64],
+    accelerations: &'a [f64],
+    multipliers: &'a [f64],
+    driving: &'a [f64],
+    cond: [f64; 3],
+    power: Option<crate::solve::prepared::PowerSummary>,
+}
+
+/// Write a row's output columns, in the order of [`BatchPlan::outputs`].
+fn write_outputs(plan: &BatchPlan, s: Solution<'_>, out: &mut [f64]) {
+    let mut o = 0;
+    let mut put = |v: f64| {
+        out[o] = v;
+        o += 1;
+    };
+    for &k in &plan.known {
+        put(s.speeds[k]);
+    }
+    if plan.compute != Compute::Kinematics {
+        for &k in &plan.known {
+            put(s.accelerations[k]);
+        }
+        for &v in s.multipliers {
+            put(v);
+        }
+        for &v in s.driving {
+            put(v);
+        }
+        for &(m, r) in &plan.forces {
+            put(s.multipliers[m] / r);
+        }
+    }
+    if let Some(p) = s.power {
+        put(p.input);
+        put(p.output);
+        put(p.loss);
+        put(p.kinetic_rate);
+        put(if p.input > 0.0 {
+            crate::analysis::power::efficiency(p.input, p.loss, p.kinetic_rate)
+        } else {
+            f64::NAN
+        });
+    }
+    put(s.cond[0]);
+    if plan.compute != Compute::Kinematics {
+        put(s.cond[1]);
+        put(s.cond[2]);
+    }
+}
+
 /// Every parameter finite; inertias and masses non-negative; efficiencies in (0, 1].
 fn check(plan: &BatchPlan, row: &[f64]) -> Result<()> {
     let g = plan.groups;
@@ -779,4 +935,48 @@ fn bad_parameter(plan: &BatchPlan, c: usize, v: f64) -> Error {
             expected: expected.into(),
         },
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Format, Train};
+
+    /// A ratio sweep goes through the lanes: every good row of a smooth
+    /// sweep, none of the rows the lanes must leave (a bad value, a pivot
+    /// order of its own). The results themselves are compared with solving
+    /// each row alone in `tests/core/batch.rs`.
+    #[test]
+    fn lanes_solve_the_rows_of_a_ratio_sweep() {
+        let text = include_str!("../../../examples/fig3_example61.toml");
+        let t = Train::from_str(text, Format::Toml, "fig3").unwrap_or_else(|e| panic!("{e}"));
+        let p = BatchPlan::new(
+            &t,
+            &BatchSpec::from_analysis(&t, Compute::Dynamics).unwrap_or_else(|e| panic!("{e}")),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let np = p.parameters().len();
+        let rows = 256;
+        let mut params = Vec::new();
+        for r in 0..rows {
+            let mut row = p.base().to_vec();
+            row[0] *= 1.0 + 0.001 * r as f64;
+            params.extend(row);
+        }
+        let mut out = vec![0.0; rows * p.outputs().len()];
+        let (mut w, mut lanes) = (p.worker(), p.lanes());
+        let mut errors = Vec::new();
+        assert_eq!(
+            w.eval_lanes(&mut lanes, &params, &mut out, 0, &mut errors),
+            rows
+        );
+        assert!(errors.is_empty());
+        params[3 * np + 1] = f64::NAN;
+        // Far from the others' ratio: it leaves the lanes (another pivot order).
+        params[9 * np] *= -40.0;
+        let solved = w.eval_lanes(&mut lanes, &params, &mut out, 0, &mut errors);
+        assert_eq!(solved, rows - 2);
+        assert_eq!(errors.len(), 1);
+        assert_eq!(errors[0].row, 3);
+    }
 }

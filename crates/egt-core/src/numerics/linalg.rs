@@ -190,7 +190,7 @@ impl Lu {
 /// The order of a system: a compile-time constant for the small systems
 /// (most trains: up to 12 coordinates), where the loops then unroll and the
 /// bounds checks fold away, or a run-time value for the rest.
-trait Dim: Copy {
+pub(crate) trait Dim: Copy {
     /// Track and use the envelope of the factors (run-time sizes only: the
     /// unrolled kernels are faster without the bookkeeping).
     const ENVELOPE: bool;
@@ -204,7 +204,7 @@ struct Envelope<'a> {
 }
 
 #[derive(Clone, Copy)]
-struct Fixed<const N: usize>;
+pub(crate) struct Fixed<const N: usize>;
 
 impl<const N: usize> Dim for Fixed<N> {
     const ENVELOPE: bool = false;
@@ -215,7 +215,7 @@ impl<const N: usize> Dim for Fixed<N> {
 }
 
 #[derive(Clone, Copy)]
-struct Dynamic(usize);
+pub(crate) struct Dynamic(pub(crate) usize);
 
 impl Dim for Dynamic {
     const ENVELOPE: bool = true;
@@ -284,7 +284,7 @@ macro_rules! dispatch {
         }
     };
 }
-use dispatch;
+pub(crate) use dispatch;
 
 /// LU with partial pivoting in place; returns ||A||_1.
 // Index loops on purpose: with a constant order they unroll completely.

@@ -2,5 +2,6 @@
 //! checked dense LU. Nothing here knows what a gear train is.
 
 pub mod exact;
+pub(crate) mod lanes;
 pub mod linalg;
 pub mod modp;

@@ -18,6 +18,9 @@
 
 use std::ops::Range;
 
+mod lanes;
+pub(crate) use lanes::LaneWorkspace;
+
 use crate::solve::rows::{Extra, Rows, dof_with, link_columns};
 use num_traits::Zero;
 

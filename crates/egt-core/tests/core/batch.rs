@@ -378,3 +378,110 @@ fn linear_blocks_equal_row_by_row_solves() {
         }
     }
 }
+
+/// The lanes of `BatchPlan::run` (rows whose ratios differ, solved eight at
+/// a time) give what a fresh worker gives for each row alone, bit for bit:
+/// every output column, the conditions included, with rows that pivot
+/// differently from their group, singular rows (a ratio of 1 locks a
+/// planetary set's sun to its carrier) and rows with a bad value in among
+/// them. Trains: a nest, a chain, Fig. 3, the two-motor Fig. 5 with
+/// accelerations prescribed on other links than the speeds (eq. 8 factored
+/// apart) and torques solved on a third pair (eq. 10 apart), and every gear
+/// state of the 8HP70 (engaged elements as extra rows, output torque solved).
+#[test]
+fn lanes_equal_fresh_row_by_row_solves_bit_for_bit() {
+    use egt_core::batch::BatchSpec;
+    let fig5 = crate::util::example("fig5_example62.toml");
+    let id = |t: &Train, n: &str| t.link_id(n).unwrap_or_else(|| panic!("no link {n}"));
+    let apart = BatchSpec {
+        inputs: vec![id(&fig5, "2"), id(&fig5, "4")],
+        accelerated: vec![id(&fig5, "3"), id(&fig5, "4")],
+        driving: vec![id(&fig5, "6"), id(&fig5, "2")],
+        extras: Vec::new(),
+        compute: Compute::Dynamics,
+    };
+    let zf = crate::util::example("zf_8hp70.toml");
+    let mut plans: Vec<(String, BatchPlan)> = Vec::new();
+    for (name, t) in [
+        ("nest", train(&crate::lab::families::nest(6))),
+        ("chain", train(&crate::lab::families::planetary_chain(3))),
+        ("fig3", crate::util::example("fig3_example61.toml")),
+        ("fig5", fig5.clone()),
+    ] {
+        for compute in [Compute::Kinematics, Compute::Dynamics] {
+            plans.push((format!("{name} {compute:?}"), plan(&t, compute)));
+        }
+    }
+    plans.push((
+        "fig5 apart".into(),
+        BatchPlan::new(&fig5, &apart).unwrap_or_else(|e| panic!("{e}")),
+    ));
+    for s in &zf
+        .checked_transmission()
+        .unwrap_or_else(|e| panic!("{e}"))
+        .states
+    {
+        let spec = BatchSpec::for_gear_state(&zf, &s.name, Compute::Dynamics)
+            .unwrap_or_else(|e| panic!("{e}"));
+        plans.push((
+            format!("8HP {}", s.name),
+            BatchPlan::new(&zf, &spec).unwrap_or_else(|e| panic!("{e}")),
+        ));
+    }
+    for (name, p) in &plans {
+        let (np, nq) = (p.parameters().len(), p.outputs().len());
+        let rows = 613;
+        let mut params = Vec::with_capacity(rows * np);
+        for r in 0..rows {
+            let mut row = p.base().to_vec();
+            for (c, v) in row.iter_mut().enumerate() {
+                let col = &p.parameters()[c];
+                let wave = (r as f64 * 0.37 + c as f64).sin();
+                if col.starts_with("ratio.") {
+                    // Every row its own ratios; every 50th far off (another pivot order).
+                    *v *= if r % 50 == 7 {
+                        -3.0 + wave
+                    } else {
+                        1.0 + 0.2 * wave
+                    };
+                } else if col.starts_with("accel.") && r % 3 == 0 {
+                    *v = 0.0;
+                } else if v.is_finite() && !col.starts_with("inertia.") && !col.starts_with("mass.")
+                {
+                    *v = 100.0 * wave;
+                } else if col.starts_with("inertia.") || col.starts_with("mass.") {
+                    *v *= 1.0 + 0.5 * wave.abs();
+                }
+            }
+            params.extend(row);
+        }
+        params[5 * np] = f64::NAN;
+        params[11 * np] = 1.0; // a singular row in most trains
+        for block in params.chunks(256 * np) {
+            assert!(!p.is_linear_block(block) && p.lanes_apply(block), "{name}");
+        }
+        let mut out = vec![0.0; rows * nq];
+        let errors = p.run(&params, &mut out);
+        let mut failed = Vec::new();
+        let mut one = vec![0.0; nq];
+        for r in 0..rows {
+            let res = p.worker().eval(&params[r * np..(r + 1) * np], &mut one);
+            if res.is_err() {
+                failed.push(r);
+            }
+            for (c, (a, b)) in one.iter().zip(&out[r * nq..(r + 1) * nq]).enumerate() {
+                assert!(
+                    a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
+                    "{name} row {r} {}: {a} alone vs {b} in lanes",
+                    p.outputs()[c]
+                );
+            }
+        }
+        assert_eq!(
+            errors.iter().map(|e| e.row).collect::<Vec<_>>(),
+            failed,
+            "{name}"
+        );
+        assert!(failed.contains(&5), "{name}");
+    }
+}

@@ -1,0 +1,412 @@
+//! Dense LU for [`LANES`] systems of one structure at once, the scenarios in
+//! the lanes of each entry (structure of arrays): every scalar step of
+//! [`Lu`](super::linalg::Lu) becomes one operation over `[f64; LANES]`, which
+//! the compiler turns into SIMD instructions.
+//!
+//! The lanes share one pivot order. At each column every live lane's
+//! partial-pivoting choice is computed; a lane whose choice differs from the
+//! group's (the first live lane's), whose pivot column is zero or not finite,
+//! or whose condition estimate is past [`COND_REFUSE`] is marked dead, and its
+//! caller solves it again on its own (where the error, if any, is raised).
+//! A live lane therefore goes through exactly the operations, in the same
+//! order, that [`Lu`](super::linalg::Lu) would apply to it alone (the same
+//! pivots, the same reciprocal pivots, the same dlacn2 estimate): its results
+//! are the same numbers.
+
+use super::linalg::{COND_REFUSE, Dim};
+
+/// Scenarios per group: 8 doubles fill two AVX registers or four SSE2 ones.
+pub const LANES: usize = 8;
+
+/// One value per lane.
+pub type Lane = [f64; LANES];
+
+/// Which lanes of a group are still being solved together.
+pub type Live = [bool; LANES];
+
+/// `a[l] -= f[l] * b[l]` for every lane.
+#[inline(always)]
+pub fn sub_mul(a: &mut Lane, f: &Lane, b: &Lane) {
+    for l in 0..LANES {
+        a[l] -= f[l] * b[l];
+    }
+}
+
+/// `a[l] *= f[l]` for every lane.
+#[inline(always)]
+pub fn mul(a: &mut Lane, f: &Lane) {
+    for l in 0..LANES {
+        a[l] *= f[l];
+    }
+}
+
+/// LU factorisations P A = L U of [`LANES`] `n x n` matrices with one pivot
+/// order, in place; entry `(i, j)` of every lane at `a[i * n + j]`. The
+/// methods take the order as a [`Dim`] (a constant for small systems, as
+/// in `linalg`), so that a caller dispatches once for a whole group.
+#[derive(Debug, Clone)]
+pub struct LaneLu {
+    a: Vec<Lane>,
+    piv: Vec<usize>,
+    dinv: Vec<Lane>,
+    /// Envelope of the factors over all lanes: the first non-zero column of
+    /// each row of L, one past the last non-zero column of each row of U.
+    /// The substitutions skip the zeros outside it (Willis rows have three
+    /// non-zeros); a skipped term is an exact zero in every lane.
+    lo: Vec<usize>,
+    hi: Vec<usize>,
+    anorm: Lane,
+    x: Vec<Lane>,
+    alt: Vec<Lane>,
+    signs: Vec<Lane>,
+}
+
+impl LaneLu {
+    /// Buffers for `n x n` systems.
+    pub fn new(n: usize) -> Self {
+        LaneLu {
+            a: vec![[0.0; LANES]; n * n],
+            piv: vec![0; n],
+            dinv: vec![[0.0; LANES]; n],
+            lo: (0..n).collect(),
+            hi: (1..=n).collect(),
+            anorm: [0.0; LANES],
+            x: vec![[0.0; LANES]; n],
+            alt: vec![[0.0; LANES]; n],
+            signs: vec![[0.0; LANES]; n],
+        }
+    }
+
+    /// The matrices to fill before [`LaneLu::factor`].
+    pub fn matrix_mut(&mut self) -> &mut [Lane] {
+        &mut self.a
+    }
+
+    /// Factor in place with the pivot order of the first live lane; lanes
+    /// that would pivot differently, or meet a zero or non-finite pivot
+    /// column, are marked dead in `live` (their factors are then meaningless).
+    // Index loops: the same order of operations as `linalg::factor`.
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    pub(crate) fn factor<D: Dim>(&mut self, d: D, live: &mut Live) {
+        let n = d.n();
+        let a = &mut self.a[..n * n];
+        let (piv, dinv) = (&mut self.piv[..n], &mut self.dinv[..n]);
+        let mut anorm = [0.0_f64; LANES];
+        for j in 0..n {
+            let mut s = [0.0; LANES];
+            for i in 0..n {
+                for l in 0..LANES {
+                    s[l] += a[i * n + j][l].abs();
+                }
+            }
+            for l in 0..LANES {
+                anorm[l] = anorm[l].max(s[l]);
+            }
+        }
+        self.anorm = anorm;
+        for k in 0..n {
+            // Every lane's partial-pivoting choice (the first largest, as `linalg::factor`).
+            let mut p = [k; LANES];
+            let mut best = [0.0; LANES];
+            for l in 0..LANES {
+                best[l] = a[k * n + k][l].abs();
+            }
+            for i in k + 1..n {
+                for l in 0..LANES {
+                    let v = a[i * n + k][l].abs();
+                    if v > best[l] {
+                        best[l] = v;
+                        p[l] = i;
+                    }
+                }
+            }
+            let Some(first) = live.iter().position(|&x| x) else {
+                return;
+            };
+            let pk = p[first];
+            for l in 0..LANES {
+                if p[l] != pk || best[l] == 0.0 || !best[l].is_finite() {
+                    live[l] = false;
+                }
+            }
+            piv[k] = pk;
+            if pk != k {
+                for j in 0..n {
+                    a.swap(k * n + j, pk * n + j);
+                }
+            }
+            let mut inv = [0.0; LANES];
+            for l in 0..LANES {
+                inv[l] = 1.0 / a[k * n + k][l];
+            }
+            dinv[k] = inv;
+            for i in k + 1..n {
+                let mut f = a[i * n + k];
+                mul(&mut f, &inv);
+                a[i * n + k] = f;
+                if f.iter().any(|&v| v != 0.0) {
+                    for j in k + 1..n {
+                        let u = a[k * n + j];
+                        sub_mul(&mut a[i * n + j], &f, &u);
+                    }
+                }
+            }
+        }
+        let nonzero = |e: &Lane| e.iter().any(|&v| v != 0.0);
+        for i in 0..n {
+            self.lo[i] = (0..i).find(|&j| nonzero(&a[i * n + j])).unwrap_or(i);
+            self.hi[i] = (i + 1..n)
+                .rev()
+                .find(|&j| nonzero(&a[i * n + j]))
+                .map_or(i + 1, |j| j + 1);
+        }
+    }
+
+    /// Solve A x = b in place in every lane (after [`LaneLu::factor`]).
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    pub(crate) fn solve<D: Dim>(&self, d: D, b: &mut [Lane]) {
+        let n = d.n();
+        let (a, piv, dinv, b) = (
+            &self.a[..n * n],
+            &self.piv[..n],
+            &self.dinv[..n],
+            &mut b[..n],
+        );
+        let (lo, hi) = (&self.lo[..n], &self.hi[..n]);
+        for k in 0..n {
+            b.swap(k, piv[k]);
+        }
+        for i in 1..n {
+            let mut s = b[i];
+            for j in lo[i]..i {
+                sub_mul(&mut s, &a[i * n + j], &b[j]);
+            }
+            b[i] = s;
+        }
+        for i in (0..n).rev() {
+            let mut s = b[i];
+            for j in i + 1..hi[i] {
+                sub_mul(&mut s, &a[i * n + j], &b[j]);
+            }
+            mul(&mut s, &dinv[i]);
+            b[i] = s;
+        }
+    }
+
+    /// Solve A^T x = b in place in every lane (after [`LaneLu::factor`]).
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    pub(crate) fn solve_transpose<D: Dim>(&self, d: D, b: &mut [Lane]) {
+        let n = d.n();
+        let (a, piv, dinv, b) = (
+            &self.a[..n * n],
+            &self.piv[..n],
+            &self.dinv[..n],
+            &mut b[..n],
+        );
+        let (lo, hi) = (&self.lo[..n], &self.hi[..n]);
+        for i in 0..n {
+            let mut y = b[i];
+            mul(&mut y, &dinv[i]);
+            b[i] = y;
+            for j in i + 1..hi[i] {
+                sub_mul(&mut b[j], &a[i * n + j], &y);
+            }
+        }
+        for i in (1..n).rev() {
+            let z = b[i];
+            for j in lo[i]..i {
+                sub_mul(&mut b[j], &a[i * n + j], &z);
+            }
+        }
+        for k in (0..n).rev() {
+            b.swap(k, piv[k]);
+        }
+    }
+
+    /// The 1-norm condition estimate of every lane, as
+    /// [`Lu::condition`](super::linalg::Lu::condition) computes it (dlacn2,
+    /// each lane stopping on its own); lanes past [`COND_REFUSE`] are marked dead.
+    #[inline(always)]
+    pub(crate) fn condition<D: Dim>(&mut self, d: D, live: &mut Live) -> Lane {
+        let n = d.n();
+        let mut cond = [f64::INFINITY; LANES];
+        if n == 0 {
+            return [1.0; LANES];
+        }
+        let mut x = std::mem::take(&mut self.x);
+        let mut alt = std::mem::take(&mut self.alt);
+        let mut sign = std::mem::take(&mut self.signs);
+        let (xs, alts, signs) = (&mut x[..n], &mut alt[..n], &mut sign[..n]);
+        xs.iter_mut().for_each(|v| *v = [1.0 / n as f64; LANES]);
+        for (i, v) in alts.iter_mut().enumerate() {
+            let s = if i % 2 == 0 { 1.0 } else { -1.0 };
+            *v = [s * (1.0 + i as f64 / (n.max(2) - 1) as f64); LANES];
+        }
+        self.solve(d, xs);
+        self.solve(d, alts);
+        let alt_norm = norm1(alts);
+        let mut est = norm1(xs);
+        if n > 1 {
+            signs_of(xs, signs);
+            // Lanes still iterating.
+            let mut going = *live;
+            for _ in 0..4 {
+                if !going.iter().any(|&g| g) {
+                    break;
+                }
+                alts.copy_from_slice(signs);
+                self.solve_transpose(d, alts);
+                let j = argmax_abs(alts);
+                for (i, v) in xs.iter_mut().enumerate() {
+                    for l in 0..LANES {
+                        v[l] = if i == j[l] { 1.0 } else { 0.0 };
+                    }
+                }
+                self.solve(d, xs);
+                let now = norm1(xs);
+                for l in 0..LANES {
+                    if !going[l] {
+                        continue;
+                    }
+                    let previous = est[l];
+                    if now[l] <= previous || same_signs(xs, signs, l) {
+                        est[l] = now[l].max(previous);
+                        going[l] = false;
+                    } else {
+                        est[l] = now[l];
+                        for (s, v) in signs.iter_mut().zip(xs.iter()) {
+                            s[l] = if v[l] >= 0.0 { 1.0 } else { -1.0 };
+                        }
+                    }
+                }
+            }
+        }
+        for l in 0..LANES {
+            let alt_est = 2.0 * alt_norm[l] / (3.0 * n as f64);
+            let c = self.anorm[l] * est[l].max(alt_est);
+            cond[l] = if c.is_finite() { c } else { f64::INFINITY };
+            if cond[l] > COND_REFUSE {
+                live[l] = false;
+            }
+        }
+        self.x = x;
+        self.alt = alt;
+        self.signs = sign;
+        cond
+    }
+}
+
+#[inline(always)]
+fn norm1(v: &[Lane]) -> Lane {
+    let mut s = [0.0; LANES];
+    for x in v {
+        for l in 0..LANES {
+            s[l] += x[l].abs();
+        }
+    }
+    s
+}
+
+#[inline(always)]
+fn signs_of(v: &[Lane], out: &mut [Lane]) {
+    for (o, x) in out.iter_mut().zip(v) {
+        for l in 0..LANES {
+            o[l] = if x[l] >= 0.0 { 1.0 } else { -1.0 };
+        }
+    }
+}
+
+#[inline(always)]
+fn same_signs(v: &[Lane], signs: &[Lane], l: usize) -> bool {
+    v.iter()
+        .zip(signs)
+        .all(|(x, s)| (if x[l] >= 0.0 { 1.0 } else { -1.0 }) == s[l])
+}
+
+#[inline(always)]
+fn argmax_abs(v: &[Lane]) -> [usize; LANES] {
+    let mut j = [0; LANES];
+    let mut best = [-1.0; LANES];
+    for (i, x) in v.iter().enumerate() {
+        for l in 0..LANES {
+            if x[l].abs() > best[l] {
+                best[l] = x[l].abs();
+                j[l] = i;
+            }
+        }
+    }
+    j
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::numerics::linalg::Lu;
+
+    /// Lanes of random matrices, one of them singular: every live lane gives
+    /// the scalar LU's solutions and condition estimate, bit for bit.
+    #[test]
+    fn lanes_equal_the_scalar_lu_bit_for_bit() {
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for n in [1, 2, 3, 5, 9, 14] {
+            for _ in 0..20 {
+                // A common diagonally heavy part keeps most lanes on one pivot order.
+                let common: Vec<f64> = (0..n * n)
+                    .map(|k| next() + if k % (n + 1) == 0 { 3.0 } else { 0.0 })
+                    .collect();
+                let mut mats = vec![vec![0.0; n * n]; LANES];
+                for (l, m) in mats.iter_mut().enumerate() {
+                    for (k, v) in m.iter_mut().enumerate() {
+                        *v = common[k] + 0.3 * next();
+                    }
+                    if l == 3 {
+                        // A zero column: singular.
+                        for i in 0..n {
+                            m[i * n] = 0.0;
+                        }
+                    }
+                }
+                let mut lanes = LaneLu::new(n);
+                for (k, e) in lanes.matrix_mut().iter_mut().enumerate() {
+                    for l in 0..LANES {
+                        e[l] = mats[l][k];
+                    }
+                }
+                let mut live = [true; LANES];
+                let d = crate::numerics::linalg::Dynamic(n);
+                lanes.factor(d, &mut live);
+                let cond = lanes.condition(d, &mut live);
+                assert!(!live[3], "the singular lane is dead");
+                let rhs: Vec<f64> = (0..n).map(|_| next()).collect();
+                let mut b: Vec<Lane> = rhs.iter().map(|&v| [v; LANES]).collect();
+                let mut bt = b.clone();
+                lanes.solve(d, &mut b);
+                lanes.solve_transpose(d, &mut bt);
+                for l in (0..LANES).filter(|&l| live[l]) {
+                    let mut lu = Lu::new(n);
+                    lu.matrix_mut().copy_from_slice(&mats[l]);
+                    lu.factor().unwrap_or_else(|e| panic!("lane {l}: {e:?}"));
+                    let c = lu.condition();
+                    assert_eq!(c.to_bits(), cond[l].to_bits(), "condition, lane {l}");
+                    let (mut x, mut xt) = (rhs.clone(), rhs.clone());
+                    lu.solve(&mut x);
+                    lu.solve_transpose(&mut xt);
+                    for i in 0..n {
+                        assert_eq!(x[i].to_bits(), b[i][l].to_bits(), "solve n={n} lane {l}");
+                        assert_eq!(xt[i].to_bits(), bt[i][l].to_bits(), "transpose n={n}");
+                    }
+                }
+                assert!(live.iter().filter(|&&x| x).count() >= 1);
+            }
+        }
+    }
+}
