@@ -399,6 +399,16 @@ impl BatchPlan {
     pub fn output(&self, name: &str) -> Option<usize> {
         self.outputs.iter().position(|p| p == name)
     }
+    /// The output columns of the condition estimates (`cond.*`), the last ones.
+    pub fn condition_columns(&self) -> std::ops::Range<usize> {
+        let q = self.outputs.len();
+        let k = if self.compute == Compute::Kinematics {
+            1
+        } else {
+            3
+        };
+        q - k..q
+    }
     /// What each row computes.
     pub fn compute(&self) -> Compute {
         self.compute
@@ -742,11 +752,7 @@ impl Worker<'_> {
         if !same && !self.linear_response(lin, row0) {
             return false;
         }
-        let conds = q - if plan.compute == Compute::Kinematics {
-            1
-        } else {
-            3
-        };
+        let conds = plan.condition_columns().start;
         let m = lin.varying.len();
         for (r, (row, o)) in rows.chunks(p).zip(out.chunks_mut(q)).enumerate() {
             // Every other column equals the base row's, which solved: only
@@ -816,11 +822,7 @@ impl Worker<'_> {
         }
         // The conditions are not linear: eq. (8) is factored only when some
         // acceleration is prescribed. Keep those of a moving row apart.
-        let conds = q - if plan.compute == Compute::Kinematics {
-            1
-        } else {
-            3
-        };
+        let conds = plan.condition_columns().start;
         let accel = g.accel..g.torque;
         lin.static_base = accel.clone().all(|c| lin.row[c] == 0.0);
         lin.accel_varying.clear();

@@ -46,6 +46,11 @@ pub enum BatchOutput {
     Jsonl,
     /// Comma-separated values with a header.
     Csv,
+    /// Apache Parquet (binary; redirect to a file): the CSV's columns, typed,
+    /// empty cells as nulls, one row group per block of 65 536 scenarios.
+    Parquet,
+    /// Apache Arrow IPC file (binary; redirect to a file), columns as for Parquet.
+    Arrow,
 }
 
 /// Arguments of `egt batch`.
@@ -169,6 +174,19 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         ComputeArg::Power => Compute::Power,
     };
     let (total, failed, first) = match &args.specs {
+        Some(_) if matches!(args.output, BatchOutput::Parquet | BatchOutput::Arrow) => {
+            return Err(Error::spec(
+                "--output",
+                SpecErrorKind::Invalid {
+                    message: "Parquet and Arrow output need one set of columns: use them with a \
+                              SPEC and --vary/--grid/--rows/--state, not with --specs \
+                              (whose trains differ row by row); --output csv writes --specs in \
+                              long form"
+                        .into(),
+                },
+            )
+            .into());
+        }
         Some(path) => run_specs(args, path, compute, out)?,
         None => run_one_spec(args, compute, out)?,
     };
@@ -476,7 +494,16 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
     }
     // A varied speed or acceleration is also an output column (the same value): write it once.
     design.varied.retain(|(name, _)| !header.contains(name));
-    if !json {
+    let mut columnar = match args.output {
+        BatchOutput::Parquet | BatchOutput::Arrow => Some(Columnar::new(
+            args.output,
+            plans[0].0.is_some(),
+            &design.varied,
+            &header,
+        )?),
+        BatchOutput::Jsonl | BatchOutput::Csv => None,
+    };
+    if !json && columnar.is_none() {
         let mut h = String::from("row");
         if plans[0].0.is_some() {
             h.push_str(",state");
@@ -525,41 +552,35 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
                 messages[r] = Some(e);
             }
             let base_row = k * per_plan + start;
-            let text: Vec<String> = results
-                .par_chunks(nq * FORMAT_TASK)
-                .zip(params.par_chunks(np * FORMAT_TASK))
-                .zip(messages.par_chunks(FORMAT_TASK))
-                .enumerate()
-                .map(|(t, ((res, par), msgs))| {
-                    let mut buf = String::with_capacity(res.len() * 24);
-                    for (r, ((o, p), m)) in res.chunks(nq).zip(par.chunks(np)).zip(msgs).enumerate()
-                    {
-                        let row = base_row + t * FORMAT_TASK + r;
-                        let fmt = Row {
-                            row,
-                            state: state.as_deref(),
-                            varied: &design.varied,
-                            keys: &keys,
-                            params: p,
-                        };
-                        if json {
-                            fmt.json(&mut buf, &okeys, sel, plan, o, m.as_deref());
-                        } else {
-                            fmt.csv(
-                                &mut buf,
-                                header.len(),
-                                (&cols.positions, sel),
-                                plan,
-                                o,
-                                m.as_deref(),
-                            );
-                        }
-                    }
-                    buf
-                })
-                .collect();
-            for t in &text {
-                out.write_all(t.as_bytes())?;
+            if let Some(c) = columnar.as_mut() {
+                let block = Block {
+                    first_row: base_row,
+                    state: state.as_deref(),
+                    varied: &design.varied,
+                    params: (&params, np),
+                    results: (&results, nq),
+                    positions: (&cols.positions, sel),
+                    messages: &messages,
+                };
+                c.write(plan, &block, out)?;
+            } else {
+                write_text(
+                    TextBlock {
+                        json,
+                        base_row,
+                        state: state.as_deref(),
+                        design: &design,
+                        keys: &keys,
+                        okeys: &okeys,
+                        header_len: header.len(),
+                        positions: (&cols.positions, sel),
+                    },
+                    plan,
+                    (&params, np),
+                    (&results, nq),
+                    &messages,
+                    out,
+                )?;
             }
             for (r, m) in messages.iter().enumerate() {
                 if let Some(m) = m {
@@ -574,7 +595,222 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
         }
     }
     bar.finish_and_clear();
+    if let Some(c) = columnar {
+        c.finish(out)?;
+    }
     Ok((total, failed, first_error))
+}
+
+/// What the text writers of one block share.
+struct TextBlock<'a> {
+    json: bool,
+    base_row: usize,
+    state: Option<&'a str>,
+    design: &'a Design,
+    keys: &'a [String],
+    okeys: &'a [String],
+    header_len: usize,
+    /// The plan's CSV positions and its selected outputs.
+    positions: (&'a [usize], &'a [usize]),
+}
+
+/// A block as JSON Lines or CSV, formatted in parallel tasks, written in order.
+fn write_text(
+    t: TextBlock<'_>,
+    plan: &BatchPlan,
+    (params, np): (&[f64], usize),
+    (results, nq): (&[f64], usize),
+    messages: &[Option<String>],
+    out: &mut dyn Write,
+) -> anyhow::Result<()> {
+    let sel = t.positions.1;
+    let text: Vec<String> = results
+        .par_chunks(nq * FORMAT_TASK)
+        .zip(params.par_chunks(np * FORMAT_TASK))
+        .zip(messages.par_chunks(FORMAT_TASK))
+        .enumerate()
+        .map(|(k, ((res, par), msgs))| {
+            let mut buf = String::with_capacity(res.len() * 24);
+            for (r, ((o, p), m)) in res.chunks(nq).zip(par.chunks(np)).zip(msgs).enumerate() {
+                let fmt = Row {
+                    row: t.base_row + k * FORMAT_TASK + r,
+                    state: t.state,
+                    varied: &t.design.varied,
+                    keys: t.keys,
+                    params: p,
+                };
+                if t.json {
+                    fmt.json(&mut buf, t.okeys, sel, plan, o, m.as_deref());
+                } else {
+                    fmt.csv(&mut buf, t.header_len, t.positions, plan, o, m.as_deref());
+                }
+            }
+            buf
+        })
+        .collect();
+    for b in &text {
+        out.write_all(b.as_bytes())?;
+    }
+    Ok(())
+}
+
+/// One block of solved rows, for the columnar writers.
+struct Block<'a> {
+    first_row: usize,
+    state: Option<&'a str>,
+    varied: &'a [(String, usize)],
+    /// Row-major parameters and their column count.
+    params: (&'a [f64], usize),
+    /// Row-major results and their column count.
+    results: (&'a [f64], usize),
+    /// The plan's positions among the output columns, and its selected outputs.
+    positions: (&'a [usize], &'a [usize]),
+    messages: &'a [Option<String>],
+}
+
+/// The columnar sinks: each writes into a buffer that is drained to the
+/// output after every block, so memory stays one block whatever the batch.
+enum Sink {
+    Parquet(Box<parquet::arrow::ArrowWriter<Vec<u8>>>),
+    Arrow(Box<arrow_ipc::writer::FileWriter<Vec<u8>>>),
+}
+
+/// Parquet or Arrow IPC output: the CSV's columns, typed (row as an
+/// unsigned integer, numbers as doubles, texts as strings), with nulls where
+/// the CSV leaves a cell empty; one record batch (Parquet row group) per block.
+struct Columnar {
+    schema: arrow_schema::SchemaRef,
+    /// Output columns (after row, state and the varied parameters).
+    outputs: usize,
+    sink: Option<Sink>,
+}
+
+impl Columnar {
+    fn new(
+        kind: BatchOutput,
+        states: bool,
+        varied: &[(String, usize)],
+        header: &[String],
+    ) -> anyhow::Result<Self> {
+        use arrow_schema::{DataType, Field, Schema};
+        let mut fields = vec![Field::new("row", DataType::UInt64, false)];
+        if states {
+            fields.push(Field::new("state", DataType::Utf8, false));
+        }
+        for (name, _) in varied {
+            fields.push(Field::new(name, DataType::Float64, true));
+        }
+        for name in header {
+            fields.push(Field::new(name, DataType::Float64, true));
+        }
+        fields.push(Field::new("warning", DataType::Utf8, true));
+        fields.push(Field::new("error", DataType::Utf8, true));
+        let schema = std::sync::Arc::new(Schema::new(fields));
+        let sink = if kind == BatchOutput::Parquet {
+            // Doubles from a solve rarely repeat: no dictionary pages.
+            let props = parquet::file::properties::WriterProperties::builder()
+                .set_compression(parquet::basic::Compression::SNAPPY)
+                .set_dictionary_enabled(false)
+                .build();
+            Sink::Parquet(Box::new(parquet::arrow::ArrowWriter::try_new(
+                Vec::new(),
+                schema.clone(),
+                Some(props),
+            )?))
+        } else {
+            Sink::Arrow(Box::new(arrow_ipc::writer::FileWriter::try_new(
+                Vec::new(),
+                &schema,
+            )?))
+        };
+        Ok(Columnar {
+            schema,
+            outputs: header.len(),
+            sink: Some(sink),
+        })
+    }
+
+    /// Write a block and pass the bytes written so far on to `out`.
+    fn write(
+        &mut self,
+        plan: &BatchPlan,
+        b: &Block<'_>,
+        out: &mut dyn Write,
+    ) -> anyhow::Result<()> {
+        use arrow_array::{ArrayRef, Float64Array, RecordBatch, StringArray, UInt64Array};
+        use std::sync::Arc;
+        let ((params, np), (results, nq)) = (b.params, b.results);
+        let len = b.messages.len();
+        let mut columns: Vec<ArrayRef> = Vec::with_capacity(self.schema.fields().len());
+        columns.push(Arc::new(UInt64Array::from_iter_values(
+            (b.first_row..b.first_row + len).map(|r| r as u64),
+        )));
+        if let Some(s) = b.state {
+            columns.push(Arc::new(StringArray::from_iter_values(
+                std::iter::repeat_n(s, len),
+            )));
+        }
+        let finite = |v: f64| v.is_finite().then_some(v);
+        for &(_, c) in b.varied {
+            columns.push(Arc::new(Float64Array::from_iter(
+                (0..len).map(|r| finite(params[r * np + c])),
+            )));
+        }
+        // Which of this plan's outputs fills each output column, if any.
+        let mut source = vec![None; self.outputs];
+        for (&pos, &i) in b.positions.0.iter().zip(b.positions.1) {
+            source[pos] = Some(i);
+        }
+        for src in source {
+            columns.push(Arc::new(Float64Array::from_iter((0..len).map(|r| {
+                let i = src?;
+                if b.messages[r].is_some() {
+                    return None;
+                }
+                finite(results[r * nq + i])
+            }))));
+        }
+        columns.push(Arc::new(StringArray::from_iter((0..len).map(|r| {
+            if b.messages[r].is_some() {
+                None
+            } else {
+                warning(plan, &results[r * nq..(r + 1) * nq])
+            }
+        }))));
+        columns.push(Arc::new(StringArray::from_iter(
+            b.messages.iter().map(|m| m.as_deref()),
+        )));
+        let batch = RecordBatch::try_new(self.schema.clone(), columns)?;
+        let bytes = match self.sink.as_mut() {
+            Some(Sink::Parquet(w)) => {
+                w.write(&batch)?;
+                w.flush()?;
+                w.inner_mut()
+            }
+            Some(Sink::Arrow(w)) => {
+                w.write(&batch)?;
+                w.get_mut()
+            }
+            None => anyhow::bail!("the columnar output was already finished"),
+        };
+        out.write_all(bytes)?;
+        bytes.clear();
+        Ok(())
+    }
+
+    /// Write the footer.
+    fn finish(mut self, out: &mut dyn Write) -> anyhow::Result<()> {
+        let bytes = match self.sink.take() {
+            Some(Sink::Parquet(w)) => w.into_inner()?,
+            Some(Sink::Arrow(mut w)) => {
+                w.finish()?;
+                w.into_inner()?
+            }
+            None => Vec::new(),
+        };
+        out.write_all(&bytes)?;
+        Ok(())
+    }
 }
 
 /// The output columns to write: those named (that the plan has), or all.
@@ -597,13 +833,9 @@ struct Row<'a> {
 
 /// The warning of a row whose condition estimate exceeds COND_WARN.
 fn warning(plan: &BatchPlan, o: &[f64]) -> Option<String> {
-    let worst = plan
-        .outputs()
+    let worst = o[plan.condition_columns()]
         .iter()
-        .zip(o)
-        .filter(|(n, _)| n.starts_with("cond."))
-        .map(|(_, v)| *v)
-        .fold(0.0, f64::max);
+        .fold(0.0, |a: f64, &b| a.max(b));
     (worst > COND_WARN).then(|| {
         format!(
             "ill-conditioned (condition {worst:.2e}): expect about {:.0} correct digits",
@@ -978,5 +1210,156 @@ mod tests {
             let eta: f64 = f[3].parse().unwrap_or(f64::NAN);
             assert!(eta > 0.9 && eta <= 1.0, "{l}");
         }
+    }
+}
+
+#[cfg(test)]
+mod columnar_tests {
+    use arrow_array::{Array, Float64Array, RecordBatch, StringArray, UInt64Array};
+    use clap::Parser;
+
+    use crate::cli::{Cli, Command};
+
+    fn example(name: &str) -> String {
+        format!("{}/../../examples/{name}", env!("CARGO_MANIFEST_DIR"))
+    }
+
+    /// Run `egt batch ARGS...`; the bytes written and the outcome.
+    fn batch(args: &[&str]) -> (Vec<u8>, anyhow::Result<()>) {
+        let cli = Cli::try_parse_from(["egt", "batch"].iter().chain(args))
+            .unwrap_or_else(|e| panic!("{e}"));
+        let Command::Batch(a) = cli.command else {
+            panic!("not a batch command")
+        };
+        let mut out = Vec::new();
+        let r = super::run(&a, &mut out);
+        (out, r)
+    }
+
+    /// The cells of a CSV line (quoted fields with doubled quotes).
+    fn cells(line: &str) -> Vec<String> {
+        let (mut out, mut cur, mut quoted) = (Vec::new(), String::new(), false);
+        let mut chars = line.chars().peekable();
+        while let Some(c) = chars.next() {
+            match c {
+                '"' if quoted && chars.peek() == Some(&'"') => {
+                    cur.push('"');
+                    chars.next();
+                }
+                '"' => quoted = !quoted,
+                ',' if !quoted => out.push(std::mem::take(&mut cur)),
+                c => cur.push(c),
+            }
+        }
+        out.push(cur);
+        out
+    }
+
+    /// Every cell of `batches` against the CSV of the same batch: numbers
+    /// bit for bit (the CSV's shortest round-trip decimals), empty cells as
+    /// nulls, texts equal.
+    fn assert_same_as_csv(batches: &[RecordBatch], csv: &str) {
+        let mut lines = csv.lines();
+        let header = cells(lines.next().unwrap_or_default());
+        let schema = batches[0].schema();
+        let names: Vec<&str> = schema.fields().iter().map(|f| f.name().as_str()).collect();
+        assert_eq!(names, header);
+        let rows: Vec<Vec<String>> = lines.map(cells).collect();
+        let mut r = 0;
+        for b in batches {
+            for i in 0..b.num_rows() {
+                let row = &rows[r];
+                for (c, col) in b.columns().iter().enumerate() {
+                    let cell = &row[c];
+                    let what = format!("row {r} column {}", header[c]);
+                    if let Some(a) = col.as_any().downcast_ref::<Float64Array>() {
+                        if cell.is_empty() {
+                            assert!(a.is_null(i), "{what}: {} for an empty cell", a.value(i));
+                        } else {
+                            let v: f64 = cell.parse().unwrap_or_else(|e| panic!("{what}: {e}"));
+                            assert!(a.is_valid(i), "{what}: null for {cell}");
+                            assert_eq!(a.value(i).to_bits(), v.to_bits(), "{what}");
+                        }
+                    } else if let Some(a) = col.as_any().downcast_ref::<StringArray>() {
+                        let got = if a.is_null(i) { "" } else { a.value(i) };
+                        assert_eq!(got, cell, "{what}");
+                    } else if let Some(a) = col.as_any().downcast_ref::<UInt64Array>() {
+                        assert_eq!(a.value(i).to_string(), *cell, "{what}");
+                    } else {
+                        panic!("{what}: unexpected type {:?}", col.data_type());
+                    }
+                }
+                r += 1;
+            }
+        }
+        assert_eq!(r, rows.len(), "every CSV row is in the columnar file");
+    }
+
+    fn parquet_batches(bytes: Vec<u8>) -> Vec<RecordBatch> {
+        let dir = std::env::temp_dir().join(format!("egt-columnar-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
+        let path = dir.join(format!("{}.parquet", bytes.len()));
+        std::fs::write(&path, bytes).unwrap_or_else(|e| panic!("{e}"));
+        let file = std::fs::File::open(&path).unwrap_or_else(|e| panic!("{e}"));
+        parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder::try_new(file)
+            .and_then(|b| b.build())
+            .unwrap_or_else(|e| panic!("{e}"))
+            .collect::<Result<Vec<_>, _>>()
+            .unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    fn arrow_batches(bytes: Vec<u8>) -> Vec<RecordBatch> {
+        arrow_ipc::reader::FileReader::try_new(std::io::Cursor::new(bytes), None)
+            .unwrap_or_else(|e| panic!("{e}"))
+            .collect::<Result<Vec<_>, _>>()
+            .unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// Parquet and Arrow files hold the CSV's cells: a shift table (states,
+    /// a varied torque) and rows with bad values (errors, empty outputs).
+    #[test]
+    fn parquet_and_arrow_hold_the_csv_cells() {
+        let zf = example("zf_8hp70.toml");
+        let fig3 = example("fig3_example61.toml");
+        let dir = std::env::temp_dir().join(format!("egt-columnar-rows-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
+        let rows = dir.join("rows.jsonl");
+        std::fs::write(
+            &rows,
+            "{\"torque.4\": -10}\nnot json\n{\"ratio.G1\": 0}\n{\"torque.4\": -20, \"accel.4\": 0}\n",
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let rows = rows.display().to_string();
+        let shift = [
+            zf.as_str(),
+            "--state",
+            "all",
+            "--set",
+            "speed.input=200",
+            "--grid",
+            "torque.input=0:400:5",
+        ];
+        let bad = [fig3.as_str(), "--rows", rows.as_str()];
+        for (args, ok) in [(&shift[..], true), (&bad[..], false)] {
+            let with = |fmt: &str| {
+                let mut a = args.to_vec();
+                a.extend(["--output", fmt]);
+                let (bytes, r) = batch(&a);
+                assert_eq!(r.is_ok(), ok, "{fmt}");
+                bytes
+            };
+            let csv = String::from_utf8(with("csv")).unwrap_or_else(|e| panic!("{e}"));
+            let p = parquet_batches(with("parquet"));
+            assert_same_as_csv(&p, &csv);
+            let a = arrow_batches(with("arrow"));
+            assert_same_as_csv(&a, &csv);
+        }
+    }
+
+    #[test]
+    fn columnar_output_of_whole_spec_lines_is_refused_naming_the_flag() {
+        let (_, r) = batch(&["--specs", "-", "--output", "parquet"]);
+        let e = format!("{:#}", r.err().unwrap_or_else(|| panic!("accepted")));
+        assert!(e.contains("--output") && e.contains("--specs"), "{e}");
     }
 }
