@@ -1038,8 +1038,8 @@ mod tests {
         "/../../examples/fig3_example61.toml"
     );
 
-    /// Run `egt batch ARGS...`; the text written and the outcome.
-    fn batch(args: &[&str]) -> (String, anyhow::Result<()>) {
+    /// Run `egt batch ARGS...`; the bytes written and the outcome.
+    pub(super) fn batch_bytes(args: &[&str]) -> (Vec<u8>, anyhow::Result<()>) {
         let cli = Cli::try_parse_from(["egt", "batch"].iter().chain(args))
             .unwrap_or_else(|e| panic!("{e}"));
         let Command::Batch(a) = cli.command else {
@@ -1047,6 +1047,12 @@ mod tests {
         };
         let mut out = Vec::new();
         let r = super::run(&a, &mut out);
+        (out, r)
+    }
+
+    /// Run `egt batch ARGS...`; the text written and the outcome.
+    fn batch(args: &[&str]) -> (String, anyhow::Result<()>) {
+        let (out, r) = batch_bytes(args);
         (String::from_utf8(out).unwrap_or_default(), r)
     }
 
@@ -1216,24 +1222,11 @@ mod tests {
 #[cfg(test)]
 mod columnar_tests {
     use arrow_array::{Array, Float64Array, RecordBatch, StringArray, UInt64Array};
-    use clap::Parser;
 
-    use crate::cli::{Cli, Command};
+    use super::tests::batch_bytes as batch;
 
     fn example(name: &str) -> String {
         format!("{}/../../examples/{name}", env!("CARGO_MANIFEST_DIR"))
-    }
-
-    /// Run `egt batch ARGS...`; the bytes written and the outcome.
-    fn batch(args: &[&str]) -> (Vec<u8>, anyhow::Result<()>) {
-        let cli = Cli::try_parse_from(["egt", "batch"].iter().chain(args))
-            .unwrap_or_else(|e| panic!("{e}"));
-        let Command::Batch(a) = cli.command else {
-            panic!("not a batch command")
-        };
-        let mut out = Vec::new();
-        let r = super::run(&a, &mut out);
-        (out, r)
     }
 
     /// The cells of a CSV line (quoted fields with doubled quotes).

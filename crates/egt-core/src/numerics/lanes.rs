@@ -61,6 +61,15 @@ pub struct LaneLu {
     signs: Vec<Lane>,
 }
 
+/// Borrowed factors of a [`LaneLu`] for the substitutions.
+struct Factors<'a> {
+    a: &'a [Lane],
+    piv: &'a [usize],
+    dinv: &'a [Lane],
+    lo: &'a [usize],
+    hi: &'a [usize],
+}
+
 impl LaneLu {
     /// Buffers for `n x n` systems.
     pub fn new(n: usize) -> Self {
@@ -163,18 +172,31 @@ impl LaneLu {
         }
     }
 
+    /// The factors, cut to order `n` (the bounds checks then fold away).
+    #[inline(always)]
+    fn factors(&self, n: usize) -> Factors<'_> {
+        Factors {
+            a: &self.a[..n * n],
+            piv: &self.piv[..n],
+            dinv: &self.dinv[..n],
+            lo: &self.lo[..n],
+            hi: &self.hi[..n],
+        }
+    }
+
     /// Solve A x = b in place in every lane (after [`LaneLu::factor`]).
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
     pub(crate) fn solve<D: Dim>(&self, d: D, b: &mut [Lane]) {
         let n = d.n();
-        let (a, piv, dinv, b) = (
-            &self.a[..n * n],
-            &self.piv[..n],
-            &self.dinv[..n],
-            &mut b[..n],
-        );
-        let (lo, hi) = (&self.lo[..n], &self.hi[..n]);
+        let Factors {
+            a,
+            piv,
+            dinv,
+            lo,
+            hi,
+        } = self.factors(n);
+        let b = &mut b[..n];
         for k in 0..n {
             b.swap(k, piv[k]);
         }
@@ -200,13 +222,14 @@ impl LaneLu {
     #[inline(always)]
     pub(crate) fn solve_transpose<D: Dim>(&self, d: D, b: &mut [Lane]) {
         let n = d.n();
-        let (a, piv, dinv, b) = (
-            &self.a[..n * n],
-            &self.piv[..n],
-            &self.dinv[..n],
-            &mut b[..n],
-        );
-        let (lo, hi) = (&self.lo[..n], &self.hi[..n]);
+        let Factors {
+            a,
+            piv,
+            dinv,
+            lo,
+            hi,
+        } = self.factors(n);
+        let b = &mut b[..n];
         for i in 0..n {
             let mut y = b[i];
             mul(&mut y, &dinv[i]);
