@@ -450,12 +450,8 @@ impl BatchPlan {
     }
 
     fn lanes(&self) -> Lanes {
-        let n = self.prepared.n();
         Lanes {
             w: self.prepared.lane_workspace(),
-            speed: vec![0.0; n],
-            accel: vec![0.0; n],
-            x: vec![0.0; n],
         }
     }
 
@@ -542,14 +538,10 @@ struct Linear {
     valid: bool,
 }
 
-/// Buffers of the lanes path: the group's structure of arrays and one lane's
-/// results, gathered for the output writer.
+/// Buffers of the lanes path: the group's structure of arrays.
 #[derive(Debug)]
 struct Lanes {
     w: LaneWorkspace,
-    speed: Vec<f64>,
-    accel: Vec<f64>,
-    x: Vec<f64>,
 }
 
 /// Evaluates rows one at a time with buffers of its own.
@@ -596,20 +588,7 @@ impl Worker<'_> {
         };
         let pt = &plan.prepared;
         pt.solve(&mut self.ws, &s, plan.compute)?;
-        let ws = &self.ws;
-        let power = (plan.compute == Compute::Power).then(|| ws.power());
-        write_outputs(
-            plan,
-            Solution {
-                speeds: ws.speeds(),
-                accelerations: ws.accelerations(),
-                multipliers: ws.multipliers(pt),
-                driving: ws.driving_torques(pt),
-                cond: ws.conditions(),
-                power,
-            },
-            out,
-        );
+        write_outputs(plan, &(&self.ws, plan), out);
         Ok(())
     }
 
@@ -667,28 +646,7 @@ impl Worker<'_> {
             for (l, (row, o)) in group.chunks(p).zip(gout.chunks_mut(q)).enumerate() {
                 if live[l] {
                     solved += 1;
-                    let lane = |v: &[Lane], buf: &mut [f64]| {
-                        for (b, x) in buf.iter_mut().zip(v) {
-                            *b = x[l];
-                        }
-                    };
-                    lane(&lw.speed, &mut lanes.speed);
-                    lane(&lw.accel, &mut lanes.accel);
-                    lane(&lw.x, &mut lanes.x);
-                    let c = pt.constraints().min(lanes.x.len());
-                    let (mult, driving) = lanes.x.split_at(c);
-                    write_outputs(
-                        plan,
-                        Solution {
-                            speeds: &lanes.speed,
-                            accelerations: &lanes.accel,
-                            multipliers: mult,
-                            driving,
-                            cond: [lw.cond[0][l], lw.cond[1][l], lw.cond[2][l]],
-                            power: None,
-                        },
-                        o,
-                    );
+                    write_outputs(plan, &(&*lw, l), o);
                 } else if let Err(error) = self.eval(row, o) {
                     errors.push(RowError {
                         row: first + k * LANES + l,
@@ -849,41 +807,82 @@ impl Worker<'_> {
     }
 }
 
-/// One row's results, wherever they were solved.
-struct Solution<'a> {
-    speeds: &'a [f64],
-    accelerations: &'a [f64],
-    multipliers: &'a [f64],
-    driving: &'a [f64],
-    cond: [f64; 3],
-    power: Option<crate::solve::prepared::PowerSummary>,
+/// One row's results, wherever they were solved: a worker's slices, or one
+/// lane of a group (read in place, no copy).
+trait Solution {
+    fn speed(&self, k: usize) -> f64;
+    fn accel(&self, k: usize) -> f64;
+    /// Multipliers, then driving torques.
+    fn x(&self, k: usize) -> f64;
+    fn cond(&self) -> [f64; 3];
+    fn power(&self) -> Option<crate::solve::prepared::PowerSummary>;
+}
+
+impl Solution for (&Workspace, &BatchPlan) {
+    fn speed(&self, k: usize) -> f64 {
+        self.0.speeds()[k]
+    }
+    fn accel(&self, k: usize) -> f64 {
+        self.0.accelerations()[k]
+    }
+    fn x(&self, k: usize) -> f64 {
+        let pt = &self.1.prepared;
+        let m = self.0.multipliers(pt);
+        m.get(k)
+            .copied()
+            .unwrap_or_else(|| self.0.driving_torques(pt)[k - m.len()])
+    }
+    fn cond(&self) -> [f64; 3] {
+        self.0.conditions()
+    }
+    fn power(&self) -> Option<crate::solve::prepared::PowerSummary> {
+        (self.1.compute == Compute::Power).then(|| self.0.power())
+    }
+}
+
+/// Lane `.1` of a group.
+impl Solution for (&LaneWorkspace, usize) {
+    fn speed(&self, k: usize) -> f64 {
+        self.0.speed[k][self.1]
+    }
+    fn accel(&self, k: usize) -> f64 {
+        self.0.accel[k][self.1]
+    }
+    fn x(&self, k: usize) -> f64 {
+        self.0.x[k][self.1]
+    }
+    fn cond(&self) -> [f64; 3] {
+        self.0.cond.map(|c| c[self.1])
+    }
+    fn power(&self) -> Option<crate::solve::prepared::PowerSummary> {
+        None
+    }
 }
 
 /// Write a row's output columns, in the order of [`BatchPlan::outputs`].
-fn write_outputs(plan: &BatchPlan, s: Solution<'_>, out: &mut [f64]) {
+#[inline]
+fn write_outputs(plan: &BatchPlan, s: &impl Solution, out: &mut [f64]) {
     let mut o = 0;
     let mut put = |v: f64| {
         out[o] = v;
         o += 1;
     };
     for &k in &plan.known {
-        put(s.speeds[k]);
+        put(s.speed(k));
     }
     if plan.compute != Compute::Kinematics {
         for &k in &plan.known {
-            put(s.accelerations[k]);
+            put(s.accel(k));
         }
-        for &v in s.multipliers {
-            put(v);
-        }
-        for &v in s.driving {
-            put(v);
+        let pt = &plan.prepared;
+        for k in 0..pt.constraints() + pt.dof() {
+            put(s.x(k));
         }
         for &(m, r) in &plan.forces {
-            put(s.multipliers[m] / r);
+            put(s.x(m) / r);
         }
     }
-    if let Some(p) = s.power {
+    if let Some(p) = s.power() {
         put(p.input);
         put(p.output);
         put(p.loss);
@@ -894,16 +893,28 @@ fn write_outputs(plan: &BatchPlan, s: Solution<'_>, out: &mut [f64]) {
             f64::NAN
         });
     }
-    put(s.cond[0]);
+    let cond = s.cond();
+    put(cond[0]);
     if plan.compute != Compute::Kinematics {
-        put(s.cond[1]);
-        put(s.cond[2]);
+        put(cond[1]);
+        put(cond[2]);
     }
 }
 
 /// Every parameter finite; inertias and masses non-negative; efficiencies in (0, 1].
 fn check(plan: &BatchPlan, row: &[f64]) -> Result<()> {
     let g = plan.groups;
+    // One pass per group of columns; the column-by-column search below only
+    // runs to name the bad one.
+    let good = row[..g.speed].iter().all(|v| v.is_finite() && *v != 0.0)
+        && row[g.speed..g.inertia].iter().all(|v| v.is_finite())
+        && row[g.inertia..g.efficiency]
+            .iter()
+            .all(|v| v.is_finite() && *v >= 0.0)
+        && row[g.efficiency..].iter().all(|v| *v > 0.0 && *v <= 1.0);
+    if good {
+        return Ok(());
+    }
     for (c, &v) in row.iter().enumerate() {
         let bad = !v.is_finite()
             || (c >= g.inertia && c < g.efficiency && v < 0.0)
