@@ -122,6 +122,54 @@ fn main() {
                            "multipliers": errors.multipliers, "torques": errors.torques},
             }));
         }
+        // egt's batch path: 10 000 rows through `BatchPlan::run` on one
+        // thread, the same two rows alternating (every row factors; groups
+        // of eight go through the SIMD lanes). Its rows are the worker's
+        // numbers bit for bit (checked here), so its error is egt LU's.
+        {
+            const ROWS: usize = 10_000;
+            let plan = p.plan();
+            let a = plan.base().to_vec();
+            let mut b = a.clone();
+            b[0] = f64::from_bits(b[0].to_bits() + 1);
+            let rows: Vec<f64> = (0..ROWS)
+                .flat_map(|r| if r % 2 == 0 { a.clone() } else { b.clone() })
+                .collect();
+            let q = plan.outputs().len();
+            let mut out = vec![0.0; ROWS * q];
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .build()
+                .unwrap_or_else(|e| panic!("{e}"));
+            let seconds = time(0.2, || {
+                pool.install(|| black_box(plan.run(black_box(&rows), &mut out)));
+            }) / ROWS as f64;
+            let mut one = vec![0.0; q];
+            for (r, row) in [&a, &b].into_iter().enumerate() {
+                plan.worker()
+                    .eval(row, &mut one)
+                    .unwrap_or_else(|e| panic!("{e}"));
+                let same = one
+                    .iter()
+                    .zip(&out[r * q..(r + 1) * q])
+                    .all(|(x, y)| x.to_bits() == y.to_bits());
+                assert!(
+                    same,
+                    "{links} links: the batch row {r} differs from the worker's"
+                );
+            }
+            let egt = &methods[0];
+            assert_eq!(egt["method"], Method::Egt.name());
+            eprintln!(
+                "{links:>2} links  {:<22} {:>10.3} us",
+                "egt batch",
+                seconds * 1e6
+            );
+            methods.push(json!({
+                "method": "egt batch", "seconds": seconds, "error": egt["error"],
+                "errors": egt["errors"],
+            }));
+        }
         // The floor: one LU (2n^3/3), two solves for speeds and accelerations,
         // [M]{w'} and the transposed solve (2n^2 each).
         let nf = n as f64;
