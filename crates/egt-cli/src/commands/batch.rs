@@ -494,16 +494,14 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
     }
     // A varied speed or acceleration is also an output column (the same value): write it once.
     design.varied.retain(|(name, _)| !header.contains(name));
-    let mut columnar = match args.output {
-        BatchOutput::Parquet | BatchOutput::Arrow => Some(Columnar::new(
-            args.output,
-            plans[0].0.is_some(),
-            &design.varied,
-            &header,
-        )?),
-        BatchOutput::Jsonl | BatchOutput::Csv => None,
+    let (encoder, mut sink) = match args.output {
+        BatchOutput::Parquet | BatchOutput::Arrow => {
+            let (e, s) = columnar(args.output, plans[0].0.is_some(), &design.varied, &header)?;
+            (Some(e), Some(s))
+        }
+        BatchOutput::Jsonl | BatchOutput::Csv => (None, None),
     };
-    if !json && columnar.is_none() {
+    if !json && encoder.is_none() {
         let mut h = String::from("row");
         if plans[0].0.is_some() {
             h.push_str(",state");
@@ -522,81 +520,129 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
     let bar = progress(total);
     let (mut failed, mut first_error) = (0, None);
     let keys: Vec<String> = design.varied.iter().map(|v| quoted(&v.0)).collect();
-    for (k, (((state, plan), cols), sel)) in plans.iter().zip(&columns).zip(&selected).enumerate() {
-        let okeys: Vec<String> = plan.outputs().iter().map(|o| quoted(o)).collect();
+    let okeys: Vec<Vec<String>> = plans
+        .iter()
+        .map(|(_, p)| p.outputs().iter().map(|o| quoted(o)).collect())
+        .collect();
+    let blocks = per_plan.div_ceil(BLOCK);
+    // Block `i` of the whole batch: plan `i / blocks`, its block `i % blocks`.
+    let solve = |(buffers, i): (&mut Buffers, usize)| -> anyhow::Result<Done> {
+        let (k, b) = (i / blocks, i % blocks);
+        let ((state, plan), (cols, sel)) = (&plans[k], (&columns[k], &selected[k]));
+        let okeys = &okeys[k];
+        let start = b * BLOCK;
+        let len = BLOCK.min(per_plan - start);
         let (np, nq) = (plan.parameters().len(), plan.outputs().len());
-        let mut start = 0;
-        while start < per_plan {
-            let len = BLOCK.min(per_plan - start);
-            let mut params = Vec::with_capacity(len * np);
-            for _ in 0..len {
-                params.extend_from_slice(&base);
-            }
-            let unreadable: Vec<(usize, String)> = params
-                .par_chunks_mut(np)
-                .enumerate()
-                .filter_map(|(r, row)| {
-                    design.rows.apply(start + r, row).err().map(|e| {
-                        row.iter_mut().for_each(|v| *v = f64::NAN);
-                        (r, e)
-                    })
+        let Buffers {
+            params,
+            results,
+            messages,
+        } = buffers;
+        params.clear();
+        for _ in 0..len {
+            params.extend_from_slice(&base);
+        }
+        let unreadable: Vec<(usize, String)> = params
+            .par_chunks_mut(np)
+            .enumerate()
+            .filter_map(|(r, row)| {
+                design.rows.apply(start + r, row).err().map(|e| {
+                    row.iter_mut().for_each(|v| *v = f64::NAN);
+                    (r, e)
                 })
-                .collect();
-            let mut results = vec![0.0; len * nq];
-            let errors = plan.run(&params, &mut results);
-            let mut messages: Vec<Option<String>> = vec![None; len];
-            for e in errors {
-                messages[e.row] = Some(e.error.to_string());
-            }
-            for (r, e) in unreadable {
-                messages[r] = Some(e);
-            }
-            let base_row = k * per_plan + start;
-            if let Some(c) = columnar.as_mut() {
-                let block = Block {
+            })
+            .collect();
+        results.clear();
+        results.resize(len * nq, 0.0);
+        let errors = plan.run(params, results);
+        messages.clear();
+        messages.resize(len, None);
+        for e in errors {
+            messages[e.row] = Some(e.error.to_string());
+        }
+        for (r, e) in unreadable {
+            messages[r] = Some(e);
+        }
+        let base_row = k * per_plan + start;
+        let encoded = match &encoder {
+            Some(c) => c.encode(
+                plan,
+                &Block {
+                    index: i,
                     first_row: base_row,
                     state: state.as_deref(),
                     varied: &design.varied,
-                    params: (&params, np),
-                    results: (&results, nq),
+                    params: (params, np),
+                    results: (results, nq),
                     positions: (&cols.positions, sel),
-                    messages: &messages,
-                };
-                c.write(plan, &block, out)?;
-            } else {
-                write_text(
-                    TextBlock {
-                        json,
-                        base_row,
-                        state: state.as_deref(),
-                        design: &design,
-                        keys: &keys,
-                        okeys: &okeys,
-                        header_len: header.len(),
-                        positions: (&cols.positions, sel),
-                    },
-                    plan,
-                    (&params, np),
-                    (&results, nq),
-                    &messages,
-                    out,
-                )?;
-            }
-            for (r, m) in messages.iter().enumerate() {
-                if let Some(m) = m {
-                    failed += 1;
-                    if first_error.is_none() {
-                        first_error = Some(format!("row {}: {m}", base_row + r));
+                    messages,
+                },
+            )?,
+            None => Encoded::Text(format_text(
+                TextBlock {
+                    json,
+                    base_row,
+                    state: state.as_deref(),
+                    design: &design,
+                    keys: &keys,
+                    okeys,
+                    header_len: header.len(),
+                    positions: (&cols.positions, sel),
+                },
+                plan,
+                (params, np),
+                (results, nq),
+                messages,
+            )),
+        };
+        Ok(Done {
+            len,
+            encoded,
+            failed: messages.iter().flatten().count(),
+            first_error: messages
+                .iter()
+                .enumerate()
+                .find_map(|(r, m)| m.as_ref().map(|m| format!("row {}: {m}", base_row + r))),
+        })
+    };
+    // Blocks are solved and encoded in parallel tasks, a wave of them at a
+    // time (as many as there are threads, to bound memory), then written in
+    // order on this thread, which only copies bytes. (Writing one wave while
+    // the next is solved measured no faster, to /dev/null or to a file.)
+    let wave = rayon::current_num_threads().max(1);
+    // Each task's buffers, kept from wave to wave (allocating them per
+    // block costs page faults in every block).
+    let mut buffers: Vec<Buffers> = (0..wave).map(|_| Buffers::default()).collect();
+    let all = blocks * plans.len();
+    for first in (0..all).step_by(wave) {
+        let done: Vec<anyhow::Result<Done>> = buffers
+            .par_iter_mut()
+            .zip(first..all.min(first + wave))
+            .map(&solve)
+            .collect();
+        for d in done {
+            let d = d?;
+            match d.encoded {
+                Encoded::Text(text) => {
+                    for t in &text {
+                        out.write_all(t.as_bytes())?;
                     }
                 }
+                encoded => match sink.as_mut() {
+                    Some(sink) => sink.append(encoded, out)?,
+                    None => anyhow::bail!("a columnar block without its output"),
+                },
             }
-            bar.inc(len as u64);
-            start += len;
+            failed += d.failed;
+            if first_error.is_none() {
+                first_error = d.first_error;
+            }
+            bar.inc(d.len as u64);
         }
     }
     bar.finish_and_clear();
-    if let Some(c) = columnar {
-        c.finish(out)?;
+    if let Some(sink) = sink {
+        sink.finish(out)?;
     }
     Ok((total, failed, first_error))
 }
@@ -614,17 +660,16 @@ struct TextBlock<'a> {
     positions: (&'a [usize], &'a [usize]),
 }
 
-/// A block as JSON Lines or CSV, formatted in parallel tasks, written in order.
-fn write_text(
+/// A block as JSON Lines or CSV, formatted in parallel tasks, in order.
+fn format_text(
     t: TextBlock<'_>,
     plan: &BatchPlan,
     (params, np): (&[f64], usize),
     (results, nq): (&[f64], usize),
     messages: &[Option<String>],
-    out: &mut dyn Write,
-) -> anyhow::Result<()> {
+) -> Vec<String> {
     let sel = t.positions.1;
-    let text: Vec<String> = results
+    results
         .par_chunks(nq * FORMAT_TASK)
         .zip(params.par_chunks(np * FORMAT_TASK))
         .zip(messages.par_chunks(FORMAT_TASK))
@@ -647,15 +692,39 @@ fn write_text(
             }
             buf
         })
-        .collect();
-    for b in &text {
-        out.write_all(b.as_bytes())?;
-    }
-    Ok(())
+        .collect()
+}
+
+/// A task's row-major parameters, results and row errors of one block.
+#[derive(Default)]
+struct Buffers {
+    params: Vec<f64>,
+    results: Vec<f64>,
+    messages: Vec<Option<String>>,
+}
+
+/// One block solved and encoded in a worker task, to be written in order.
+struct Done {
+    len: usize,
+    encoded: Encoded,
+    failed: usize,
+    first_error: Option<String>,
+}
+
+/// A block's output, ready to be written.
+enum Encoded {
+    /// JSON Lines or CSV text.
+    Text(Vec<String>),
+    /// Parquet column chunks of one row group.
+    Parquet(Vec<parquet::arrow::arrow_writer::ArrowColumnChunk>),
+    /// One Arrow record batch.
+    Arrow(arrow_array::RecordBatch),
 }
 
 /// One block of solved rows, for the columnar writers.
 struct Block<'a> {
+    /// Its place among all blocks (the Parquet row group's index).
+    index: usize,
     first_row: usize,
     state: Option<&'a str>,
     varied: &'a [(String, usize)],
@@ -668,76 +737,83 @@ struct Block<'a> {
     messages: &'a [Option<String>],
 }
 
-/// The columnar sinks: each writes into a buffer that is drained to the
-/// output after every block, so memory stays one block whatever the batch.
-enum Sink {
-    Parquet(Box<parquet::arrow::ArrowWriter<Vec<u8>>>),
-    Arrow(Box<arrow_ipc::writer::FileWriter<Vec<u8>>>),
-}
-
 /// Parquet or Arrow IPC output: the CSV's columns, typed (row as an
 /// unsigned integer, numbers as doubles, texts as strings), with nulls where
-/// the CSV leaves a cell empty; one record batch (Parquet row group) per block.
-struct Columnar {
+/// the CSV leaves a cell empty; one record batch (Parquet row group) per
+/// block. Blocks are encoded in worker tasks ([`Encoder`], shared) and
+/// appended in order ([`Sink`], the main thread's).
+fn columnar(
+    kind: BatchOutput,
+    states: bool,
+    varied: &[(String, usize)],
+    header: &[String],
+) -> anyhow::Result<(Encoder, Sink)> {
+    use arrow_schema::{DataType, Field, Schema};
+    let mut fields = vec![Field::new("row", DataType::UInt64, false)];
+    if states {
+        fields.push(Field::new("state", DataType::Utf8, false));
+    }
+    for (name, _) in varied {
+        fields.push(Field::new(name, DataType::Float64, true));
+    }
+    for name in header {
+        fields.push(Field::new(name, DataType::Float64, true));
+    }
+    fields.push(Field::new("warning", DataType::Utf8, true));
+    fields.push(Field::new("error", DataType::Utf8, true));
+    let schema = std::sync::Arc::new(Schema::new(fields));
+    let (factory, sink) = if kind == BatchOutput::Parquet {
+        // Doubles from a solve rarely repeat: no dictionary pages.
+        let props = parquet::file::properties::WriterProperties::builder()
+            .set_compression(parquet::basic::Compression::SNAPPY)
+            .set_dictionary_enabled(false)
+            .build();
+        // The Arrow writer adds the Arrow schema to the file's metadata;
+        // its lower half lets row groups be encoded in parallel.
+        let (writer, factory) =
+            parquet::arrow::ArrowWriter::try_new(Vec::new(), schema.clone(), Some(props))?
+                .into_serialized_writer()?;
+        (Some(factory), Sink::Parquet(Box::new(writer)))
+    } else {
+        let writer = arrow_ipc::writer::FileWriter::try_new(Vec::new(), &schema)?;
+        (None, Sink::Arrow(Box::new(writer)))
+    };
+    let encoder = Encoder {
+        schema,
+        outputs: header.len(),
+        factory,
+    };
+    Ok((encoder, sink))
+}
+
+/// Turns a block into Parquet column chunks or an Arrow record batch.
+struct Encoder {
     schema: arrow_schema::SchemaRef,
     /// Output columns (after row, state and the varied parameters).
     outputs: usize,
-    sink: Option<Sink>,
+    /// Parquet's column writers (None for Arrow IPC).
+    factory: Option<parquet::arrow::arrow_writer::ArrowRowGroupWriterFactory>,
 }
 
-impl Columnar {
-    fn new(
-        kind: BatchOutput,
-        states: bool,
-        varied: &[(String, usize)],
-        header: &[String],
-    ) -> anyhow::Result<Self> {
-        use arrow_schema::{DataType, Field, Schema};
-        let mut fields = vec![Field::new("row", DataType::UInt64, false)];
-        if states {
-            fields.push(Field::new("state", DataType::Utf8, false));
-        }
-        for (name, _) in varied {
-            fields.push(Field::new(name, DataType::Float64, true));
-        }
-        for name in header {
-            fields.push(Field::new(name, DataType::Float64, true));
-        }
-        fields.push(Field::new("warning", DataType::Utf8, true));
-        fields.push(Field::new("error", DataType::Utf8, true));
-        let schema = std::sync::Arc::new(Schema::new(fields));
-        let sink = if kind == BatchOutput::Parquet {
-            // Doubles from a solve rarely repeat: no dictionary pages.
-            let props = parquet::file::properties::WriterProperties::builder()
-                .set_compression(parquet::basic::Compression::SNAPPY)
-                .set_dictionary_enabled(false)
-                .build();
-            Sink::Parquet(Box::new(parquet::arrow::ArrowWriter::try_new(
-                Vec::new(),
-                schema.clone(),
-                Some(props),
-            )?))
-        } else {
-            Sink::Arrow(Box::new(arrow_ipc::writer::FileWriter::try_new(
-                Vec::new(),
-                &schema,
-            )?))
-        };
-        Ok(Columnar {
-            schema,
-            outputs: header.len(),
-            sink: Some(sink),
-        })
+/// A column of doubles; nulls where `value` gives none (no null buffer when
+/// there are none).
+fn doubles(len: usize, value: impl Fn(usize) -> Option<f64>) -> arrow_array::ArrayRef {
+    let mut values = Vec::with_capacity(len);
+    let mut valid = Vec::with_capacity(len);
+    for r in 0..len {
+        let v = value(r);
+        values.push(v.unwrap_or(0.0));
+        valid.push(v.is_some());
     }
+    let nulls = valid
+        .contains(&false)
+        .then(|| arrow_buffer::NullBuffer::from(valid));
+    std::sync::Arc::new(arrow_array::Float64Array::new(values.into(), nulls))
+}
 
-    /// Write a block and pass the bytes written so far on to `out`.
-    fn write(
-        &mut self,
-        plan: &BatchPlan,
-        b: &Block<'_>,
-        out: &mut dyn Write,
-    ) -> anyhow::Result<()> {
-        use arrow_array::{ArrayRef, Float64Array, RecordBatch, StringArray, UInt64Array};
+impl Encoder {
+    fn encode(&self, plan: &BatchPlan, b: &Block<'_>) -> anyhow::Result<Encoded> {
+        use arrow_array::{ArrayRef, RecordBatch, StringArray, UInt64Array};
         use std::sync::Arc;
         let ((params, np), (results, nq)) = (b.params, b.results);
         let len = b.messages.len();
@@ -752,9 +828,7 @@ impl Columnar {
         }
         let finite = |v: f64| v.is_finite().then_some(v);
         for &(_, c) in b.varied {
-            columns.push(Arc::new(Float64Array::from_iter(
-                (0..len).map(|r| finite(params[r * np + c])),
-            )));
+            columns.push(doubles(len, |r| finite(params[r * np + c])));
         }
         // Which of this plan's outputs fills each output column, if any.
         let mut source = vec![None; self.outputs];
@@ -762,13 +836,13 @@ impl Columnar {
             source[pos] = Some(i);
         }
         for src in source {
-            columns.push(Arc::new(Float64Array::from_iter((0..len).map(|r| {
+            columns.push(doubles(len, |r| {
                 let i = src?;
                 if b.messages[r].is_some() {
                     return None;
                 }
                 finite(results[r * nq + i])
-            }))));
+            }));
         }
         columns.push(Arc::new(StringArray::from_iter((0..len).map(|r| {
             if b.messages[r].is_some() {
@@ -781,17 +855,53 @@ impl Columnar {
             b.messages.iter().map(|m| m.as_deref()),
         )));
         let batch = RecordBatch::try_new(self.schema.clone(), columns)?;
-        let bytes = match self.sink.as_mut() {
-            Some(Sink::Parquet(w)) => {
-                w.write(&batch)?;
+        let Some(factory) = &self.factory else {
+            return Ok(Encoded::Arrow(batch));
+        };
+        let mut writers = factory.create_column_writers(b.index)?;
+        let mut leaves = writers.iter_mut();
+        for (array, field) in batch.columns().iter().zip(self.schema.fields()) {
+            for leaf in parquet::arrow::arrow_writer::compute_leaves(field, array)? {
+                match leaves.next() {
+                    Some(w) => w.write(&leaf)?,
+                    None => anyhow::bail!("more Parquet leaves than column writers"),
+                }
+            }
+        }
+        let chunks = writers
+            .into_iter()
+            .map(|w| w.close())
+            .collect::<Result<_, _>>()?;
+        Ok(Encoded::Parquet(chunks))
+    }
+}
+
+/// The columnar files being written: each writes into a buffer that is
+/// drained to the output after every block, so memory stays one wave of
+/// blocks whatever the batch.
+enum Sink {
+    Parquet(Box<parquet::file::writer::SerializedFileWriter<Vec<u8>>>),
+    Arrow(Box<arrow_ipc::writer::FileWriter<Vec<u8>>>),
+}
+
+impl Sink {
+    /// Append an encoded block and pass the bytes written so far on to `out`.
+    fn append(&mut self, encoded: Encoded, out: &mut dyn Write) -> anyhow::Result<()> {
+        let bytes = match (self, encoded) {
+            (Sink::Parquet(w), Encoded::Parquet(chunks)) => {
+                let mut group = w.next_row_group()?;
+                for chunk in chunks {
+                    chunk.append_to_row_group(&mut group)?;
+                }
+                group.close()?;
                 w.flush()?;
                 w.inner_mut()
             }
-            Some(Sink::Arrow(w)) => {
+            (Sink::Arrow(w), Encoded::Arrow(batch)) => {
                 w.write(&batch)?;
                 w.get_mut()
             }
-            None => anyhow::bail!("the columnar output was already finished"),
+            _ => anyhow::bail!("a block encoded for another output format"),
         };
         out.write_all(bytes)?;
         bytes.clear();
@@ -799,14 +909,13 @@ impl Columnar {
     }
 
     /// Write the footer.
-    fn finish(mut self, out: &mut dyn Write) -> anyhow::Result<()> {
-        let bytes = match self.sink.take() {
-            Some(Sink::Parquet(w)) => w.into_inner()?,
-            Some(Sink::Arrow(mut w)) => {
+    fn finish(self, out: &mut dyn Write) -> anyhow::Result<()> {
+        let bytes = match self {
+            Sink::Parquet(w) => w.into_inner()?,
+            Sink::Arrow(mut w) => {
                 w.finish()?;
                 w.into_inner()?
             }
-            None => Vec::new(),
         };
         out.write_all(&bytes)?;
         Ok(())
@@ -1333,7 +1442,18 @@ mod columnar_tests {
             "torque.input=0:400:5",
         ];
         let bad = [fig3.as_str(), "--rows", rows.as_str()];
-        for (args, ok) in [(&shift[..], true), (&bad[..], false)] {
+        // Three blocks and a part: blocks are solved in parallel waves and
+        // must come out in order.
+        let n = 3 * super::BLOCK + 100;
+        let grid = format!("torque.4=-10:-20:{n}");
+        let long = [
+            fig3.as_str(),
+            "--grid",
+            grid.as_str(),
+            "--columns",
+            "driving_torque.2",
+        ];
+        for (args, ok) in [(&shift[..], true), (&bad[..], false), (&long[..], true)] {
             let with = |fmt: &str| {
                 let mut a = args.to_vec();
                 a.extend(["--output", fmt]);
@@ -1342,6 +1462,17 @@ mod columnar_tests {
                 bytes
             };
             let csv = String::from_utf8(with("csv")).unwrap_or_else(|e| panic!("{e}"));
+            // Rows in order: numbered 0, 1, ... and the grid's values in its order.
+            let mut last = f64::INFINITY;
+            for (r, line) in csv.lines().skip(1).enumerate() {
+                let c = cells(line);
+                assert_eq!(c[0], r.to_string(), "row numbers in order");
+                if args == long {
+                    let t: f64 = c[1].parse().unwrap_or_else(|e| panic!("row {r}: {e}"));
+                    assert!(t < last, "row {r}: torque.4 {t} after {last}");
+                    last = t;
+                }
+            }
             let p = parquet_batches(with("parquet"));
             assert_same_as_csv(&p, &csv);
             let a = arrow_batches(with("arrow"));
