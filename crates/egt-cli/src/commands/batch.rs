@@ -47,7 +47,8 @@ pub enum BatchOutput {
     /// Comma-separated values with a header.
     Csv,
     /// Apache Parquet (binary; redirect to a file): the CSV's columns, typed,
-    /// empty cells as nulls, one row group per block of 65 536 scenarios.
+    /// empty cells as nulls, one row group per block of 65 536 scenarios
+    /// (with `--specs`, the CSV's long form: row, name, quantity, value, error).
     Parquet,
     /// Apache Arrow IPC file (binary; redirect to a file), columns as for Parquet.
     Arrow,
@@ -174,19 +175,6 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         ComputeArg::Power => Compute::Power,
     };
     let (total, failed, first) = match &args.specs {
-        Some(_) if matches!(args.output, BatchOutput::Parquet | BatchOutput::Arrow) => {
-            return Err(Error::spec(
-                "--output",
-                SpecErrorKind::Invalid {
-                    message: "Parquet and Arrow output need one set of columns: use them with a \
-                              SPEC and --vary/--grid/--rows/--state, not with --specs \
-                              (whose trains differ row by row); --output csv writes --specs in \
-                              long form"
-                        .into(),
-                },
-            )
-            .into());
-        }
         Some(path) => run_specs(args, path, compute, out)?,
         None => run_one_spec(args, compute, out)?,
     };
@@ -748,7 +736,7 @@ fn columnar(
     varied: &[(String, usize)],
     header: &[String],
 ) -> anyhow::Result<(Encoder, Sink)> {
-    use arrow_schema::{DataType, Field, Schema};
+    use arrow_schema::{DataType, Field};
     let mut fields = vec![Field::new("row", DataType::UInt64, false)];
     if states {
         fields.push(Field::new("state", DataType::Utf8, false));
@@ -761,7 +749,31 @@ fn columnar(
     }
     fields.push(Field::new("warning", DataType::Utf8, true));
     fields.push(Field::new("error", DataType::Utf8, true));
-    let schema = std::sync::Arc::new(Schema::new(fields));
+    columnar_file(kind, fields, header.len())
+}
+
+/// The CSV's long form of `--specs` (one row per output of each line),
+/// typed: row, name, quantity, value (null on a failed line) and error.
+fn long_columnar(kind: BatchOutput) -> anyhow::Result<(Encoder, Sink)> {
+    use arrow_schema::{DataType, Field};
+    let fields = vec![
+        Field::new("row", DataType::UInt64, false),
+        Field::new("name", DataType::Utf8, false),
+        Field::new("quantity", DataType::Utf8, false),
+        Field::new("value", DataType::Float64, true),
+        Field::new("error", DataType::Utf8, true),
+    ];
+    columnar_file(kind, fields, 0)
+}
+
+/// An encoder and a sink for the columns `fields` (`outputs` of them the
+/// solver's).
+fn columnar_file(
+    kind: BatchOutput,
+    fields: Vec<arrow_schema::Field>,
+    outputs: usize,
+) -> anyhow::Result<(Encoder, Sink)> {
+    let schema = std::sync::Arc::new(arrow_schema::Schema::new(fields));
     let (factory, sink) = if kind == BatchOutput::Parquet {
         // Doubles from a solve rarely repeat: no dictionary pages.
         let props = parquet::file::properties::WriterProperties::builder()
@@ -780,7 +792,7 @@ fn columnar(
     };
     let encoder = Encoder {
         schema,
-        outputs: header.len(),
+        outputs,
         factory,
     };
     Ok((encoder, sink))
@@ -813,7 +825,7 @@ fn doubles(len: usize, value: impl Fn(usize) -> Option<f64>) -> arrow_array::Arr
 
 impl Encoder {
     fn encode(&self, plan: &BatchPlan, b: &Block<'_>) -> anyhow::Result<Encoded> {
-        use arrow_array::{ArrayRef, RecordBatch, StringArray, UInt64Array};
+        use arrow_array::{ArrayRef, StringArray, UInt64Array};
         use std::sync::Arc;
         let ((params, np), (results, nq)) = (b.params, b.results);
         let len = b.messages.len();
@@ -854,11 +866,21 @@ impl Encoder {
         columns.push(Arc::new(StringArray::from_iter(
             b.messages.iter().map(|m| m.as_deref()),
         )));
-        let batch = RecordBatch::try_new(self.schema.clone(), columns)?;
+        self.record_batch(columns, b.index)
+    }
+
+    /// Columns in the schema's order as one Arrow record batch, or as the
+    /// Parquet column chunks of row group `index`.
+    fn record_batch(
+        &self,
+        columns: Vec<arrow_array::ArrayRef>,
+        index: usize,
+    ) -> anyhow::Result<Encoded> {
+        let batch = arrow_array::RecordBatch::try_new(self.schema.clone(), columns)?;
         let Some(factory) = &self.factory else {
             return Ok(Encoded::Arrow(batch));
         };
-        let mut writers = factory.create_column_writers(b.index)?;
+        let mut writers = factory.create_column_writers(index)?;
         let mut leaves = writers.iter_mut();
         for (array, field) in batch.columns().iter().zip(self.schema.fields()) {
             for leaf in parquet::arrow::arrow_writer::compute_leaves(field, array)? {
@@ -1044,13 +1066,47 @@ fn run_specs(
         .filter(|(_, l)| !l.trim().is_empty())
         .collect();
     let json = args.output == BatchOutput::Jsonl;
-    if !json {
+    let mut columnar = match args.output {
+        BatchOutput::Parquet | BatchOutput::Arrow => Some(long_columnar(args.output)?),
+        BatchOutput::Jsonl | BatchOutput::Csv => None,
+    };
+    if !json && columnar.is_none() {
         out.write_all(b"row,name,quantity,value\n")?;
     }
     let bar = progress(lines.len());
     let source = path.display().to_string();
     let (mut failed, mut first_error) = (0, None);
     for (b, block) in lines.chunks(BLOCK).enumerate() {
+        if let Some((encoder, sink)) = columnar.as_mut() {
+            // Each line's title and selected outputs (its plan dropped at
+            // once), or its line name and error.
+            let solved: Vec<Long> = block
+                .par_iter()
+                .map(|&(line_no, line)| {
+                    let name = format!("{source}:{}", line_no + 1);
+                    match one_spec(line, &name, compute, args) {
+                        Ok((title, plan, o)) => Ok((
+                            title,
+                            select(&args.columns, &plan)
+                                .into_iter()
+                                .map(|i| (plan.outputs()[i].clone(), o[i]))
+                                .collect(),
+                        )),
+                        Err(e) => Err((name, format!("{e:#}"))),
+                    }
+                })
+                .collect();
+            let encoded = long_block(encoder, b, &solved)?;
+            sink.append(encoded, out)?;
+            for (r, s) in solved.iter().enumerate() {
+                if let Err((name, e)) = s {
+                    failed += 1;
+                    first_error.get_or_insert(format!("row {} ({name}): {e}", b * BLOCK + r));
+                }
+            }
+            bar.inc(block.len() as u64);
+            continue;
+        }
         let rows: Vec<(String, Option<String>)> = block
             .par_iter()
             .enumerate()
@@ -1110,7 +1166,52 @@ fn run_specs(
         bar.inc(block.len() as u64);
     }
     bar.finish_and_clear();
+    if let Some((_, sink)) = columnar {
+        sink.finish(out)?;
+    }
     Ok((lines.len(), failed, first_error))
+}
+
+/// One `--specs` line: its title and (output, value) pairs, or its line
+/// name and error.
+type Long = Result<(String, Vec<(String, f64)>), (String, String)>;
+
+/// Block `b` of `--specs` lines in long form, as the CSV writes it: a row
+/// per selected output of each line, or one `error` row for a failed line.
+fn long_block(encoder: &Encoder, b: usize, solved: &[Long]) -> anyhow::Result<Encoded> {
+    use arrow_array::{ArrayRef, Float64Array, StringArray, UInt64Array};
+    use std::sync::Arc;
+    let (mut row, mut name, mut quantity) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut value, mut error) = (Vec::new(), Vec::new());
+    for (r, s) in solved.iter().enumerate() {
+        let r = (b * BLOCK + r) as u64;
+        match s {
+            Ok((title, outputs)) => {
+                for (q, v) in outputs {
+                    row.push(r);
+                    name.push(title.as_str());
+                    quantity.push(q.as_str());
+                    value.push(v.is_finite().then_some(*v));
+                    error.push(None);
+                }
+            }
+            Err((line, e)) => {
+                row.push(r);
+                name.push(line.as_str());
+                quantity.push("error");
+                value.push(None);
+                error.push(Some(e.as_str()));
+            }
+        }
+    }
+    let columns: Vec<ArrayRef> = vec![
+        Arc::new(UInt64Array::from(row)),
+        Arc::new(StringArray::from(name)),
+        Arc::new(StringArray::from(quantity)),
+        Arc::new(Float64Array::from(value)),
+        Arc::new(StringArray::from(error)),
+    ];
+    encoder.record_batch(columns, b)
 }
 
 /// Parse, validate, prepare and solve one spec line.
@@ -1481,9 +1582,69 @@ mod columnar_tests {
     }
 
     #[test]
-    fn columnar_output_of_whole_spec_lines_is_refused_naming_the_flag() {
-        let (_, r) = batch(&["--specs", "-", "--output", "parquet"]);
-        let e = format!("{:#}", r.err().unwrap_or_else(|| panic!("accepted")));
-        assert!(e.contains("--output") && e.contains("--specs"), "{e}");
+    fn columnar_output_of_whole_spec_lines_holds_the_long_csv() {
+        let fig3 = example("fig3_example61.toml");
+        let text = std::fs::read_to_string(&fig3).unwrap_or_else(|e| panic!("{fig3}: {e}"));
+        let good = egt_core::parse_spec(&text, egt_core::Format::Toml, "x")
+            .unwrap_or_else(|e| panic!("{e}"));
+        let json = serde_json::to_string(&good).unwrap_or_default();
+        let dir = std::env::temp_dir().join(format!("egt-columnar-specs-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
+        let specs = dir.join("specs.jsonl");
+        std::fs::write(&specs, format!("{json}\n{{\"frame\": 3}}\n{json}\n"))
+            .unwrap_or_else(|e| panic!("{e}"));
+        let specs = specs.display().to_string();
+        let with = |fmt: &str| {
+            let (bytes, r) = batch(&["--specs", &specs, "--output", fmt]);
+            assert!(r.is_err(), "{fmt}: the broken line fails the batch");
+            bytes
+        };
+        let csv = String::from_utf8(with("csv")).unwrap_or_else(|e| panic!("{e}"));
+        let rows: Vec<Vec<String>> = csv.lines().skip(1).map(cells).collect();
+        assert!(rows.iter().any(|r| r[2] == "error"), "{csv}");
+        assert!(rows.len() > 10, "{csv}");
+        for batches in [
+            parquet_batches(with("parquet")),
+            arrow_batches(with("arrow")),
+        ] {
+            let names: Vec<String> = batches[0]
+                .schema()
+                .fields()
+                .iter()
+                .map(|f| f.name().clone())
+                .collect();
+            assert_eq!(names, ["row", "name", "quantity", "value", "error"]);
+            let mut r = 0;
+            for b in &batches {
+                let col = |c: usize| b.column(c).as_any();
+                let row = col(0).downcast_ref::<UInt64Array>();
+                let name = col(1).downcast_ref::<StringArray>();
+                let quantity = col(2).downcast_ref::<StringArray>();
+                let value = col(3).downcast_ref::<Float64Array>();
+                let error = col(4).downcast_ref::<StringArray>();
+                let (Some(row), Some(name), Some(quantity), Some(value), Some(error)) =
+                    (row, name, quantity, value, error)
+                else {
+                    panic!("unexpected column types: {:?}", b.schema());
+                };
+                for i in 0..b.num_rows() {
+                    let csv = &rows[r];
+                    let what = format!("row {r}");
+                    assert_eq!(row.value(i).to_string(), csv[0], "{what}");
+                    assert_eq!(name.value(i), csv[1], "{what}");
+                    assert_eq!(quantity.value(i), csv[2], "{what}");
+                    if csv[2] == "error" {
+                        assert!(value.is_null(i), "{what}");
+                        assert_eq!(error.value(i), csv[3], "{what}");
+                    } else {
+                        assert!(error.is_null(i), "{what}");
+                        let v: f64 = csv[3].parse().unwrap_or_else(|e| panic!("{what}: {e}"));
+                        assert_eq!(value.value(i).to_bits(), v.to_bits(), "{what}");
+                    }
+                    r += 1;
+                }
+            }
+            assert_eq!(r, rows.len(), "every CSV row is in the columnar file");
+        }
     }
 }
