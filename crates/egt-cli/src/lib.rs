@@ -37,8 +37,11 @@ where
             return u8::try_from(e.exit_code()).unwrap_or(2);
         }
     };
+    let terminal = io::IsTerminal::is_terminal(&io::stdout());
     let mut out = io::BufWriter::new(io::stdout().lock());
-    let result = commands::run(&cli.command, &mut out).and_then(|()| Ok(out.flush()?));
+    let result = commands::preflight(&cli.command, terminal)
+        .and_then(|()| commands::run(&cli.command, &mut out))
+        .and_then(|()| Ok(out.flush()?));
     match result {
         Ok(()) => 0,
         Err(e) if is_broken_pipe(&e) => 0,

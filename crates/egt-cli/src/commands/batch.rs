@@ -187,6 +187,32 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Parquet and Arrow are binary: refused when stdout is a terminal.
+///
+/// # Errors
+/// A spec error naming `--output`, when the batch would write Parquet or
+/// Arrow (not for `--list`).
+pub fn refuse_binary_to_terminal(args: &Args) -> anyhow::Result<()> {
+    let format = match args.output {
+        BatchOutput::Parquet => "parquet",
+        BatchOutput::Arrow => "arrow",
+        BatchOutput::Jsonl | BatchOutput::Csv => return Ok(()),
+    };
+    if args.list {
+        return Ok(());
+    }
+    Err(Error::spec(
+        "--output",
+        SpecErrorKind::Invalid {
+            message: format!(
+                "{format} is binary and stdout is a terminal: redirect it to a file \
+                 (`egt batch ... --output {format} > batch.{format}`)"
+            ),
+        },
+    )
+    .into())
+}
+
 fn progress(total: usize) -> ProgressBar {
     // Drawn on stderr only when it is a terminal (indicatif hides it otherwise).
     let bar = ProgressBar::new(total as u64);
@@ -1578,6 +1604,28 @@ mod columnar_tests {
             assert_same_as_csv(&p, &csv);
             let a = arrow_batches(with("arrow"));
             assert_same_as_csv(&a, &csv);
+        }
+    }
+
+    #[test]
+    fn binary_output_to_a_terminal_is_refused_naming_the_flag() {
+        use clap::Parser;
+        let args = |extra: &[&str]| {
+            let mut a = vec!["egt", "batch", "x.toml"];
+            a.extend(extra);
+            match crate::cli::Cli::try_parse_from(a).map(|c| c.command) {
+                Ok(crate::cli::Command::Batch(b)) => b,
+                other => panic!("{other:?}"),
+            }
+        };
+        for f in ["parquet", "arrow"] {
+            let r = super::refuse_binary_to_terminal(&args(&["--output", f]));
+            let e = format!("{:#}", r.err().unwrap_or_else(|| panic!("{f} accepted")));
+            assert!(e.contains("--output") && e.contains("terminal"), "{e}");
+            assert!(super::refuse_binary_to_terminal(&args(&["--output", f, "--list"])).is_ok());
+        }
+        for f in ["csv", "jsonl"] {
+            assert!(super::refuse_binary_to_terminal(&args(&["--output", f])).is_ok());
         }
     }
 

@@ -21,6 +21,18 @@ pub mod simulate;
 pub mod stability;
 pub mod synth;
 
+/// Refuse, before any work, what cannot go to this stdout: a binary batch
+/// output (Parquet, Arrow) to a terminal.
+///
+/// # Errors
+/// A spec error naming `--output`.
+pub fn preflight(command: &Command, stdout_is_terminal: bool) -> anyhow::Result<()> {
+    match command {
+        Command::Batch(args) if stdout_is_terminal => batch::refuse_binary_to_terminal(args),
+        _ => Ok(()),
+    }
+}
+
 /// Run one subcommand, writing its report to `out`.
 ///
 /// # Errors
