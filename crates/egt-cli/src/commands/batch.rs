@@ -306,38 +306,45 @@ fn design(args: &Args, plan: &BatchPlan) -> anyhow::Result<Design> {
     };
     if let Some(path) = &args.rows {
         let text = read(path)?;
-        let mut rows = Vec::new();
-        for (k, line) in text
+        let lines: Vec<(usize, &str)> = text
             .lines()
             .enumerate()
             .filter(|(_, l)| !l.trim().is_empty())
-        {
-            let parsed = serde_json::from_str::<serde_json::Map<String, serde_json::Value>>(line)
-                .map_err(|e| format!("{}:{}: {e}", path.display(), k + 1))
-                .and_then(|obj| {
-                    obj.iter()
-                        .map(|(name, v)| {
-                            let c = plan.parameter(name).ok_or_else(|| {
-                                format!(
-                                    "{}:{}: {}",
-                                    path.display(),
-                                    k + 1,
-                                    unknown(plan, name, "--rows")
-                                )
-                            })?;
-                            let x = v.as_f64().ok_or_else(|| {
-                                format!("{}:{}: `{name}` is not a number", path.display(), k + 1)
-                            })?;
-                            Ok((c, x))
-                        })
-                        .collect::<Result<Vec<_>, String>>()
-                });
-            if let Ok(set) = &parsed {
-                for &(c, _) in set {
-                    note(&plan.parameters()[c], c);
-                }
+            .collect();
+        // Parsed in parallel; the varied columns noted in line order.
+        let rows: Vec<Result<Vec<(usize, f64)>, String>> = lines
+            .par_iter()
+            .map(|&(k, line)| {
+                serde_json::from_str::<serde_json::Map<String, serde_json::Value>>(line)
+                    .map_err(|e| format!("{}:{}: {e}", path.display(), k + 1))
+                    .and_then(|obj| {
+                        obj.iter()
+                            .map(|(name, v)| {
+                                let c = plan.parameter(name).ok_or_else(|| {
+                                    format!(
+                                        "{}:{}: {}",
+                                        path.display(),
+                                        k + 1,
+                                        unknown(plan, name, "--rows")
+                                    )
+                                })?;
+                                let x = v.as_f64().ok_or_else(|| {
+                                    format!(
+                                        "{}:{}: `{name}` is not a number",
+                                        path.display(),
+                                        k + 1
+                                    )
+                                })?;
+                                Ok((c, x))
+                            })
+                            .collect::<Result<Vec<_>, String>>()
+                    })
+            })
+            .collect();
+        for set in rows.iter().flatten() {
+            for &(c, _) in set {
+                note(&plan.parameters()[c], c);
             }
-            rows.push(parsed);
         }
         return Ok(Design {
             varied,
