@@ -24,7 +24,7 @@ use crate::cli::{OutputFormat, SpecArgs, SpecFormat};
 use crate::input;
 
 /// Scenarios solved and written per block (bounds memory; output streams per block).
-const BLOCK: usize = 1 << 16;
+const BLOCK: usize = 1 << 14;
 /// Rows formatted per parallel task.
 const FORMAT_TASK: usize = 1024;
 
@@ -47,7 +47,7 @@ pub enum BatchOutput {
     /// Comma-separated values with a header.
     Csv,
     /// Apache Parquet (binary; redirect to a file): the CSV's columns, typed,
-    /// empty cells as nulls, one row group per block of 65 536 scenarios
+    /// empty cells as nulls, one row group per block of 16 384 scenarios
     /// (with `--specs`, the CSV's long form: row, name, quantity, value, error).
     Parquet,
     /// Apache Arrow IPC file (binary; redirect to a file), columns as for Parquet.
