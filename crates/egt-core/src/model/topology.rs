@@ -502,31 +502,40 @@ fn generic_mobility(
             }
         })
     };
-    // The Willis Jacobian (eq. 2) with generic ratios, over GF(p) (see `modp`).
-    let j: Vec<Vec<u64>> = circuits
+    // The Willis Jacobian (eq. 2) with generic ratios, over GF(p) (see
+    // `modp`): three entries a row, eliminated sparsely.
+    let j: Vec<modp::SparseRow> = circuits
         .iter()
         .enumerate()
         .map(|(m, c)| {
             let t = modp::generic(m as u64);
-            let mut row = vec![0; cols];
+            let mut row: modp::SparseRow = Vec::with_capacity(3);
             for (l, v) in [
                 (c.gear_i, 1),
                 (c.gear_j, modp::neg(t)),
                 (c.carrier, modp::sub(t, 1)),
             ] {
                 if let Some(k) = col(l) {
-                    row[k] = modp::add(row[k], v);
+                    match row.iter_mut().find(|e| e.0 == k) {
+                        Some(e) => e.1 = modp::add(e.1, v),
+                        None => row.push((k, v)),
+                    }
                 }
             }
+            row.retain(|e| e.1 != 0);
             row
         })
         .collect();
-    let (null, rank) = modp::nullspace(&j, cols);
+    let (null, rank) = modp::nullspace_sparse(&j, cols);
     if rank < circuits.len() {
-        // Rows with weight in a left null vector are the dependent ones.
-        let jt: Vec<Vec<u64>> = (0..cols)
-            .map(|c| j.iter().map(|r| r[c]).collect())
-            .collect();
+        // Rows with weight in a left null vector are the dependent ones
+        // (dense: a failing train only).
+        let mut jt: Vec<Vec<u64>> = vec![vec![0; circuits.len()]; cols];
+        for (m, row) in j.iter().enumerate() {
+            for &(c, v) in row {
+                jt[c][m] = v;
+            }
+        }
         let dependent = modp::support(&modp::nullspace(&jt, circuits.len()).0, circuits.len());
         return Err(TopologyError::Redundant {
             pairs: dependent
