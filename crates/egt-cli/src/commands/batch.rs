@@ -1,5 +1,6 @@
 //! `egt batch`: many scenarios at full speed, in parallel (rayon), streamed
-//! as JSON Lines or CSV. Scenarios come from one spec whose parameters vary
+//! as JSON Lines, CSV, Parquet or Arrow IPC (blocks solved and encoded in
+//! parallel tasks, written in order). Scenarios come from one spec whose parameters vary
 //! (`--vary` arrays, zipped; `--grid` axes, crossed; `--rows` a JSON Lines
 //! file of parameter objects; `--state` gear states of a transmission), or
 //! from a JSON Lines file of whole specs (`--specs`, one train per line, each
