@@ -1111,90 +1111,42 @@ fn run_specs(
     let source = path.display().to_string();
     let (mut failed, mut first_error) = (0, None);
     for (b, block) in lines.chunks(BLOCK).enumerate() {
-        if let Some((encoder, sink)) = columnar.as_mut() {
-            // Each line's title and selected outputs (its plan dropped at
-            // once), or its line name and error.
-            let solved: Vec<Long> = block
-                .par_iter()
-                .map(|&(line_no, line)| {
-                    let name = format!("{source}:{}", line_no + 1);
-                    match one_spec(line, &name, compute, args) {
-                        Ok((title, plan, o)) => Ok((
-                            title,
-                            select(&args.columns, &plan)
-                                .into_iter()
-                                .map(|i| (plan.outputs()[i].clone(), o[i]))
-                                .collect(),
-                        )),
-                        Err(e) => Err((name, format!("{e:#}"))),
-                    }
-                })
-                .collect();
-            let encoded = long_block(encoder, b, &solved)?;
-            sink.append(encoded, out)?;
-            for (r, s) in solved.iter().enumerate() {
-                if let Err((name, e)) = s {
-                    failed += 1;
-                    first_error.get_or_insert(format!("row {} ({name}): {e}", b * BLOCK + r));
-                }
-            }
-            bar.inc(block.len() as u64);
-            continue;
-        }
-        let rows: Vec<(String, Option<String>)> = block
+        // Each line solved (its plan dropped at once), then written in the
+        // output's form.
+        let solved: Vec<Long> = block
             .par_iter()
-            .enumerate()
-            .map(|(r, &(line_no, line))| {
-                let row = b * BLOCK + r;
+            .map(|&(line_no, line)| {
                 let name = format!("{source}:{}", line_no + 1);
                 match one_spec(line, &name, compute, args) {
-                    Ok((title, plan, o)) => {
-                        let mut buf = String::new();
-                        if json {
-                            let _ = write!(buf, "{{\"row\":{row},\"name\":{}", quoted(&title));
-                            for &i in &select(&args.columns, &plan) {
-                                let _ = write!(buf, ",{}:", quoted(&plan.outputs()[i]));
-                                number(&mut buf, o[i], true);
-                            }
-                            if let Some(w) = warning(&plan, &o) {
-                                let _ = write!(buf, ",\"warning\":{}", quoted(&w));
-                            }
-                            buf.push_str("}\n");
-                        } else {
-                            for &i in &select(&args.columns, &plan) {
-                                let _ = write!(
-                                    buf,
-                                    "{row},{},{},",
-                                    csv_field(&title),
-                                    csv_field(&plan.outputs()[i])
-                                );
-                                number(&mut buf, o[i], false);
-                                buf.push('\n');
-                            }
-                        }
-                        (buf, None)
-                    }
-                    Err(e) => {
-                        let msg = format!("{e:#}");
-                        let buf = if json {
-                            format!(
-                                "{{\"row\":{row},\"name\":{},\"error\":{}}}\n",
-                                quoted(&name),
-                                quoted(&msg)
-                            )
-                        } else {
-                            format!("{row},{},error,{}\n", csv_field(&name), csv_field(&msg))
-                        };
-                        (buf, Some(format!("row {row} ({name}): {msg}")))
-                    }
+                    Ok((title, plan, o)) => Ok(Solved {
+                        title,
+                        outputs: select(&args.columns, &plan)
+                            .into_iter()
+                            .map(|i| (plan.outputs()[i].clone(), o[i]))
+                            .collect(),
+                        warning: warning(&plan, &o),
+                    }),
+                    Err(e) => Err((name, format!("{e:#}"))),
                 }
             })
             .collect();
-        for (buf, err) in rows {
-            out.write_all(buf.as_bytes())?;
-            if let Some(e) = err {
+        match columnar.as_mut() {
+            Some((encoder, sink)) => sink.append(long_block(encoder, b, &solved)?, out)?,
+            None => {
+                let text: Vec<String> = solved
+                    .par_iter()
+                    .enumerate()
+                    .map(|(r, s)| long_text(b * BLOCK + r, s, json))
+                    .collect();
+                for t in &text {
+                    out.write_all(t.as_bytes())?;
+                }
+            }
+        }
+        for (r, s) in solved.iter().enumerate() {
+            if let Err((name, e)) = s {
                 failed += 1;
-                first_error.get_or_insert(e);
+                first_error.get_or_insert(format!("row {} ({name}): {e}", b * BLOCK + r));
             }
         }
         bar.inc(block.len() as u64);
@@ -1206,9 +1158,54 @@ fn run_specs(
     Ok((lines.len(), failed, first_error))
 }
 
-/// One `--specs` line: its title and (output, value) pairs, or its line
-/// name and error.
-type Long = Result<(String, Vec<(String, f64)>), (String, String)>;
+/// One `--specs` line as JSON Lines or as the CSV's long form (a row per
+/// output, or one `error` row).
+fn long_text(row: usize, s: &Long, json: bool) -> String {
+    let mut buf = String::new();
+    match s {
+        Ok(l) if json => {
+            let _ = write!(buf, "{{\"row\":{row},\"name\":{}", quoted(&l.title));
+            for (q, v) in &l.outputs {
+                let _ = write!(buf, ",{}:", quoted(q));
+                number(&mut buf, *v, true);
+            }
+            if let Some(w) = &l.warning {
+                let _ = write!(buf, ",\"warning\":{}", quoted(w));
+            }
+            buf.push_str("}\n");
+        }
+        Ok(l) => {
+            for (q, v) in &l.outputs {
+                let _ = write!(buf, "{row},{},{},", csv_field(&l.title), csv_field(q));
+                number(&mut buf, *v, false);
+                buf.push('\n');
+            }
+        }
+        Err((name, msg)) if json => {
+            let _ = writeln!(
+                buf,
+                "{{\"row\":{row},\"name\":{},\"error\":{}}}",
+                quoted(name),
+                quoted(msg)
+            );
+        }
+        Err((name, msg)) => {
+            let _ = writeln!(buf, "{row},{},error,{}", csv_field(name), csv_field(msg));
+        }
+    }
+    buf
+}
+
+/// A solved `--specs` line: its title, its selected (output, value) pairs
+/// and its condition warning.
+struct Solved {
+    title: String,
+    outputs: Vec<(String, f64)>,
+    warning: Option<String>,
+}
+
+/// One `--specs` line: solved, or its line name and error.
+type Long = Result<Solved, (String, String)>;
 
 /// Block `b` of `--specs` lines in long form, as the CSV writes it: a row
 /// per selected output of each line, or one `error` row for a failed line.
@@ -1220,7 +1217,7 @@ fn long_block(encoder: &Encoder, b: usize, solved: &[Long]) -> anyhow::Result<En
     for (r, s) in solved.iter().enumerate() {
         let r = (b * BLOCK + r) as u64;
         match s {
-            Ok((title, outputs)) => {
+            Ok(Solved { title, outputs, .. }) => {
                 for (q, v) in outputs {
                     row.push(r);
                     name.push(title.as_str());
