@@ -528,15 +528,18 @@ fn generic_mobility(
         .collect();
     let (null, rank) = modp::nullspace_sparse(&j, cols);
     if rank < circuits.len() {
-        // Rows with weight in a left null vector are the dependent ones
-        // (dense: a failing train only).
-        let mut jt: Vec<Vec<u64>> = vec![vec![0; circuits.len()]; cols];
+        // Rows with weight in a left null vector are the dependent ones: the
+        // null space of the transpose, eliminated sparsely too.
+        let mut jt: Vec<modp::SparseRow> = vec![Vec::new(); cols];
         for (m, row) in j.iter().enumerate() {
             for &(c, v) in row {
-                jt[c][m] = v;
+                jt[c].push((m, v));
             }
         }
-        let dependent = modp::support(&modp::nullspace(&jt, circuits.len()).0, circuits.len());
+        let dependent = modp::support(
+            &modp::nullspace_sparse(&jt, circuits.len()).0,
+            circuits.len(),
+        );
         return Err(TopologyError::Redundant {
             pairs: dependent
                 .iter()

@@ -39,6 +39,9 @@ pub(crate) struct Draft {
     pub links: IndexMap<String, DraftLink>,
     pub revolutes: Vec<DraftRevolute>,
     pub gears: Vec<DraftGear>,
+    /// Index in `revolutes` of each central member's mount on the frame (so a
+    /// set mounting a link already mounted finds it without a scan).
+    mounts: std::collections::HashMap<String, usize>,
 }
 
 impl Draft {
@@ -439,11 +442,7 @@ fn mount(d: &mut Draft, frame: &str, link: &str, axis: &str, path: &str) -> Resu
     if link == frame {
         return Ok(());
     }
-    if let Some(existing) = d
-        .revolutes
-        .iter()
-        .find(|r| r.links[0] == frame && r.links[1] == link)
-    {
+    if let Some(existing) = d.mounts.get(link).map(|&k| &d.revolutes[k]) {
         if existing.level != axis {
             return Err(Error::invalid(
                 path,
@@ -455,6 +454,7 @@ fn mount(d: &mut Draft, frame: &str, link: &str, axis: &str, path: &str) -> Resu
         }
         return Ok(());
     }
+    d.mounts.insert(link.to_string(), d.revolutes.len());
     d.revolutes.push(DraftRevolute {
         links: [frame.to_string(), link.to_string()],
         level: axis.to_string(),
