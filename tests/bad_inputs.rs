@@ -156,26 +156,47 @@ fn every_bad_input_class_is_refused_by_name() {
     }
 }
 
-/// Resource bounds (issue 12): a train too large for its dense matrices and a
-/// transmission with too many gear states are refused by name, with the limit,
-/// before the work starts (asserting the refusal, not a time).
+/// Resource bounds (issues 12, 13): a train too large for the dense matrices
+/// of an analysis is refused by name, with the limit, before the work starts
+/// (asserting the refusal, not a time), while its check and kinematics,
+/// which are sparse, run; a transmission with too many gear states is refused.
 #[test]
 fn resource_limits_are_refused_by_name() {
-    // A chain of 1500 simple links: 1-2:a 2-3:a ... with one gear per pair of neighbours.
-    let n = 1500;
-    let mut items: Vec<String> = (1..n).map(|k| format!("0-{k}:a")).collect();
-    items.extend((1..n - 1).map(|k| format!("{k}-{}:G=-2", k + 1)));
-    let spec = format!("frame = \"0\"\nadjacency = \"{}\"\n", items.join(" "));
-    let row = Row {
-        name: "huge train",
-        spec: None,
-        args: &["check"],
-        exit: 2,
-        words: &[],
-    };
-    let (code, text) = run_with(&row, &spec);
-    assert_eq!(code, 2, "{text}");
-    assert!(text.contains("MiB") && text.contains("links"), "{text}");
+    // A chain of 749 simple planetary sets: 1500 links.
+    let sets = 749;
+    let mut spec = String::from("frame = \"case\"\n");
+    for i in 1..=sets {
+        spec.push_str(&format!(
+            "[[planetary]]\nname = \"P{i}\"\nsun = \"m{}\"\nring = \"case\"\ncarrier = \"m{i}\"\nteeth = {{ sun = 30, planet = 21, ring = 72 }}\n",
+            i - 1
+        ));
+    }
+    spec.push_str("[analysis]\nspeeds = { m0 = 100.0 }\naccelerations = { m0 = 1.0 }\ntorques = { m749 = -1.0 }\ndriving = [\"m0\"]\n");
+    for (args, exit) in [
+        (&["check"][..], 0),
+        (&["kinematics"][..], 0),
+        (&["dynamics"][..], 1),
+    ] {
+        let row = Row {
+            name: "huge train",
+            spec: None,
+            args,
+            exit,
+            words: &[],
+        };
+        let (code, text) = run_with(&row, &spec);
+        assert_eq!(code, exit, "{args:?}: {text}");
+        match args[0] {
+            "check" => assert!(text.contains("links: 1500"), "{text}"),
+            "kinematics" => assert!(text.contains("no exact speeds"), "{text}"),
+            _ => assert!(
+                text.contains("1500 links")
+                    && text.contains("MiB")
+                    && text.contains("at most 1024 links"),
+                "{text}"
+            ),
+        }
+    }
 
     let states: Vec<String> = (0..300).map(|k| format!("\"s{k}\" = [\"A\"]")).collect();
     let spec = format!(

@@ -205,6 +205,45 @@ macro_rules! phases {
 phases!(chain, CHAIN_LINKS, chain);
 phases!(nest, NEST_LINKS, families::nest);
 
+/// Large trains (zigzag chains, speeds of order one): one kinematic solve
+/// with the dense and with the sparse LU, and reading plus checking the
+/// spec. `SPARSE_FROM` in `solve/kinematics.rs` sits where they cross.
+mod large {
+    use super::*;
+    use egt_core::KinematicsPlan;
+
+    const SIZES: &[usize] = &[6, 10, 16, 22, 34, 66, 130, 258, 514, 1026];
+
+    fn solve(b: Bencher, links: usize, sparse: bool) {
+        let t = build(&families::zigzag_chain((links - 2) / 2));
+        let input = t.link_id("m0").unwrap_or_else(|| panic!("no m0"));
+        let mut plan =
+            KinematicsPlan::with_sparse(&t, &[input], sparse).unwrap_or_else(|e| panic!("{e}"));
+        let ratios = t.ratios().unwrap_or_else(|e| panic!("{e}"));
+        let mut speeds = vec![0.0; t.links().len()];
+        b.bench_local(|| {
+            plan.solve(black_box(&ratios), &[157.0], &mut speeds)
+                .unwrap_or_else(|e| panic!("{e}"))
+        });
+    }
+
+    #[divan::bench(args = SIZES)]
+    fn kinematics_dense(b: Bencher, links: usize) {
+        solve(b, links, false);
+    }
+
+    #[divan::bench(args = SIZES)]
+    fn kinematics_sparse(b: Bencher, links: usize) {
+        solve(b, links, true);
+    }
+
+    #[divan::bench(args = [1002, 10_002, 100_002], sample_count = 5)]
+    fn read_and_check(b: Bencher, links: usize) {
+        let text = families::zigzag_chain((links - 2) / 2);
+        b.bench(|| build(black_box(&text)).dof());
+    }
+}
+
 mod examples {
     use super::*;
 

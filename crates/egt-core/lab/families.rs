@@ -5,6 +5,9 @@
 //! * [`gear_pair`]: two wheels on the frame (3 links, the smallest train).
 //! * [`planetary_chain`]: k simple planetary sets in series, ring fixed, each
 //!   carrier driving the next sun (2 + 2k links, 1 DOF).
+//! * [`zigzag_chain`]: the same chain with every other set reversed (carrier
+//!   in, sun out), so the speeds stay of order one however long it is: the
+//!   large trains of the sparse kinematics (2 + 2k links, 1 DOF).
 //! * [`nest`]: planetary stages nested k deep: each planet is the carrier of
 //!   the next, so link k rides on k - 1 carriers and its eq. (4) chain has
 //!   k - 1 terms (k + 1 links, 1 DOF).
@@ -106,6 +109,35 @@ pub fn planetary_chain(k: usize) -> String {
         link(&mut s, &format!("P{i}.planet"), 1.5e-5, Some(0.08), 3);
     }
     analysis(&mut s, "s1", &format!("c{k}"));
+    s
+}
+
+/// `k` simple planetary sets in series, ring fixed, alternately reducing
+/// (sun in, carrier out) and overdriving (carrier in, sun out): the output
+/// speed stays of order one for any `k` (a plain chain's underflows past
+/// about 500 sets). Links `m0` (input) to `mk` (output); 2 + 2k links.
+pub fn zigzag_chain(k: usize) -> String {
+    let mut s = format!("name = \"zigzag chain of {k}\"\nframe = \"case\"\n\n");
+    link(&mut s, "m0", 2.0e-4, None, 1);
+    for i in 1..=k {
+        let (prev, next) = (format!("m{}", i - 1), format!("m{i}"));
+        let (sun, carrier) = if i % 2 == 1 {
+            (&prev, &next)
+        } else {
+            (&next, &prev)
+        };
+        let zs = 21 + (7 * i as i64) % 13;
+        let zp = 17 + (5 * i as i64) % 11;
+        let zr = zs + 2 * zp;
+        let _ = write!(
+            s,
+            "[[planetary]]\nname = \"P{i}\"\nsun = \"{sun}\"\nring = \"case\"\ncarrier = \"{carrier}\"\n\
+             teeth = {{ sun = {zs}, planet = {zp}, ring = {zr} }}\nmodule = 1.5e-3\n\n"
+        );
+        link(&mut s, &next, 3.5e-3, Some(1.8), 1);
+        link(&mut s, &format!("P{i}.planet"), 1.5e-5, Some(0.08), 3);
+    }
+    analysis(&mut s, "m0", &format!("m{k}"));
     s
 }
 

@@ -468,6 +468,25 @@ pub enum AnalysisError {
         /// The enumeration limit.
         limit: usize,
     },
+    /// A train too large for an analysis that holds dense matrices (or exact
+    /// rationals) of its size: refused before allocating.
+    #[error(
+        "{analysis} of a train of {links} links needs about {mib} MiB of dense matrices; the limit is {limit_mib} MiB, at most {most} links ({what})"
+    )]
+    TooLarge {
+        /// The analysis refused.
+        analysis: String,
+        /// Links in the train.
+        links: usize,
+        /// Estimated MiB it would take.
+        mib: usize,
+        /// The limit in MiB.
+        limit_mib: usize,
+        /// The largest train within the limit.
+        most: usize,
+        /// What is still available for a train this large, in words.
+        what: String,
+    },
     /// The mass matrix varies with the configuration, which this analysis cannot follow.
     #[error(
         "{analysis} needs a constant mass matrix, but {} ride(s) on nested carriers whose arms do not balance, so [M] varies with the carrier angles; use the single-scenario dynamics with [analysis] angles",
@@ -521,6 +540,7 @@ impl AnalysisError {
             AnalysisError::SelfLocking => "self_locking",
             AnalysisError::DirectionsUndecided { .. } => "directions_undecided",
             AnalysisError::ConfigurationDependent { .. } => "configuration_dependent",
+            AnalysisError::TooLarge { .. } => "too_large",
         }
     }
 }

@@ -162,6 +162,7 @@ impl Train {
     /// [`AnalysisError::MissingData`] naming a missing offset, or an inertia
     /// given for a planet whose speed is unknown (no tooth count).
     pub fn mass_matrix(&self) -> Result<MassMatrix> {
+        self.require_dense("the mass matrix")?;
         let n = self.coordinates().len();
         let mut m = DMatrix::zeros(n, n);
         let (offsets, notes) = self.axis_offsets();

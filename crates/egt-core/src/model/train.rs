@@ -11,7 +11,7 @@ use std::collections::HashMap;
 use petgraph::graph::{NodeIndex, UnGraph};
 use serde::Serialize;
 
-use crate::error::{Error, Result, SpecErrorKind, suggest};
+use crate::error::{AnalysisError, Error, Result, SpecErrorKind, suggest};
 use crate::model::circuits::FundamentalCircuit;
 use crate::model::topology::{self, Tree};
 use crate::numerics::exact::{self, Q};
@@ -236,6 +236,8 @@ pub struct Simulate {
 pub struct Train {
     pub(crate) name: Option<String>,
     pub(crate) links: Vec<Link>,
+    /// Link ids by name (a train may have many thousands of links).
+    pub(crate) link_ids: HashMap<String, LinkId>,
     pub(crate) frame: LinkId,
     pub(crate) levels: Vec<String>,
     pub(crate) revolutes: Vec<Revolute>,
@@ -365,10 +367,7 @@ impl Train {
     }
     /// Look up a link by name.
     pub fn link_id(&self, name: &str) -> Option<LinkId> {
-        self.links
-            .iter()
-            .position(|l| l.name == name)
-            .map(LinkId::from_index)
+        self.link_ids.get(name).copied()
     }
     /// Look up a link by name, with a spec error naming `path` when it is unknown.
     ///
@@ -733,12 +732,20 @@ fn gear_pair(g: &DraftGear, ids: &HashMap<&str, LinkId>) -> Result<GearPair> {
     })
 }
 
-/// The most memory the dense matrices of one train may take. The topology rank
-/// test, the kinematics and the prepared solver hold a few dense n x n matrices
-/// (u64, f64, rationals) for n links; [`dense_bytes`] estimates them before any
-/// is allocated, so a huge train is refused by name instead of aborting on a
-/// failed allocation (or running for minutes, the work being cubic in n).
+/// The most memory the dense matrices of one analysis may take. The
+/// analyses other than the topology check and the kinematics (dynamics,
+/// power, stability, simulation, gear states, exact speeds) hold a few dense
+/// n x n matrices (f64 or rationals) for n links; [`Train::require_dense`]
+/// estimates them with [`dense_bytes`] before any is allocated, so a huge
+/// train is refused by name instead of aborting on a failed allocation (or
+/// running for minutes, the work being cubic in n). The topology check and
+/// the float kinematics are sparse and take any train up to [`MAX_TRAIN_LINKS`].
 pub const MAX_DENSE_BYTES: usize = 64 << 20;
+
+/// The most links a train may have: about 5 KB of memory a link while it is
+/// read and checked (a 10^5-link spec takes 0.5 GB), so 2^20 links stay
+/// within a few GB.
+pub const MAX_TRAIN_LINKS: usize = 1 << 20;
 
 /// Estimated bytes of the dense matrices of a train of `links` links: about
 /// eight n x n matrices of 8-byte entries (see [`MAX_DENSE_BYTES`]).
@@ -746,34 +753,62 @@ pub fn dense_bytes(links: usize) -> usize {
     links.saturating_mul(links).saturating_mul(64)
 }
 
+/// The largest train whose dense matrices fit in [`MAX_DENSE_BYTES`].
+pub fn most_dense_links() -> usize {
+    // dense_bytes is increasing: the largest n with 64 n^2 <= limit.
+    let mut n = ((MAX_DENSE_BYTES / 64) as f64).sqrt() as usize + 1;
+    while dense_bytes(n) > MAX_DENSE_BYTES {
+        n -= 1;
+    }
+    n
+}
+
+impl Train {
+    /// Refuse `analysis` when its dense matrices for this train would pass
+    /// [`MAX_DENSE_BYTES`]; called before any is allocated.
+    ///
+    /// # Errors
+    /// [`AnalysisError::TooLarge`] naming the analysis, the size and the limit.
+    pub fn require_dense(&self, analysis: &str) -> Result<()> {
+        let n = self.links.len();
+        if dense_bytes(n) <= MAX_DENSE_BYTES {
+            return Ok(());
+        }
+        Err(AnalysisError::TooLarge {
+            analysis: analysis.to_string(),
+            links: n,
+            mib: dense_bytes(n) >> 20,
+            limit_mib: MAX_DENSE_BYTES >> 20,
+            most: most_dense_links(),
+            what: "the topology check and the float kinematics are sparse and take it".into(),
+        }
+        .into())
+    }
+}
+
 fn build(spec: &Spec, draft: &Draft) -> Result<Train> {
     let n = draft.links.len();
-    if dense_bytes(n) > MAX_DENSE_BYTES {
-        let most = (1..=n)
-            .take_while(|&k| dense_bytes(k) <= MAX_DENSE_BYTES)
-            .last();
+    if n > MAX_TRAIN_LINKS {
         #[allow(clippy::cast_precision_loss)]
         return Err(Error::spec(
             "links",
             SpecErrorKind::OutOfRange {
                 value: n as f64,
-                expected: format!(
-                    "a train of {n} links needs about {} MiB of dense matrices; the limit is {} MiB, \
-                     at most {} links",
-                    dense_bytes(n) >> 20,
-                    MAX_DENSE_BYTES >> 20,
-                    most.unwrap_or(0)
-                ),
+                expected: format!("at most {MAX_TRAIN_LINKS} links in a train"),
             },
         ));
     }
     // Links.
     let mut links = Vec::with_capacity(draft.links.len());
+    let written: HashMap<&str, usize> = spec
+        .links
+        .iter()
+        .enumerate()
+        .map(|(k, l)| (l.name.as_str(), k))
+        .collect();
     for (n, (name, dl)) in draft.links.iter().enumerate() {
-        let path = spec
-            .links
-            .iter()
-            .position(|l| &l.name == name)
+        let path = written
+            .get(name.as_str())
             .map_or_else(|| format!("link `{name}`"), |k| format!("links[{k}]"));
         let d = &dl.data;
         let inertia = d
@@ -845,14 +880,15 @@ fn build(spec: &Spec, draft: &Draft) -> Result<Train> {
 
     // Levels, interned in first-appearance order.
     let mut levels: Vec<String> = Vec::new();
+    let mut level_ids: HashMap<String, LevelId> = HashMap::new();
     let mut level_id = |name: &str| -> LevelId {
-        match levels.iter().position(|l| l == name) {
-            Some(i) => LevelId::from_index(i),
-            None => {
-                levels.push(name.to_string());
-                LevelId::from_index(levels.len() - 1)
-            }
+        if let Some(&id) = level_ids.get(name) {
+            return id;
         }
+        let id = LevelId::from_index(levels.len());
+        levels.push(name.to_string());
+        level_ids.insert(name.to_string(), id);
+        id
     };
 
     // Turning pairs: no self-loops, no duplicates.
@@ -944,8 +980,8 @@ fn build(spec: &Spec, draft: &Draft) -> Result<Train> {
         let path = format!("offsets[{n}]");
         let mut lv = [LevelId(0); 2];
         for (s, name) in o.levels.iter().enumerate() {
-            lv[s] = match levels.iter().position(|l| l == name) {
-                Some(i) => LevelId::from_index(i),
+            lv[s] = match level_ids.get(name.as_str()) {
+                Some(&id) => id,
                 None => {
                     return Err(Error::invalid(
                         format!("{path}.levels[{s}]"),
@@ -1014,9 +1050,15 @@ fn build(spec: &Spec, draft: &Draft) -> Result<Train> {
         coord_of[l.index()] = Some(c);
     }
 
+    let link_ids = links
+        .iter()
+        .enumerate()
+        .map(|(i, l)| (l.name.clone(), LinkId::from_index(i)))
+        .collect();
     let mut train = Train {
         name: spec.name.clone(),
         links,
+        link_ids,
         frame,
         levels,
         revolutes,

@@ -5,3 +5,4 @@ pub mod exact;
 pub(crate) mod lanes;
 pub mod linalg;
 pub mod modp;
+pub mod sparse;

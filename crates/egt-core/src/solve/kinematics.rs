@@ -15,7 +15,8 @@ use crate::error::{AnalysisError, Error, Result};
 use crate::model::equations::{self, willis_row};
 use crate::model::train::{LinkId, Train};
 use crate::numerics::exact::{self, Q, QMatrix};
-use crate::numerics::linalg::{COND_WARN, Lu};
+use crate::numerics::linalg::{self, COND_WARN, Lu};
+use crate::numerics::sparse::SparseLu;
 
 /// One prescribed input speed.
 #[derive(Debug, Clone, PartialEq)]
@@ -80,6 +81,22 @@ enum Slot {
     Unknown(usize),
 }
 
+/// Unknowns from which the Willis system is factored sparsely (faer's
+/// sparse LU, fill-reducing order): below, the dense LU (unrolled for small
+/// orders) is faster; from about 20 unknowns the sparse one is, and its time
+/// and memory grow about linearly where the dense LU's grow as n^2 to n^3
+/// (`cargo bench -p egt-core --bench scenarios -- large::kinematics`,
+/// figures in `docs/benchmarks.md`, "Large trains").
+pub const SPARSE_FROM: usize = 20;
+
+/// The factorisation of a Willis system.
+#[derive(Debug, Clone)]
+enum Factor {
+    Dense(Lu),
+    /// With the slot of each circuit's three entries (`usize::MAX`: a known speed).
+    Sparse(Box<SparseLu>, Vec<[usize; 3]>),
+}
+
 /// A kinematic solve prepared for one choice of input links.
 #[derive(Debug, Clone)]
 pub struct KinematicsPlan {
@@ -87,7 +104,7 @@ pub struct KinematicsPlan {
     slots: Vec<Slot>,
     unknowns: Vec<LinkId>,
     circuits: Vec<[LinkId; 3]>,
-    lu: Lu,
+    factor: Factor,
     rhs: Vec<f64>,
 }
 
@@ -97,6 +114,14 @@ impl KinematicsPlan {
     /// # Errors
     /// Wrong input count, the frame or a repeated link as input.
     pub fn new(train: &Train, inputs: &[LinkId]) -> Result<Self> {
+        Self::with_sparse(train, inputs, train.coordinates().len() >= SPARSE_FROM)
+    }
+
+    /// As [`KinematicsPlan::new`], with the sparse or the dense LU as asked.
+    ///
+    /// # Errors
+    /// As [`KinematicsPlan::new`].
+    pub fn with_sparse(train: &Train, inputs: &[LinkId], sparse: bool) -> Result<Self> {
         if inputs.len() != train.dof() {
             return Err(AnalysisError::WrongInputCount {
                 dof: train.dof(),
@@ -134,16 +159,42 @@ impl KinematicsPlan {
         }
         let n = unknowns.len();
         debug_assert_eq!(n, train.circuits().len());
+        let circuits: Vec<[LinkId; 3]> = train
+            .circuits()
+            .iter()
+            .map(|c| [c.gear_i, c.gear_j, c.carrier])
+            .collect();
+        let factor = if sparse {
+            let mut entries = Vec::with_capacity(3 * n);
+            for (m, ids) in circuits.iter().enumerate() {
+                for l in ids {
+                    if let Slot::Unknown(u) = slots[l.index()] {
+                        entries.push((m, u));
+                    }
+                }
+            }
+            let (lu, at) = SparseLu::new(n, &entries)
+                .map_err(|e| linalg::singular("the Willis system", &e.to_string()))?;
+            let mut next = at.into_iter();
+            let places = circuits
+                .iter()
+                .map(|ids| {
+                    ids.map(|l| match slots[l.index()] {
+                        Slot::Unknown(_) => next.next().unwrap_or(usize::MAX),
+                        _ => usize::MAX,
+                    })
+                })
+                .collect();
+            Factor::Sparse(Box::new(lu), places)
+        } else {
+            Factor::Dense(Lu::new(n))
+        };
         Ok(KinematicsPlan {
             inputs: inputs.to_vec(),
             slots,
             unknowns,
-            circuits: train
-                .circuits()
-                .iter()
-                .map(|c| [c.gear_i, c.gear_j, c.carrier])
-                .collect(),
-            lu: Lu::new(n),
+            circuits,
+            factor,
             rhs: vec![0.0; n],
         })
     }
@@ -167,22 +218,59 @@ impl KinematicsPlan {
         speeds: &mut [f64],
     ) -> Result<f64> {
         let n = self.unknowns.len();
-        let a = self.lu.matrix_mut();
-        a.iter_mut().for_each(|v| *v = 0.0);
         self.rhs.iter_mut().for_each(|v| *v = 0.0);
-        for (m, (ids, &tau)) in self.circuits.iter().zip(ratios).enumerate() {
-            for (l, coef) in ids.iter().zip(willis_row(tau)) {
-                match self.slots[l.index()] {
-                    Slot::Frame => {}
-                    Slot::Input(k) => self.rhs[m] -= coef * input_speeds[k],
-                    Slot::Unknown(u) => a[m * n + u] += coef,
+        let (what, detail) = ("the Willis system", "a pivot column is zero");
+        match &mut self.factor {
+            Factor::Dense(lu) => {
+                let a = lu.matrix_mut();
+                a.iter_mut().for_each(|v| *v = 0.0);
+                for (m, (ids, &tau)) in self.circuits.iter().zip(ratios).enumerate() {
+                    for (l, coef) in ids.iter().zip(willis_row(tau)) {
+                        match self.slots[l.index()] {
+                            Slot::Frame => {}
+                            Slot::Input(k) => self.rhs[m] -= coef * input_speeds[k],
+                            Slot::Unknown(u) => a[m * n + u] += coef,
+                        }
+                    }
+                }
+            }
+            Factor::Sparse(lu, places) => {
+                let a = lu.values_mut();
+                a.iter_mut().for_each(|v| *v = 0.0);
+                for (m, ((ids, &tau), at)) in self
+                    .circuits
+                    .iter()
+                    .zip(ratios)
+                    .zip(places.iter())
+                    .enumerate()
+                {
+                    for ((l, coef), &k) in ids.iter().zip(willis_row(tau)).zip(at) {
+                        match self.slots[l.index()] {
+                            Slot::Frame => {}
+                            Slot::Input(i) => self.rhs[m] -= coef * input_speeds[i],
+                            Slot::Unknown(_) => a[k] += coef,
+                        }
+                    }
                 }
             }
         }
-        let cond = self
-            .lu
-            .factor_checked("the Willis system", "a pivot column is zero")?;
-        self.lu.solve(&mut self.rhs);
+        let cond = match &mut self.factor {
+            Factor::Dense(lu) => {
+                let cond = lu.factor_checked(what, detail)?;
+                lu.solve(&mut self.rhs);
+                cond
+            }
+            Factor::Sparse(lu, _) => {
+                lu.factor().map_err(|_| linalg::singular(what, detail))?;
+                let cond = lu.condition();
+                if cond.is_infinite() {
+                    return Err(linalg::singular(what, "a pivot is zero"));
+                }
+                linalg::refuse(cond, what)?;
+                lu.solve(&mut self.rhs);
+                cond
+            }
+        };
         speeds.iter_mut().for_each(|v| *v = 0.0);
         for (k, &l) in self.inputs.iter().enumerate() {
             speeds[l.index()] = input_speeds[k];
@@ -231,6 +319,7 @@ impl Train {
     /// # Errors
     /// Missing ratio.
     pub fn willis_jacobian(&self) -> Result<DMatrix<f64>> {
+        self.require_dense("the Willis Jacobian")?;
         let ratios = self.ratios()?;
         let mut j = DMatrix::zeros(self.circuits().len(), self.coordinates().len());
         for (m, (c, &t)) in self.circuits().iter().zip(&ratios).enumerate() {
@@ -246,8 +335,10 @@ impl Train {
         Ok(j)
     }
 
-    /// The exact Willis Jacobian, when every ratio is exact.
+    /// The exact Willis Jacobian, when every ratio is exact (and the train is
+    /// within [`MAX_DENSE_BYTES`](crate::model::train::MAX_DENSE_BYTES)).
     pub fn willis_jacobian_exact(&self) -> Option<QMatrix> {
+        self.require_dense("the exact Willis Jacobian").ok()?;
         let taus: Vec<Q> = self
             .gears()
             .iter()
@@ -290,8 +381,12 @@ impl Train {
             .iter()
             .map(|g| g.ratio.as_ref()?.exact.clone())
             .collect();
+        // The exact solve and the exact diagnosis eliminate densely over the
+        // rationals: only for trains within the dense limit.
+        let exact_fits = self.require_dense("the exact kinematics");
         let condition = match solved {
             Ok(c) => c,
+            Err(e) if exact_fits.is_err() => return Err(e),
             Err(e) => {
                 // Diagnose exactly, on the exact ratios or on the exact values of the floats.
                 let taus: Vec<Q> = match &exact_taus {
@@ -328,8 +423,16 @@ impl Train {
         if condition > COND_WARN {
             warnings.push(format!("the Willis system is ill-conditioned (condition {condition:.2e}); expect about {:.0} correct digits", (16.0 - condition.log10()).max(0.0)));
         }
-        let exact = match (exact_taus, exact_inputs) {
-            (Some(t), Some(i)) => Some(self.solve_exact(&plan, &t, &i)?),
+        let exact = match (exact_taus, exact_inputs, exact_fits) {
+            (Some(t), Some(i), Ok(())) => Some(self.solve_exact(&plan, &t, &i)?),
+            (Some(_), Some(_), Err(_)) => {
+                warnings.push(format!(
+                    "no exact speeds: exact rationals are solved for trains of at most {} links, this one has {} (the float speeds stand, checked by their Willis residual)",
+                    crate::model::train::most_dense_links(),
+                    self.links().len()
+                ));
+                None
+            }
             _ => None,
         };
         if let Some(e) = &exact {

@@ -66,6 +66,7 @@ impl MassModel {
     /// As [`Train::mass_matrix`]: a link with a mass whose offsets are unknown,
     /// or an inertia given for a planet whose speed is unknown.
     pub fn new(train: &Train) -> Result<Self> {
+        train.require_dense("the mass matrix")?;
         // The offsets, the arms and the errors come from the one definition in mass.rs.
         let (offsets, notes) = train.axis_offsets();
         let n = train.coordinates().len();
@@ -382,6 +383,7 @@ impl PreparedTrain {
         driving: &[LinkId],
         extras: &[Extra],
     ) -> Result<Self> {
+        train.require_dense("the prepared solver (batch, dynamics, power flow)")?;
         let (n, f) = dof_with(train, extras)?;
         let inputs = link_columns(train, inputs, f, "input links")?;
         let accelerated = link_columns(train, accelerated, f, "prescribed accelerations")?;

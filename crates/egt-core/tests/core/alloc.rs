@@ -2,7 +2,7 @@
 //! allocate nothing: `Worker::eval` for kinematics, dynamics and lossy power
 //! flow on every test train, `PreparedTrain::solve` (also with a whole mass
 //! matrix and in the forces-only mode of the single analyses),
-//! `MassModel::fill` and `KinematicsPlan::solve`.
+//! `MassModel::fill` and `KinematicsPlan::solve` (dense and sparse).
 //!
 //! The count is per thread (the test harness runs tests on several threads),
 //! kept in a `const`-initialised thread-local `Cell`, which itself never allocates.
@@ -112,6 +112,15 @@ fn prepared_solves_and_mass_fill_allocate_nothing() {
         let (n, r) = allocations(|| kin.solve(&ratios, &speeds, &mut w));
         assert!(r.is_ok());
         assert_eq!(n, 0, "{name}: KinematicsPlan::solve");
+        // The sparse LU of large trains: factor, condition and solve reuse
+        // the plan's numeric storage and scratch.
+        let mut kin =
+            KinematicsPlan::with_sparse(&t, &inputs, true).unwrap_or_else(|e| panic!("{e}"));
+        kin.solve(&ratios, &speeds, &mut w)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let (n, r) = allocations(|| kin.solve(&ratios, &speeds, &mut w));
+        assert!(r.is_ok());
+        assert_eq!(n, 0, "{name}: KinematicsPlan::solve, sparse");
 
         // The single analyses' mode: a whole [M], forces only (eq. 8, 10).
         let req = util::request(&t);

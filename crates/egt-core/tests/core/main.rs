@@ -16,5 +16,8 @@ mod batch;
 #[path = "../../lab/mod.rs"]
 mod lab;
 
+// Large trains: the sparse Willis solve, and the dense analyses refused past their limit.
+mod large;
+
 // Trains used across modules: the bundled examples, generated families, random parameters.
 mod util;

@@ -1,0 +1,174 @@
+//! Large trains: the sparse Willis solve against the dense one, against exact
+//! rationals and against the product of the stage ratios of a 10 000-link
+//! chain; refusals where the sparse LU meets a (nearly) singular system; the
+//! dense analyses refused by name past their memory limit.
+
+use egt_core::numerics::exact;
+use egt_core::solve::kinematics::willis_residual;
+use egt_core::{KinematicsPlan, LinkId, SpeedInput, Train};
+
+use crate::lab::families;
+use crate::util::{self, one_dof_trains};
+
+fn input_of(t: &Train) -> (Vec<LinkId>, Vec<f64>) {
+    (
+        t.analysis().speeds.iter().map(|s| s.0).collect(),
+        t.analysis().speeds.iter().map(|s| s.1).collect(),
+    )
+}
+
+fn solve(t: &Train, sparse: bool) -> egt_core::error::Result<(Vec<f64>, f64)> {
+    let (links, speeds) = input_of(t);
+    let mut plan = KinematicsPlan::with_sparse(t, &links, sparse)?;
+    let ratios = t.ratios()?;
+    let mut w = vec![0.0; t.links().len()];
+    let cond = plan.solve(&ratios, &speeds, &mut w)?;
+    Ok((w, cond))
+}
+
+#[test]
+fn sparse_and_dense_willis_solves_agree_on_every_test_train() {
+    let mut trains = one_dof_trains();
+    trains.push(("zigzag 40".into(), util::train(&families::zigzag_chain(40))));
+    trains.push((
+        "chain 40".into(),
+        util::train(&families::planetary_chain(40)),
+    ));
+    for (name, t) in trains {
+        let (d, cd) = solve(&t, false).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let (s, cs) = solve(&t, true).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let scale = d.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        for (k, (a, b)) in d.iter().zip(&s).enumerate() {
+            assert!(
+                (a - b).abs() <= 1e-13 * scale,
+                "{name}: link {k}: dense {a} against sparse {b}"
+            );
+        }
+        // Two estimates of one condition number, from different factors.
+        assert!(
+            cs <= 3.0 * cd && cd <= 3.0 * cs,
+            "{name}: condition {cd} against {cs}"
+        );
+    }
+}
+
+#[test]
+fn sparse_solve_of_a_500_link_chain_is_within_1e_13_of_exact() {
+    let t = util::train(&families::zigzag_chain(249));
+    assert!(t.coordinates().len() >= egt_core::solve::kinematics::SPARSE_FROM);
+    let (w, cond) = solve(&t, true).unwrap_or_else(|e| panic!("{e}"));
+    // A disturbance of one stage reaches every later one: the condition
+    // grows like the number of links, not faster.
+    assert!(cond < 10.0 * t.links().len() as f64, "condition {cond}");
+    let (links, speeds) = input_of(&t);
+    let inputs: Vec<SpeedInput> = links
+        .iter()
+        .zip(&speeds)
+        .map(|(&l, &v)| (l, v).into())
+        .collect();
+    let k = t.kinematics(&inputs).unwrap_or_else(|e| panic!("{e}"));
+    let ex = k
+        .exact
+        .unwrap_or_else(|| panic!("tooth counts give exact speeds"));
+    for (l, (f, q)) in w.iter().zip(&ex).enumerate() {
+        let e = exact::to_f64(q);
+        assert!(
+            (f - e).abs() <= 1e-13 * e.abs().max(1e-300),
+            "link {l}: {f} against exact {e}"
+        );
+    }
+}
+
+/// The speed of every stage's output of a zigzag chain, from its teeth
+/// alone: a sun-in set turns its carrier at z_s / (z_s + z_r) of the sun's
+/// speed, a carrier-in set its sun at (z_s + z_r) / z_s of the carrier's.
+fn stage_speeds(k: usize, input: f64) -> Vec<f64> {
+    let mut w = vec![input];
+    for i in 1..=k {
+        let zs = (21 + (7 * i as i64) % 13) as f64;
+        let zp = (17 + (5 * i as i64) % 11) as f64;
+        let zr = zs + 2.0 * zp;
+        let last = w[i - 1];
+        w.push(if i % 2 == 1 {
+            last * zs / (zs + zr)
+        } else {
+            last * (zs + zr) / zs
+        });
+    }
+    w
+}
+
+#[test]
+fn a_10000_link_chain_checks_and_solves_to_the_product_of_its_stage_ratios() {
+    let k = 4999;
+    let t = util::train(&families::zigzag_chain(k));
+    assert_eq!(t.links().len(), 10_000);
+    let (links, speeds) = input_of(&t);
+    let inputs: Vec<SpeedInput> = links
+        .iter()
+        .zip(&speeds)
+        .map(|(&l, &v)| (l, v).into())
+        .collect();
+    let s = t.kinematics(&inputs).unwrap_or_else(|e| panic!("{e}"));
+    // No exact speeds this large, and the answer says so.
+    assert!(s.exact.is_none());
+    assert!(
+        s.warnings.iter().any(|w| w.contains("no exact speeds")),
+        "{:?}",
+        s.warnings
+    );
+    let expected = stage_speeds(k, speeds[0]);
+    for (i, e) in expected.iter().enumerate() {
+        let l = t
+            .link_id(&format!("m{i}"))
+            .unwrap_or_else(|| panic!("m{i}"));
+        let w = s.speed[l.index()];
+        assert!((w - e).abs() <= 1e-12 * e.abs(), "m{i}: {w} against {e}");
+    }
+    let ratios = t.ratios().unwrap_or_else(|e| panic!("{e}"));
+    let residual = willis_residual(&t, &ratios, &s.speed);
+    assert!(residual < 1e-14, "residual {residual}");
+    assert!(
+        s.condition < 20.0 * t.links().len() as f64,
+        "condition {}",
+        s.condition
+    );
+}
+
+#[test]
+fn the_sparse_solve_refuses_singular_and_nearly_singular_systems() {
+    for (name, text) in [
+        ("locked Fig. 3", families::near_locked(0.0)),
+        ("near-locked Fig. 3", families::near_locked(1e-15)),
+    ] {
+        let t = util::train(&text);
+        for sparse in [false, true] {
+            match solve(&t, sparse) {
+                Ok((w, c)) => panic!("{name} (sparse {sparse}): speeds {w:?}, condition {c}"),
+                Err(e) => assert!(
+                    matches!(e.code(), "singular" | "ill_conditioned"),
+                    "{name} (sparse {sparse}): {e}"
+                ),
+            }
+        }
+    }
+}
+
+#[test]
+fn dense_analyses_of_a_train_past_the_limit_are_refused_by_name() {
+    let t = util::train(&families::zigzag_chain(600));
+    for e in [
+        t.mass_matrix().err(),
+        t.willis_jacobian().err(),
+        t.inverse_dynamics(&util::request(&t), None).err(),
+    ] {
+        let e = e.unwrap_or_else(|| panic!("a 1202-link train's dense analysis ran"));
+        assert_eq!(e.code(), "too_large", "{e}");
+        let msg = e.to_string();
+        assert!(
+            msg.contains("1202 links") && msg.contains("at most 1024 links"),
+            "{msg}"
+        );
+    }
+    assert!(t.willis_jacobian_exact().is_none());
+}
