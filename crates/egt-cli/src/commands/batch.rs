@@ -560,9 +560,16 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
             results,
             messages,
         } = buffers;
-        params.clear();
-        for _ in 0..len {
-            params.extend_from_slice(&base);
+        // Every row starts from the base row. A grid or zip sets the same
+        // columns in every row, so a buffer of the same length from an
+        // earlier block already holds the base everywhere else; a `--rows`
+        // file sets other columns line by line, so it refills.
+        let same_columns = matches!(design.rows, Rows::Product { .. });
+        if !(same_columns && params.len() == len * np) {
+            params.clear();
+            for _ in 0..len {
+                params.extend_from_slice(&base);
+            }
         }
         let unreadable: Vec<(usize, String)> = params
             .par_chunks_mut(np)
@@ -574,7 +581,7 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
                 })
             })
             .collect();
-        results.clear();
+        // `run` writes every output of every row (NaN on failed rows).
         results.resize(len * nq, 0.0);
         let errors = plan.run(params, results);
         messages.clear();
@@ -841,20 +848,43 @@ struct Encoder {
     factory: Option<parquet::arrow::arrow_writer::ArrowRowGroupWriterFactory>,
 }
 
-/// A column of doubles; nulls where `value` gives none (no null buffer when
-/// there are none).
-fn doubles(len: usize, value: impl Fn(usize) -> Option<f64>) -> arrow_array::ArrayRef {
-    let mut values = Vec::with_capacity(len);
-    let mut valid = Vec::with_capacity(len);
-    for r in 0..len {
-        let v = value(r);
-        values.push(v.unwrap_or(0.0));
-        valid.push(v.is_some());
-    }
-    let nulls = valid
-        .contains(&false)
-        .then(|| arrow_buffer::NullBuffer::from(valid));
+/// A column of doubles: `value(r)`, null where it is not finite or where
+/// `null(r)` (no null buffer when there are none).
+fn doubles(
+    len: usize,
+    value: impl Fn(usize) -> f64,
+    null: impl Fn(usize) -> bool,
+) -> arrow_array::ArrayRef {
+    let values: Vec<f64> = (0..len).map(&value).collect();
+    let missing = |r: usize| null(r) || !values[r].is_finite();
+    let nulls = (0..len).any(missing).then(|| {
+        let valid: Vec<bool> = (0..len).map(|r| !missing(r)).collect();
+        arrow_buffer::NullBuffer::from(valid)
+    });
+    let values: Vec<f64> = match &nulls {
+        // Null slots hold 0 (never a NaN or an inf a reader might take up).
+        Some(n) => values
+            .iter()
+            .enumerate()
+            .map(|(r, &v)| if n.is_valid(r) { v } else { 0.0 })
+            .collect(),
+        None => values,
+    };
     std::sync::Arc::new(arrow_array::Float64Array::new(values.into(), nulls))
+}
+
+/// A column of optional texts: all null without building one by one when
+/// `text` gives none (the usual block: no warning, no error).
+fn texts<'a>(
+    len: usize,
+    text: impl Fn(usize) -> Option<std::borrow::Cow<'a, str>>,
+) -> arrow_array::ArrayRef {
+    use arrow_array::StringArray;
+    let first = (0..len).find(|&r| text(r).is_some());
+    std::sync::Arc::new(match first {
+        None => StringArray::new_null(len),
+        Some(_) => StringArray::from_iter((0..len).map(text)),
+    })
 }
 
 impl Encoder {
@@ -872,34 +902,31 @@ impl Encoder {
                 std::iter::repeat_n(s, len),
             )));
         }
-        let finite = |v: f64| v.is_finite().then_some(v);
         for &(_, c) in b.varied {
-            columns.push(doubles(len, |r| finite(params[r * np + c])));
+            columns.push(doubles(len, |r| params[r * np + c], |_| false));
         }
+        let failed = |r: usize| b.messages[r].is_some();
         // Which of this plan's outputs fills each output column, if any.
         let mut source = vec![None; self.outputs];
         for (&pos, &i) in b.positions.0.iter().zip(b.positions.1) {
             source[pos] = Some(i);
         }
         for src in source {
-            columns.push(doubles(len, |r| {
-                let i = src?;
-                if b.messages[r].is_some() {
-                    return None;
-                }
-                finite(results[r * nq + i])
-            }));
+            columns.push(match src {
+                Some(i) => doubles(len, |r| results[r * nq + i], failed),
+                None => Arc::new(arrow_array::Float64Array::new_null(len)),
+            });
         }
-        columns.push(Arc::new(StringArray::from_iter((0..len).map(|r| {
-            if b.messages[r].is_some() {
+        columns.push(texts(len, |r| {
+            if failed(r) {
                 None
             } else {
-                warning(plan, &results[r * nq..(r + 1) * nq])
+                warning(plan, &results[r * nq..(r + 1) * nq]).map(std::borrow::Cow::Owned)
             }
-        }))));
-        columns.push(Arc::new(StringArray::from_iter(
-            b.messages.iter().map(|m| m.as_deref()),
-        )));
+        }));
+        columns.push(texts(len, |r| {
+            b.messages[r].as_deref().map(std::borrow::Cow::Borrowed)
+        }));
         self.record_batch(columns, b.index)
     }
 
