@@ -217,3 +217,31 @@ def test_a_panic_is_an_internal_error(fig3: egt.Train) -> None:
 def test_errors_are_catchable_as_egt_error(fig3: egt.Train) -> None:
     with pytest.raises(egt.EgtError):
         fig3.kinematics({"nope": 1.0})
+
+
+def _zigzag(sets: int) -> str:
+    """A chain of simple planetary sets, every other one reversed (carrier in,
+    sun out), so the speeds stay of order one: 2 + 2 * sets links."""
+    out = ['frame = "case"']
+    for i in range(1, sets + 1):
+        prev, nxt = f"m{i - 1}", f"m{i}"
+        sun, carrier = (prev, nxt) if i % 2 else (nxt, prev)
+        out.append(
+            f'[[planetary]]\nname = "P{i}"\nsun = "{sun}"\nring = "case"\ncarrier = "{carrier}"\n'
+            "teeth = { sun = 30, planet = 21, ring = 72 }"
+        )
+    return "\n".join(out) + "\n"
+
+
+def test_a_train_past_the_dense_limit_solves_its_kinematics_and_refuses_dynamics() -> None:
+    train = egt.loads(_zigzag(600))  # 1202 links
+    k = train.kinematics({"m0": 1.0})
+    # Sun in: the carrier turns at 30 / 102 of the sun; carrier in: the sun at 102 / 30.
+    assert k["m1"] == pytest.approx(30 / 102, rel=1e-13)
+    assert k["m600"] == pytest.approx(1.0, rel=1e-12)
+    assert k.exact is None and any("no exact speeds" in w for w in k.warnings)
+    assert train.willis_residual(k.speeds) < 1e-14
+    with pytest.raises(egt.AnalysisError) as info:
+        train.dynamics(accelerations={"m0": 0.0}, torques={"m600": -1.0}, driving=["m0"])
+    assert info.value.kind == "too_large"
+    assert "1202 links" in str(info.value) and "at most 1024 links" in str(info.value)
