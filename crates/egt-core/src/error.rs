@@ -487,6 +487,15 @@ pub enum AnalysisError {
         /// What is still available for a train this large, in words.
         what: String,
     },
+    /// A solver could not allocate its working memory (reported instead of
+    /// aborting; never taken for a singular system).
+    #[error("{what} could not be computed: {detail}")]
+    OutOfMemory {
+        /// The solve.
+        what: String,
+        /// What failed, in the solver's words.
+        detail: String,
+    },
     /// The mass matrix varies with the configuration, which this analysis cannot follow.
     #[error(
         "{analysis} needs a constant mass matrix, but {} ride(s) on nested carriers whose arms do not balance, so [M] varies with the carrier angles; use the single-scenario dynamics with [analysis] angles",
@@ -541,6 +550,7 @@ impl AnalysisError {
             AnalysisError::DirectionsUndecided { .. } => "directions_undecided",
             AnalysisError::ConfigurationDependent { .. } => "configuration_dependent",
             AnalysisError::TooLarge { .. } => "too_large",
+            AnalysisError::OutOfMemory { .. } => "out_of_memory",
         }
     }
 }

@@ -23,6 +23,18 @@ use super::linalg::{Factored, inverse_norm1};
 #[error("the sparse LU could not be set up: {0}")]
 pub struct SetupError(pub String);
 
+/// Why a factorisation failed.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum FactorError {
+    /// No non-zero pivot is left in the pattern at this column (of the
+    /// fill-reducing order): the matrix is structurally singular.
+    #[error("structurally singular at pivot {0}")]
+    Singular(usize),
+    /// faer could not allocate its working memory.
+    #[error("the sparse LU could not allocate: {0}")]
+    Failed(String),
+}
+
 /// LU factorisation of a square sparse matrix of fixed pattern.
 pub struct SparseLu {
     n: usize,
@@ -150,10 +162,11 @@ impl SparseLu {
     /// Factor.
     ///
     /// # Errors
-    /// The column (in the fill-reducing order) where no non-zero pivot is
-    /// left in the pattern: structurally singular. A pivot that is zero by
-    /// its value shows as an infinite [`SparseLu::condition`].
-    pub fn factor(&mut self) -> Result<(), super::linalg::ZeroPivot> {
+    /// [`FactorError::Singular`] when the pattern is structurally singular
+    /// (a pivot that is zero by its value shows as an infinite
+    /// [`SparseLu::condition`] instead); [`FactorError::Failed`] when faer
+    /// cannot allocate.
+    pub fn factor(&mut self) -> Result<(), FactorError> {
         self.factored = false;
         let pattern = self.pattern.rb();
         self.anorm = (0..self.n)
@@ -173,9 +186,9 @@ impl SparseLu {
             )
             .map_err(|e| match e {
                 faer::sparse::linalg::LuError::SymbolicSingular { index } => {
-                    super::linalg::ZeroPivot(index)
+                    FactorError::Singular(index)
                 }
-                faer::sparse::linalg::LuError::Generic(_) => super::linalg::ZeroPivot(0),
+                faer::sparse::linalg::LuError::Generic(e) => FactorError::Failed(format!("{e:?}")),
             })?;
         self.factored = true;
         Ok(())

@@ -16,7 +16,7 @@ use crate::model::equations::{self, willis_row};
 use crate::model::train::{LinkId, Train};
 use crate::numerics::exact::{self, Q, QMatrix};
 use crate::numerics::linalg::{self, COND_WARN, Lu};
-use crate::numerics::sparse::SparseLu;
+use crate::numerics::sparse::{FactorError, SparseLu};
 
 /// One prescribed input speed.
 #[derive(Debug, Clone, PartialEq)]
@@ -173,8 +173,10 @@ impl KinematicsPlan {
                     }
                 }
             }
-            let (lu, at) = SparseLu::new(n, &entries)
-                .map_err(|e| linalg::singular("the Willis system", &e.to_string()))?;
+            let (lu, at) = SparseLu::new(n, &entries).map_err(|e| AnalysisError::OutOfMemory {
+                what: "the Willis system".into(),
+                detail: e.to_string(),
+            })?;
             let mut next = at.into_iter();
             let places = circuits
                 .iter()
@@ -261,7 +263,14 @@ impl KinematicsPlan {
                 cond
             }
             Factor::Sparse(lu, _) => {
-                lu.factor().map_err(|_| linalg::singular(what, detail))?;
+                lu.factor().map_err(|e| match e {
+                    FactorError::Singular(_) => linalg::singular(what, detail),
+                    FactorError::Failed(d) => AnalysisError::OutOfMemory {
+                        what: what.into(),
+                        detail: d,
+                    }
+                    .into(),
+                })?;
                 let cond = lu.condition();
                 if cond.is_infinite() {
                     return Err(linalg::singular(what, "a pivot is zero"));
