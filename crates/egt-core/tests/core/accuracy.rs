@@ -58,6 +58,44 @@ fn every_method_is_within_1e_13_of_exact_on_well_conditioned_trains() {
     }
 }
 
+/// The kinematics of `Train::kinematics` (and the CLI) factors the Willis
+/// system by the dense LU below `SPARSE_FROM` unknowns and by the sparse LU
+/// above: both, forced on every well-conditioned train, are within 1e-13 of
+/// the exact speeds.
+#[test]
+fn both_willis_factorisations_are_within_1e_13_of_exact_speeds() {
+    let mut trains = well_conditioned();
+    trains.push(("zigzag 30".into(), train(&families::zigzag_chain(30))));
+    for (name, t) in trains {
+        let (links, speeds): (Vec<_>, Vec<f64>) =
+            t.analysis().speeds.iter().map(|s| (s.0, s.1)).unzip();
+        let inputs: Vec<SpeedInput> = links
+            .iter()
+            .zip(&speeds)
+            .map(|(&l, &v)| (l, v).into())
+            .collect();
+        let k = t
+            .kinematics(&inputs)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let exact: Vec<f64> = k
+            .exact
+            .unwrap_or_else(|| panic!("{name}: no exact speeds"))
+            .iter()
+            .map(egt_core::numerics::exact::to_f64)
+            .collect();
+        let ratios = t.ratios().unwrap_or_else(|e| panic!("{name}: {e}"));
+        for sparse in [false, true] {
+            let mut plan = egt_core::KinematicsPlan::with_sparse(&t, &links, sparse)
+                .unwrap_or_else(|e| panic!("{name}: {e}"));
+            let mut w = vec![0.0; t.links().len()];
+            plan.solve(&ratios, &speeds, &mut w)
+                .unwrap_or_else(|e| panic!("{name}: {e}"));
+            let e = relative_error(&w, &exact);
+            assert!(e <= 1e-13, "{name} (sparse {sparse}): {e:e}");
+        }
+    }
+}
+
 #[test]
 fn condition_estimate_is_within_a_factor_of_10_of_the_true_value() {
     let mut trains = well_conditioned();
