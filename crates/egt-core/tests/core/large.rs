@@ -17,6 +17,15 @@ fn input_of(t: &Train) -> (Vec<LinkId>, Vec<f64>) {
     )
 }
 
+fn speed_inputs(t: &Train) -> Vec<SpeedInput> {
+    let (links, speeds) = input_of(t);
+    links
+        .iter()
+        .zip(&speeds)
+        .map(|(&l, &v)| (l, v).into())
+        .collect()
+}
+
 fn solve(t: &Train, sparse: bool) -> egt_core::error::Result<(Vec<f64>, f64)> {
     let (links, speeds) = input_of(t);
     let mut plan = KinematicsPlan::with_sparse(t, &links, sparse)?;
@@ -60,12 +69,7 @@ fn sparse_solve_of_a_500_link_chain_is_within_1e_13_of_exact() {
     // A disturbance of one stage reaches every later one: the condition
     // grows like the number of links, not faster.
     assert!(cond < 10.0 * t.links().len() as f64, "condition {cond}");
-    let (links, speeds) = input_of(&t);
-    let inputs: Vec<SpeedInput> = links
-        .iter()
-        .zip(&speeds)
-        .map(|(&l, &v)| (l, v).into())
-        .collect();
+    let inputs = speed_inputs(&t);
     let k = t.kinematics(&inputs).unwrap_or_else(|e| panic!("{e}"));
     let ex = k
         .exact
@@ -103,12 +107,8 @@ fn a_10000_link_chain_checks_and_solves_to_the_product_of_its_stage_ratios() {
     let k = 4999;
     let t = util::train(&families::zigzag_chain(k));
     assert_eq!(t.links().len(), 10_000);
-    let (links, speeds) = input_of(&t);
-    let inputs: Vec<SpeedInput> = links
-        .iter()
-        .zip(&speeds)
-        .map(|(&l, &v)| (l, v).into())
-        .collect();
+    let (_, speeds) = input_of(&t);
+    let inputs = speed_inputs(&t);
     let s = t.kinematics(&inputs).unwrap_or_else(|e| panic!("{e}"));
     // No exact speeds this large, and the answer says so.
     assert!(s.exact.is_none());
