@@ -456,6 +456,24 @@ impl Train {
             }
         }
         let known: Vec<bool> = self.links().iter().map(|l| l.sized).collect();
+        // Speeds below the smallest normal double lose digits (subnormal) or
+        // become 0: say so rather than print them as if exact.
+        let underflowed: Vec<&str> = speed
+            .iter()
+            .enumerate()
+            .filter(|&(i, w)| {
+                let lost = exact.as_ref().is_some_and(|e| !e[i].is_zero());
+                (*w != 0.0 && w.abs() < f64::MIN_POSITIVE) || (*w == 0.0 && lost)
+            })
+            .map(|(i, _)| self.link_name(LinkId::from_index(i)))
+            .collect();
+        if let Some(first) = underflowed.first() {
+            warnings.push(format!(
+                "the speeds of {} link(s), from `{first}`, are below 2.2e-308 in magnitude, where double precision keeps fewer digits; a speed smaller still prints as 0{}",
+                underflowed.len(),
+                if exact.is_some() { " (the exact speeds are right)" } else { "" }
+            ));
+        }
         let relative = self.relative_speeds(&speed, exact.as_deref(), &known);
         let residual = willis_residual(self, &ratios, &speed);
         crate::error::finite_results("the speeds", &speed)?;

@@ -172,3 +172,33 @@ fn dense_analyses_of_a_train_past_the_limit_are_refused_by_name() {
     }
     assert!(t.willis_jacobian_exact().is_none());
 }
+
+#[test]
+fn speeds_that_underflow_double_precision_are_flagged() {
+    // 600 reducing sets: the last carriers turn below 1e-308 of the input.
+    let t = util::train(&families::planetary_chain(600));
+    let s = t
+        .kinematics(&speed_inputs(&t))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let tiny = s
+        .speed
+        .iter()
+        .filter(|w| w.abs() < f64::MIN_POSITIVE)
+        .count();
+    assert!(tiny > 0, "the chain was meant to underflow");
+    assert!(
+        s.warnings.iter().any(|w| w.contains("below 2.2e-308")),
+        "{:?}",
+        s.warnings
+    );
+    // A chain whose speeds stay of order one gets no such warning.
+    let t = util::train(&families::zigzag_chain(600));
+    let s = t
+        .kinematics(&speed_inputs(&t))
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert!(
+        !s.warnings.iter().any(|w| w.contains("below 2.2e-308")),
+        "{:?}",
+        s.warnings
+    );
+}
