@@ -198,6 +198,17 @@ fn resource_limits_are_refused_by_name() {
         }
     }
 
+    // A spec file past the size limit is refused by its size, before it is
+    // parsed (a sparse file: no disk is used).
+    let path = std::env::temp_dir().join(format!("egt-huge-spec-{}.toml", std::process::id()));
+    std::fs::File::create(&path)
+        .and_then(|f| f.set_len((256 << 20) + 1))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let (code, text) = run_args(&["check", &path.display().to_string()], None);
+    std::fs::remove_file(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(code, 2, "{text}");
+    assert!(text.contains("at most 256 MiB"), "{text}");
+
     let states: Vec<String> = (0..300).map(|k| format!("\"s{k}\" = [\"A\"]")).collect();
     let spec = format!(
         "frame = \"ring\"\n[[planetary]]\nname = \"P\"\nsun = \"sun\"\nring = \"ring\"\ncarrier = \"c\"\nteeth = {{ sun = 30, ring = 72 }}\n\

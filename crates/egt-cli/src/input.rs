@@ -46,19 +46,35 @@ pub fn is_stdin(path: &Path) -> bool {
 }
 
 /// The text of a file, or of standard input for `-`, and its name for messages.
+/// At most [`MAX_SPEC_BYTES`](egt_core::spec::parse::MAX_SPEC_BYTES) are
+/// read: a longer input is refused by its size, not loaded.
 ///
 /// # Errors
-/// I/O errors, with the path.
+/// I/O errors, with the path; text that is not UTF-8; an input past the limit.
 pub fn read_text(path: &Path) -> anyhow::Result<(String, String)> {
-    if is_stdin(path) {
-        let mut text = String::new();
+    use egt_core::spec::parse::{MAX_SPEC_BYTES, check_spec_size};
+    let limit = MAX_SPEC_BYTES as u64 + 1;
+    let mut bytes = Vec::new();
+    let name = if is_stdin(path) {
         std::io::stdin()
-            .read_to_string(&mut text)
+            .take(limit)
+            .read_to_end(&mut bytes)
             .context("reading the spec from standard input")?;
-        Ok((text, "<stdin>".to_string()))
+        "<stdin>".to_string()
     } else {
-        let text =
-            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-        Ok((text, path.display().to_string()))
-    }
+        std::fs::File::open(path)
+            .and_then(|f| f.take(limit).read_to_end(&mut bytes))
+            .with_context(|| format!("reading {}", path.display()))?;
+        path.display().to_string()
+    };
+    check_spec_size(bytes.len(), &name)?;
+    let text = String::from_utf8(bytes)
+        .map_err(|_| {
+            std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                "stream did not contain valid UTF-8",
+            )
+        })
+        .with_context(|| format!("reading {name}"))?;
+    Ok((text, name))
 }

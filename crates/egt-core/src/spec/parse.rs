@@ -1,7 +1,7 @@
 //! Reading specs from TOML or JSON text, with syntax and type errors located
 //! by file, line, column and field path.
 
-use crate::error::{Error, Result, SyntaxError};
+use crate::error::{Error, Result, SpecErrorKind, SyntaxError};
 use crate::spec::Spec;
 
 /// The text format of a spec.
@@ -39,10 +39,38 @@ fn strip_bom(text: &str) -> &str {
     text.strip_prefix('\u{feff}').unwrap_or(text)
 }
 
+/// The longest spec text read: 256 MiB, about 1.7 million links written as
+/// planetary sets (past [`MAX_TRAIN_LINKS`](crate::model::train::MAX_TRAIN_LINKS)),
+/// so a larger file is refused by its size before parsing, which takes
+/// about 30 times the text in memory.
+pub const MAX_SPEC_BYTES: usize = 256 << 20;
+
+/// Refuse spec text longer than [`MAX_SPEC_BYTES`].
+///
+/// # Errors
+/// A spec error on `source_name`, code `out_of_range`, with the limit.
+pub fn check_spec_size(bytes: usize, source_name: &str) -> Result<()> {
+    if bytes <= MAX_SPEC_BYTES {
+        return Ok(());
+    }
+    #[allow(clippy::cast_precision_loss)]
+    Err(Error::spec(
+        source_name,
+        SpecErrorKind::OutOfRange {
+            value: bytes as f64,
+            expected: format!(
+                "a spec of at most {} MiB ({MAX_SPEC_BYTES} bytes); this one has more",
+                MAX_SPEC_BYTES >> 20
+            ),
+        },
+    ))
+}
+
 /// Parse a spec from text. `source_name` is used in error messages.
 ///
 /// # Errors
-/// [`Error::Syntax`] with line, column and (when known) the field path.
+/// [`Error::Syntax`] with line, column and (when known) the field path; a
+/// text longer than [`MAX_SPEC_BYTES`].
 pub fn parse_spec(text: &str, format: Format, source_name: &str) -> Result<Spec> {
     parse_document(text, format, source_name)
 }
@@ -57,6 +85,7 @@ pub fn parse_document<T: serde::de::DeserializeOwned>(
     format: Format,
     source_name: &str,
 ) -> Result<T> {
+    check_spec_size(text.len(), source_name)?;
     // A byte-order mark is no part of the document, in either format (the
     // positions of errors are then counted from the first character after it).
     let text = strip_bom(text);
