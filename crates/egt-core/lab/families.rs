@@ -141,6 +141,47 @@ pub fn zigzag_chain(k: usize) -> String {
     s
 }
 
+/// `k` planetary sets in series whose rings turn freely (`r1`..): the sun of
+/// set i is the carrier of set i - 1 (`m0` the first sun), so each set adds
+/// a degree of freedom: 3k + 2 links, k + 1 DOF (a train with thousands of
+/// freedoms for the topology checks). With `locked_end` the last set's ring
+/// is the frame and a second set `Q` with another ratio joins the same sun
+/// and carrier: those two links and the planets can no longer turn (a
+/// locked sub-chain at the end of a long mobile one).
+pub fn free_ring_chain(k: usize, locked_end: bool) -> String {
+    let mut s = format!("name = \"free-ring chain of {k}\"\nframe = \"case\"\n\n");
+    link(&mut s, "m0", 2.0e-4, None, 1);
+    for i in 1..=k {
+        let (prev, next) = (format!("m{}", i - 1), format!("m{i}"));
+        let zs = 21 + (7 * i as i64) % 13;
+        let zp = 17 + (5 * i as i64) % 11;
+        let zr = zs + 2 * zp;
+        let ring = if locked_end && i == k {
+            "case".to_string()
+        } else {
+            link(&mut s, &format!("r{i}"), 4.0e-3, None, 1);
+            format!("r{i}")
+        };
+        let _ = write!(
+            s,
+            "[[planetary]]\nname = \"P{i}\"\nsun = \"{prev}\"\nring = \"{ring}\"\ncarrier = \"{next}\"\n\
+             teeth = {{ sun = {zs}, planet = {zp}, ring = {zr} }}\n\n"
+        );
+        link(&mut s, &next, 3.5e-3, None, 1);
+        link(&mut s, &format!("P{i}.planet"), 1.5e-5, None, 3);
+    }
+    if locked_end {
+        let _ = write!(
+            s,
+            "[[planetary]]\nname = \"Q\"\nsun = \"m{}\"\nring = \"case\"\ncarrier = \"m{k}\"\n\
+             teeth = {{ sun = 20, planet = 20, ring = 60 }}\n\n",
+            k - 1
+        );
+        link(&mut s, "Q.planet", 1.5e-5, None, 3);
+    }
+    s
+}
+
 /// Planetary stages nested `links - 1` deep: link 1 turns on the frame, link
 /// k on link k - 1 (each at its own level), and gear pair (k - 2, k) meshes
 /// across carrier k - 1. `links` links (at least 3), 1 DOF. Links 2 and 3

@@ -526,7 +526,12 @@ fn generic_mobility(
             row
         })
         .collect();
-    let (null, rank) = modp::nullspace_sparse(&j, cols);
+    // Two generic null vectors, not a basis: a train with thousands of
+    // degrees of freedom would need one dense vector per freedom (quadratic
+    // time and memory); the questions below (is a coordinate zero, do two
+    // coincide, on the whole null space) a generic vector answers alike.
+    const PROBES: usize = 2;
+    let (null, rank) = modp::null_combinations(&j, cols, PROBES, 1 << 40);
     if rank < circuits.len() {
         // Rows with weight in a left null vector are the dependent ones: the
         // null space of the transpose, eliminated sparsely too.
@@ -537,7 +542,7 @@ fn generic_mobility(
             }
         }
         let dependent = modp::support(
-            &modp::nullspace_sparse(&jt, circuits.len()).0,
+            &modp::null_combinations(&jt, circuits.len(), PROBES, 1 << 41).0,
             circuits.len(),
         );
         return Err(TopologyError::Redundant {

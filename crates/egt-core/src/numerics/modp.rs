@@ -136,89 +136,142 @@ pub type SparseRow = Vec<(usize, u64)>;
 /// substitution through the pivot rows in reverse order, one per free
 /// column.
 pub fn nullspace_sparse(m: &[SparseRow], cols: usize) -> (Vec<Vec<u64>>, usize) {
-    use std::cmp::Reverse;
-    use std::collections::BinaryHeap;
-    let mut degree = vec![0usize; cols];
-    for row in m {
-        for &(c, _) in row {
-            degree[c] += 1;
+    let e = Echelon::new(m, cols);
+    let basis = (0..cols)
+        .filter(|&c| e.pivot_of[c].is_none())
+        .map(|f| {
+            let mut v = vec![0; cols];
+            v[f] = 1;
+            e.back_substitute(&mut v);
+            v
+        })
+        .collect();
+    (basis, e.pivots.len())
+}
+
+/// `count` generic vectors of the right null space of `m` (`cols` wide) and
+/// the rank: each is the combination of [`nullspace_sparse`]'s basis with
+/// weights drawn by [`generic`] (seeds `seed + count * column + k`), found by
+/// one substitution through the pivot rows. Where a question is "does a
+/// coordinate vanish (or two coincide) on the whole null space", a generic
+/// vector answers it as the basis does but for a draw of probability 1 / P
+/// (Schwartz-Zippel, degree 1), with `count` vectors instead of one per free
+/// column: memory and time stay about linear in the entries when the
+/// train has thousands of degrees of freedom, where the basis is quadratic.
+pub fn null_combinations(
+    m: &[SparseRow],
+    cols: usize,
+    count: usize,
+    seed: u64,
+) -> (Vec<Vec<u64>>, usize) {
+    let e = Echelon::new(m, cols);
+    let vectors = (0..count)
+        .map(|k| {
+            let mut v = vec![0; cols];
+            for (c, x) in v.iter_mut().enumerate() {
+                if e.pivot_of[c].is_none() {
+                    *x = generic(seed + (count * c + k) as u64);
+                }
+            }
+            e.back_substitute(&mut v);
+            v
+        })
+        .collect();
+    (vectors, e.pivots.len())
+}
+
+/// The pivot rows of a sparse elimination (see [`nullspace_sparse`]).
+struct Echelon {
+    /// pivot_of[c]: the pivot row whose pivot column is c.
+    pivot_of: Vec<Option<usize>>,
+    /// (pivot column, row scaled to 1 there), in the order found.
+    pivots: Vec<(usize, SparseRow)>,
+}
+
+impl Echelon {
+    /// Given the free coordinates of `v` (the others are overwritten), the
+    /// null vector they determine: each pivot coordinate from its row, in
+    /// reverse order.
+    fn back_substitute(&self, v: &mut [u64]) {
+        for (pc, prow) in self.pivots.iter().rev() {
+            let s = prow
+                .iter()
+                .filter(|&&(c, _)| c != *pc)
+                .fold(0, |s, &(c, x)| add(s, mul(x, v[c])));
+            v[*pc] = neg(s);
         }
     }
-    // pivot_of[c]: the pivot row whose pivot column is c.
-    let mut pivot_of: Vec<Option<usize>> = vec![None; cols];
-    let mut pivots: Vec<(usize, SparseRow)> = Vec::new();
-    let mut acc = vec![0u64; cols];
-    let mut touched: Vec<usize> = Vec::new();
-    let mut seen = vec![false; cols];
-    let mut heap = BinaryHeap::new();
-    for row in m {
-        for &(c, v) in row {
-            if !seen[c] {
-                seen[c] = true;
-                touched.push(c);
-            }
-            acc[c] = add(acc[c], v);
-            if let Some(k) = pivot_of[c] {
-                heap.push(Reverse(k));
+
+    fn new(m: &[SparseRow], cols: usize) -> Self {
+        use std::cmp::Reverse;
+        use std::collections::BinaryHeap;
+        let mut degree = vec![0usize; cols];
+        for row in m {
+            for &(c, _) in row {
+                degree[c] += 1;
             }
         }
-        while let Some(Reverse(k)) = heap.pop() {
-            // A pivot row may be queued more than once.
-            while heap.peek() == Some(&Reverse(k)) {
-                heap.pop();
-            }
-            let (pc, ref prow) = pivots[k];
-            let f = acc[pc];
-            if f == 0 {
-                continue;
-            }
-            for &(c, v) in prow {
+        // pivot_of[c]: the pivot row whose pivot column is c.
+        let mut pivot_of: Vec<Option<usize>> = vec![None; cols];
+        let mut pivots: Vec<(usize, SparseRow)> = Vec::new();
+        let mut acc = vec![0u64; cols];
+        let mut touched: Vec<usize> = Vec::new();
+        let mut seen = vec![false; cols];
+        let mut heap = BinaryHeap::new();
+        for row in m {
+            for &(c, v) in row {
                 if !seen[c] {
                     seen[c] = true;
                     touched.push(c);
                 }
-                let was = acc[c];
-                acc[c] = sub(acc[c], mul(f, v));
-                if let (0, Some(j)) = (was, pivot_of[c].filter(|_| c != pc)) {
-                    heap.push(Reverse(j));
+                acc[c] = add(acc[c], v);
+                if let Some(k) = pivot_of[c] {
+                    heap.push(Reverse(k));
                 }
             }
-        }
-        let mut rest: SparseRow = Vec::new();
-        for &c in &touched {
-            if acc[c] != 0 {
-                rest.push((c, acc[c]));
+            while let Some(Reverse(k)) = heap.pop() {
+                // A pivot row may be queued more than once.
+                while heap.peek() == Some(&Reverse(k)) {
+                    heap.pop();
+                }
+                let (pc, ref prow) = pivots[k];
+                let f = acc[pc];
+                if f == 0 {
+                    continue;
+                }
+                for &(c, v) in prow {
+                    if !seen[c] {
+                        seen[c] = true;
+                        touched.push(c);
+                    }
+                    let was = acc[c];
+                    acc[c] = sub(acc[c], mul(f, v));
+                    if let (0, Some(j)) = (was, pivot_of[c].filter(|_| c != pc)) {
+                        heap.push(Reverse(j));
+                    }
+                }
             }
-            acc[c] = 0;
-            seen[c] = false;
+            let mut rest: SparseRow = Vec::new();
+            for &c in &touched {
+                if acc[c] != 0 {
+                    rest.push((c, acc[c]));
+                }
+                acc[c] = 0;
+                seen[c] = false;
+            }
+            touched.clear();
+            let Some(&(pc, pv)) = rest.iter().min_by_key(|&&(c, _)| (degree[c], c)) else {
+                continue;
+            };
+            let iv = inv(pv);
+            for e in &mut rest {
+                e.1 = mul(e.1, iv);
+            }
+            pivot_of[pc] = Some(pivots.len());
+            pivots.push((pc, rest));
         }
-        touched.clear();
-        let Some(&(pc, pv)) = rest.iter().min_by_key(|&&(c, _)| (degree[c], c)) else {
-            continue;
-        };
-        let iv = inv(pv);
-        for e in &mut rest {
-            e.1 = mul(e.1, iv);
-        }
-        pivot_of[pc] = Some(pivots.len());
-        pivots.push((pc, rest));
+        Echelon { pivot_of, pivots }
     }
-    let basis = (0..cols)
-        .filter(|&c| pivot_of[c].is_none())
-        .map(|f| {
-            let mut v = vec![0; cols];
-            v[f] = 1;
-            for (pc, prow) in pivots.iter().rev() {
-                let s = prow
-                    .iter()
-                    .filter(|&&(c, _)| c != *pc)
-                    .fold(0, |s, &(c, x)| add(s, mul(x, v[c])));
-                v[*pc] = neg(s);
-            }
-            v
-        })
-        .collect();
-    (basis, pivots.len())
 }
 
 /// Indices with a non-zero entry in some vector of `basis`.
@@ -361,6 +414,24 @@ mod tests {
             proptest::prop_assert_eq!(srank, drank);
             assert_null_basis(&m, cols, &sp, srank);
             proptest::prop_assert_eq!(support(&sp, cols), support(&dense, cols));
+            // Two generic vectors answer what the basis does: which
+            // coordinates vanish on the null space, which pairs coincide.
+            let (probes, prank) = null_combinations(&sparse(&m), cols, 2, 7);
+            proptest::prop_assert_eq!(prank, drank);
+            for v in &probes {
+                for row in &m {
+                    let s = row.iter().zip(v).fold(0, |acc, (&x, &y)| add(acc, mul(x, y)));
+                    proptest::prop_assert_eq!(s, 0, "not annihilated");
+                }
+            }
+            proptest::prop_assert_eq!(support(&probes, cols), support(&dense, cols));
+            for a in 0..cols {
+                for b in 0..cols {
+                    let basis = dense.iter().all(|v| v[a] == v[b]);
+                    let generic = probes.iter().all(|v| v[a] == v[b]);
+                    proptest::prop_assert_eq!(basis, generic, "columns {} and {}", a, b);
+                }
+            }
         }
     }
 

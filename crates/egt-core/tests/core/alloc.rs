@@ -23,6 +23,21 @@ struct Counting;
 
 thread_local! {
     static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
+    /// Bytes this thread holds (allocated less freed) and the most it held.
+    static HELD: Cell<i64> = const { Cell::new(0) };
+    static PEAK: Cell<i64> = const { Cell::new(0) };
+}
+
+fn hold(bytes: i64) {
+    let now = HELD.with(|h| {
+        h.set(h.get() + bytes);
+        h.get()
+    });
+    PEAK.with(|p| p.set(p.get().max(now)));
+}
+
+fn size(layout: Layout) -> i64 {
+    i64::try_from(layout.size()).unwrap_or(i64::MAX)
 }
 
 // SAFETY: every call is forwarded unchanged to `System`; the counter is a
@@ -30,20 +45,24 @@ thread_local! {
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
         ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        hold(size(layout));
         // SAFETY: same contract as the caller's.
         unsafe { System.alloc(layout) }
     }
     unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
         ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        hold(size(layout));
         // SAFETY: same contract as the caller's.
         unsafe { System.alloc_zeroed(layout) }
     }
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
         ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        hold(i64::try_from(new_size).unwrap_or(i64::MAX) - size(layout));
         // SAFETY: same contract as the caller's.
         unsafe { System.realloc(ptr, layout, new_size) }
     }
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        hold(-size(layout));
         // SAFETY: same contract as the caller's.
         unsafe { System.dealloc(ptr, layout) }
     }
@@ -59,12 +78,28 @@ pub fn allocations<R>(f: impl FnOnce() -> R) -> (u64, R) {
     (ALLOCATIONS.with(Cell::get) - before, r)
 }
 
+/// The most bytes this thread held at once while running `f`, beyond what
+/// it held before (memory freed by other threads is not seen).
+pub fn peak_bytes<R>(f: impl FnOnce() -> R) -> (i64, R) {
+    let before = HELD.with(Cell::get);
+    PEAK.with(|p| p.set(before));
+    let r = f();
+    (PEAK.with(Cell::get) - before, r)
+}
+
 #[test]
 fn the_counter_sees_allocations() {
     // Guards the guard: a test that cannot fail proves nothing.
     let (n, v) = allocations(|| vec![1.0_f64; 64]);
     assert_eq!(v.len(), 64);
     assert!(n >= 1);
+    let (peak, v) = peak_bytes(|| {
+        let big = vec![1.0_f64; 1 << 20];
+        drop(big);
+        vec![2.0_f64; 64]
+    });
+    assert_eq!(v.len(), 64);
+    assert!(peak >= 8 << 20, "peak {peak}");
 }
 
 /// Vary every parameter a little around the base row, deterministically.

@@ -1,7 +1,8 @@
 //! Large trains: the sparse Willis solve against the dense one, against exact
 //! rationals and against the product of the stage ratios of a 10 000-link
 //! chain; refusals where the sparse LU meets a (nearly) singular system; the
-//! dense analyses refused by name past their memory limit.
+//! dense analyses refused by name past their memory limit; a train with
+//! thousands of degrees of freedom checked in about linear memory.
 
 use egt_core::numerics::exact;
 use egt_core::solve::kinematics::willis_residual;
@@ -201,4 +202,39 @@ fn speeds_that_underflow_double_precision_are_flagged() {
         "{:?}",
         s.warnings
     );
+}
+
+/// The mobility check asks of the null space of the Willis equations which
+/// turning pairs can move; a basis has one dense vector per freedom, which
+/// for a train with 2 501 DOF and 7 502 links is 150 MB and grows as the
+/// square (a 25 000-set chain would need 15 GB and abort). Two generic null
+/// vectors answer the same: the mobile chain checks with its DOF, and the
+/// same chain with a locked last stage is refused naming exactly that stage.
+#[test]
+fn a_train_with_thousands_of_freedoms_is_checked_and_its_locked_stage_found() {
+    let k = 2500;
+    let spec = egt_core::spec::parse::parse_spec(
+        &families::free_ring_chain(k, false),
+        egt_core::Format::Toml,
+        "free rings",
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let (peak, t) = crate::alloc::peak_bytes(|| Train::from_spec(&spec));
+    let t = t.unwrap_or_else(|e| panic!("{e}"));
+    // A basis of the null space alone would hold 2 501 x 7 501 x 8 bytes.
+    assert!(peak < 64 << 20, "checking held {peak} bytes at once");
+    assert_eq!(t.links().len(), 3 * k + 2);
+    assert_eq!(t.dof(), k + 1);
+    let err = Train::from_str(
+        &families::free_ring_chain(k, true),
+        egt_core::Format::Toml,
+        "locked end",
+    )
+    .err()
+    .unwrap_or_else(|| panic!("a locked last stage was accepted"));
+    let text = err.to_string();
+    assert!(text.contains("locked sub-chain"), "{text}");
+    let named = format!("`m{}`, `m{k}`, `P{k}.planet`, `Q.planet`", k - 1);
+    assert!(text.contains(&named), "{text}");
+    assert!(!text.contains(&format!("`m{}`", k - 2)), "{text}");
 }
