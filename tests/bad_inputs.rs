@@ -157,9 +157,10 @@ fn every_bad_input_class_is_refused_by_name() {
 }
 
 /// Resource bounds (issues 12, 13): a train too large for the dense matrices
-/// of an analysis is refused by name, with the limit, before the work starts
-/// (asserting the refusal, not a time), while its check and kinematics,
-/// which are sparse, run; a transmission with too many gear states is refused.
+/// of an analysis (stability) is refused by name, with the limit, before the
+/// work starts (asserting the refusal, not a time), while its check,
+/// kinematics and inverse dynamics, which are sparse, run; a transmission
+/// with too many gear states is refused.
 #[test]
 fn resource_limits_are_refused_by_name() {
     // A chain of 749 simple planetary sets: 1500 links.
@@ -172,10 +173,14 @@ fn resource_limits_are_refused_by_name() {
         ));
     }
     spec.push_str("[analysis]\nspeeds = { m0 = 100.0 }\naccelerations = { m0 = 1.0 }\ntorques = { m749 = -1.0 }\ndriving = [\"m0\"]\n");
+    spec.push_str(
+        "[[analysis.curves]]\nlink = \"m0\"\ntorque = 10.0\nslope = -0.1\nspeed = 100.0\n",
+    );
     for (args, exit) in [
         (&["check"][..], 0),
         (&["kinematics"][..], 0),
-        (&["dynamics"][..], 1),
+        (&["dynamics"][..], 0),
+        (&["stability"][..], 1),
     ] {
         let row = Row {
             name: "huge train",
@@ -189,6 +194,7 @@ fn resource_limits_are_refused_by_name() {
         match args[0] {
             "check" => assert!(text.contains("links: 1500"), "{text}"),
             "kinematics" => assert!(text.contains("no exact speeds"), "{text}"),
+            "dynamics" => assert!(text.contains("inverse dynamics (1 DOF)"), "{text}"),
             _ => assert!(
                 text.contains("1500 links")
                     && text.contains("MiB")

@@ -65,7 +65,11 @@ fn rows(p: &BatchPlan) -> [Vec<f64>; 2] {
 
 /// One scenario on a prepared plan, factorisations included.
 fn scenario(b: Bencher, t: &Train, compute: Compute) {
-    let p = plan(t, compute);
+    scenario_on(b, plan(t, compute));
+}
+
+/// [`scenario`] on a given plan.
+fn scenario_on(b: Bencher, p: BatchPlan) {
     let rows = rows(&p);
     let mut out = vec![0.0; p.outputs().len()];
     let mut w = p.worker();
@@ -235,6 +239,28 @@ mod large {
     #[divan::bench(args = SIZES)]
     fn kinematics_sparse(b: Bencher, links: usize) {
         solve(b, links, true);
+    }
+
+    /// One inverse-dynamics scenario (a new factorisation of each system,
+    /// as `chain::inverse_dynamics`) with the dense and with the sparse
+    /// engine of `PreparedTrain`; `PREPARED_SPARSE_FROM` in
+    /// `solve/prepared.rs` sits where they cross.
+    fn dynamics(b: Bencher, links: usize, sparse: bool) {
+        let t = build(&families::zigzag_chain((links - 2) / 2));
+        let p = plan(&t, Compute::Dynamics)
+            .with_sparse(sparse)
+            .unwrap_or_else(|e| panic!("{e}"));
+        scenario_on(b, p);
+    }
+
+    #[divan::bench(args = [6, 10, 16, 22, 34, 66, 130, 258])]
+    fn dynamics_dense(b: Bencher, links: usize) {
+        dynamics(b, links, false);
+    }
+
+    #[divan::bench(args = [6, 10, 16, 22, 34, 66, 130, 258, 1026, 10_002])]
+    fn dynamics_sparse(b: Bencher, links: usize) {
+        dynamics(b, links, true);
     }
 
     #[divan::bench(args = [1002, 10_002, 100_002], sample_count = 5)]

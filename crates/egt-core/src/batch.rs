@@ -413,6 +413,17 @@ impl BatchPlan {
     pub fn compute(&self) -> Compute {
         self.compute
     }
+    /// Solve with the sparse (or the dense) factorisations and \[M\] as
+    /// terms, whatever the train's size (see
+    /// [`PreparedTrain::with_sparse`]): to compare the two on one train.
+    ///
+    /// # Errors
+    /// As [`PreparedTrain::with_sparse`].
+    pub fn with_sparse(mut self, sparse: bool) -> Result<Self> {
+        self.prepared = self.prepared.with_sparse(sparse)?;
+        Ok(self)
+    }
+
     /// The prepared train underneath.
     pub fn prepared(&self) -> &PreparedTrain {
         &self.prepared
@@ -443,10 +454,14 @@ impl BatchPlan {
     }
 
     /// Whether [`BatchPlan::run`] solves a block of rows (row-major) by the
-    /// lanes: kinematics or ideal dynamics and at least [`LANES_MIN_ROWS`] rows.
+    /// lanes: kinematics or ideal dynamics of a dense train (below
+    /// [`PREPARED_SPARSE_FROM`](crate::solve::prepared::PREPARED_SPARSE_FROM)
+    /// coordinates) and at least [`LANES_MIN_ROWS`] rows.
     pub fn lanes_apply(&self, rows: &[f64]) -> bool {
         let n = rows.len().checked_div(self.parameters.len()).unwrap_or(0);
-        matches!(self.compute, Compute::Kinematics | Compute::Dynamics) && n >= LANES_MIN_ROWS
+        matches!(self.compute, Compute::Kinematics | Compute::Dynamics)
+            && n >= LANES_MIN_ROWS
+            && !self.prepared.is_sparse()
     }
 
     fn lanes(&self) -> Lanes {

@@ -22,8 +22,9 @@ use serde::Serialize;
 use crate::error::{AnalysisError, Error, Result};
 use crate::model::equations::willis_row;
 use crate::model::mass::MassMatrix;
+use crate::model::train::MAX_DENSE_BYTES;
 use crate::model::train::{GearId, LinkId, Train};
-use crate::numerics::linalg::{COND_WARN, Lu};
+use crate::numerics::linalg::COND_WARN;
 use crate::solve::prepared::{Compute, PreparedTrain, Scenario, Workspace};
 use crate::solve::rows::Extra;
 
@@ -257,7 +258,6 @@ impl Train {
         )?;
         let alpha = Self::prescribed_accelerations(req)?;
         let (q, velocity) = self.generalized_forces(req, mass, None)?;
-        let m = mass.map(row_major);
         let mut ws = plan.workspace();
         let scenario = Scenario {
             ratios: &ratios,
@@ -267,7 +267,7 @@ impl Train {
             inertia: &[],
             mass: &[],
             efficiency: &vec![1.0; ratios.len()],
-            mass_matrix: m.as_deref(),
+            mass_matrix: mass,
         };
         plan.solve(&mut ws, &scenario, Compute::Forces)?;
         let result = self.dynamics_result(req, mass, &plan, &ws, &velocity);
@@ -375,26 +375,26 @@ impl Train {
         extras: &[Extra],
     ) -> Result<(DMatrix<f64>, f64)> {
         let n = self.coordinates().len();
+        // One dense column of n speeds per input.
+        let bytes = n.saturating_mul(inputs.len()).saturating_mul(8);
+        if bytes > MAX_DENSE_BYTES {
+            return Err(AnalysisError::TooLarge {
+                analysis: format!("[V] (eq. 23), one column per input ({})", inputs.len()),
+                links: self.links().len(),
+                mib: bytes >> 20,
+                limit_mib: MAX_DENSE_BYTES >> 20,
+                most: MAX_DENSE_BYTES / (8 * inputs.len().max(1)) + 1,
+                what: "the kinematics and inverse dynamics take it".into(),
+            }
+            .into());
+        }
         let ratios = self.ratios()?;
         let plan = PreparedTrain::for_analysis(self, inputs, inputs, inputs, extras)?;
-        let c = plan.constraints();
-        let mut lu = Lu::new(n);
-        plan.kinematic_matrix(&ratios, lu.matrix_mut());
-        let cond = lu.factor_checked(
+        plan.velocity_columns(
+            &ratios,
             "[Gamma_w] (eq. 23)",
             "the chosen inputs do not determine the train",
-        )?;
-        let mut v = DMatrix::zeros(n, inputs.len());
-        let mut b = vec![0.0; n];
-        for col in 0..inputs.len() {
-            b.iter_mut().for_each(|x| *x = 0.0);
-            b[c + col] = 1.0;
-            lu.solve(&mut b);
-            for r in 0..n {
-                v[(r, col)] = b[r];
-            }
-        }
-        Ok((v, cond))
+        )
     }
 
     /// The reduced mass matrix V^T M V (eq. 25) for the given independent inputs;
@@ -405,7 +405,18 @@ impl Train {
     pub fn reduced_mass_matrix(&self, inputs: &[LinkId], extras: &[Extra]) -> Result<DMatrix<f64>> {
         let v = self.velocity_matrix(inputs, extras)?;
         let m = self.mass_matrix()?;
-        Ok(v.transpose() * &m.matrix * v)
+        // V^T M V over M's non-zeros: linear in the links for a given DOF.
+        let f = v.ncols();
+        let mut r = DMatrix::zeros(f, f);
+        for &(a, b, x) in m.entries() {
+            for i in 0..f {
+                let vai = v[(a, i)] * x;
+                for j in 0..f {
+                    r[(i, j)] += vai * v[(b, j)];
+                }
+            }
+        }
+        Ok(r)
     }
 
     /// Equivalent inertia of a 1-DOF train reduced to `link`: 2K / w_link^2.
@@ -455,9 +466,4 @@ impl Train {
             self.constrained_speeds(&inputs, extras)?.speed
         })
     }
-}
-
-/// A mass matrix row-major (it is symmetric, so this is also column-major).
-pub(crate) fn row_major(mm: &MassMatrix) -> Vec<f64> {
-    mm.matrix.transpose().iter().copied().collect()
 }

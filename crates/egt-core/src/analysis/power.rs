@@ -16,7 +16,7 @@ use serde::Serialize;
 
 pub use crate::solve::losses::Driver;
 
-use crate::analysis::dynamics::{DynamicsRequest, InverseDynamics, row_major};
+use crate::analysis::dynamics::{DynamicsRequest, InverseDynamics};
 use crate::error::Result;
 use crate::model::mass::MassMatrix;
 use crate::model::train::{GearId, LinkId, Train};
@@ -162,7 +162,6 @@ impl Train {
         )?;
         let alpha = Self::prescribed_accelerations(dyn_req)?;
         let (q, velocity) = self.generalized_forces(dyn_req, mass, Some(w))?;
-        let m = mass.map(row_major);
         let input_speeds: Vec<f64> = req.speeds.iter().map(|i| i.speed).collect();
         let scenario = Scenario {
             ratios: &taus,
@@ -172,7 +171,7 @@ impl Train {
             inertia: &[],
             mass: &[],
             efficiency: &etas,
-            mass_matrix: m.as_deref(),
+            mass_matrix: mass,
         };
         let mut ws = plan.workspace();
         plan.solve(&mut ws, &scenario, Compute::Power)?;
@@ -209,13 +208,12 @@ impl Train {
 
         let mw: Vec<f64> = match mass {
             Some(mm) => {
-                let wd = nalgebra::DVector::from_iterator(
-                    self.coordinates().len(),
-                    self.coordinates()
-                        .iter()
-                        .map(|l| dynamics.acceleration[l.index()]),
-                );
-                (&mm.matrix * wd).iter().copied().collect()
+                let wd: Vec<f64> = self
+                    .coordinates()
+                    .iter()
+                    .map(|l| dynamics.acceleration[l.index()])
+                    .collect();
+                mm.mul_vec(&wd)
             }
             None => vec![0.0; self.coordinates().len()],
         };

@@ -641,14 +641,15 @@ impl Train {
         let mm =
             self.constant_mass_matrix("the reduced model of stability and simulation (eq. 23-27)")?;
         warnings.extend(mm.notes.iter().cloned());
-        let mass = sym(&(v.transpose() * &mm.matrix * &v));
+        let full_mass = mm.matrix()?;
+        let mass = sym(&(v.transpose() * &full_mass * &v));
         let slope = slope_matrix(&velocity, &link_slope);
         let nb = self.null_basis()?;
         let mut basis = DMatrix::zeros(nl, f);
         for (k, l) in self.coordinates().iter().enumerate() {
             basis.set_row(l.index(), &nb.row(k));
         }
-        let basis_mass = sym(&(nb.transpose() * &mm.matrix * &nb));
+        let basis_mass = sym(&(nb.transpose() * &full_mass * &nb));
         let basis_slope = slope_matrix(&basis, &link_slope);
         let slope_inertia = self.exact_slope_inertia(&link_slope);
         Ok(ReducedModel {
@@ -657,7 +658,7 @@ impl Train {
             velocity,
             gamma_condition,
             orthogonality,
-            full_mass: mm.matrix,
+            full_mass,
             mass,
             slope,
             basis,

@@ -72,13 +72,22 @@ pub(crate) struct FloatingTerms {
     pub varying: Vec<(usize, usize, f64, f64)>,
 }
 
-/// The mass matrix over the coordinates (every link but the frame).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+/// The mass matrix over the coordinates (every link but the frame), held
+/// sparse: each link adds to the diagonal (eq. 3, and eq. 4 for the arms of
+/// a floating link), and only the configuration terms couple two carriers,
+/// so a train of any size holds it in memory linear in its links.
+///
+/// Serialized as `matrix` (rows) for a train within the dense limit
+/// ([`MAX_DENSE_BYTES`](crate::model::train::MAX_DENSE_BYTES)); past it
+/// `matrix` is null and `entries` lists the non-zeros.
+#[derive(Debug, Clone, PartialEq)]
 pub struct MassMatrix {
-    /// \[M\], symmetric, `coordinates().len()` square, at `angles` when it
-    /// depends on the configuration (serialized as rows).
-    #[serde(serialize_with = "crate::numerics::linalg::serde_rows")]
-    pub matrix: DMatrix<f64>,
+    /// Order: the number of coordinates.
+    n: usize,
+    /// The non-zeros (row, column, value) in row-major order, each position
+    /// once, both triangles (it is symmetric), at `angles` when it depends on
+    /// the configuration.
+    entries: Vec<(usize, usize, f64)>,
     /// The terms that vary with the carrier angles (empty for most trains).
     pub configuration: Vec<ConfigurationTerm>,
     /// The carrier angles \[M\] was evaluated at (empty when it does not depend on them).
@@ -87,6 +96,101 @@ pub struct MassMatrix {
     pub offsets: Vec<Offset>,
     /// Notes: disagreeing offsets, configuration-dependent coupling.
     pub notes: Vec<String>,
+}
+
+impl MassMatrix {
+    /// The order (number of coordinates).
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    /// The non-zeros (row, column, value), row-major, each position once.
+    pub fn entries(&self) -> &[(usize, usize, f64)] {
+        &self.entries
+    }
+
+    /// Entry (r, c) (zero where none is held).
+    pub fn get(&self, r: usize, c: usize) -> f64 {
+        self.entries
+            .binary_search_by(|e| (e.0, e.1).cmp(&(r, c)))
+            .map_or(0.0, |k| self.entries[k].2)
+    }
+
+    /// Whether a dense copy fits [`MAX_DENSE_BYTES`](crate::model::train::MAX_DENSE_BYTES).
+    fn fits_dense(&self) -> bool {
+        self.n
+            .checked_mul(self.n)
+            .and_then(|k| k.checked_mul(8))
+            .is_some_and(|b| b <= crate::model::train::MAX_DENSE_BYTES)
+    }
+
+    /// \[M\] as a dense matrix, for the analyses that work on it whole
+    /// (stability, simulation, shifts).
+    ///
+    /// # Errors
+    /// [`AnalysisError::TooLarge`] when n x n doubles pass
+    /// [`MAX_DENSE_BYTES`](crate::model::train::MAX_DENSE_BYTES).
+    pub fn matrix(&self) -> Result<DMatrix<f64>> {
+        if !self.fits_dense() {
+            let mib = self.n.saturating_mul(self.n).saturating_mul(8) >> 20;
+            return Err(AnalysisError::TooLarge {
+                analysis: "the dense mass matrix".into(),
+                links: self.n + 1,
+                mib,
+                limit_mib: crate::model::train::MAX_DENSE_BYTES >> 20,
+                most: crate::model::train::most_dense_links(),
+                what: "inverse dynamics and power flow hold it sparse and take it".into(),
+            }
+            .into());
+        }
+        let mut m = DMatrix::zeros(self.n, self.n);
+        for &(r, c, v) in &self.entries {
+            m[(r, c)] = v;
+        }
+        Ok(m)
+    }
+
+    /// \[M\] {x} for a vector over the coordinates.
+    pub fn mul_vec(&self, x: &[f64]) -> Vec<f64> {
+        let mut y = vec![0.0; self.n];
+        for &(r, c, v) in &self.entries {
+            y[r] += v * x[c];
+        }
+        y
+    }
+}
+
+impl Serialize for MassMatrix {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::{Error as _, SerializeStruct};
+        let dense = self.fits_dense();
+        let mut st = s.serialize_struct("MassMatrix", if dense { 5 } else { 6 })?;
+        if dense {
+            let m = self.matrix().map_err(S::Error::custom)?;
+            st.serialize_field("matrix", &crate::numerics::linalg::matrix_rows(&m))?;
+        } else {
+            st.serialize_field("matrix", &None::<()>)?;
+            st.serialize_field("entries", &self.entries)?;
+        }
+        st.serialize_field("configuration", &self.configuration)?;
+        st.serialize_field("angles", &self.angles)?;
+        st.serialize_field("offsets", &self.offsets)?;
+        st.serialize_field("notes", &self.notes)?;
+        st.end()
+    }
+}
+
+/// The distance of each level pair's offset (the first listed wins), for
+/// lookups by pair in time independent of the number of offsets.
+pub(crate) type OffsetIndex = std::collections::HashMap<[LevelId; 2], f64>;
+
+/// [`OffsetIndex`] of `offsets`.
+pub(crate) fn offset_index(offsets: &[Offset]) -> OffsetIndex {
+    let mut index = OffsetIndex::default();
+    for o in offsets {
+        index.entry(o.levels).or_insert(o.distance);
+    }
+    index
 }
 
 fn key(a: LevelId, b: LevelId) -> [LevelId; 2] {
@@ -108,6 +212,11 @@ impl Train {
             })
             .collect();
         let mut notes = Vec::new();
+        // Where each level pair's offset sits in `out` (the first given wins).
+        let mut at: std::collections::HashMap<[LevelId; 2], usize> = Default::default();
+        for (k, o) in out.iter().enumerate() {
+            at.entry(o.levels).or_insert(k);
+        }
         for (c, g) in self.circuits().iter().zip(self.gears()) {
             let Some([ri, rj]) = g.radii else { continue };
             let external = match (g.mesh, &g.ratio) {
@@ -117,7 +226,7 @@ impl Train {
             };
             let d = if external { ri + rj } else { (ri - rj).abs() };
             let k = key(c.level_i, c.level_j);
-            match out.iter().find(|o| o.levels == k) {
+            match at.get(&k).map(|&i| &out[i]) {
                 Some(o) if (o.distance - d).abs() > OFFSET_AGREEMENT * o.distance.max(d) => notes
                     .push(format!(
                         "offset {}-{}: {} gives {}, but gear pair `{}` radii give {d} (using {})",
@@ -129,11 +238,14 @@ impl Train {
                         o.distance
                     )),
                 Some(_) => {}
-                None => out.push(Offset {
-                    levels: k,
-                    distance: d,
-                    source: format!("gear pair `{}`", g.name),
-                }),
+                None => {
+                    at.insert(k, out.len());
+                    out.push(Offset {
+                        levels: k,
+                        distance: d,
+                        source: format!("gear pair `{}`", g.name),
+                    });
+                }
             }
         }
         (out, notes)
@@ -162,10 +274,12 @@ impl Train {
     /// [`AnalysisError::MissingData`] naming a missing offset, or an inertia
     /// given for a planet whose speed is unknown (no tooth count).
     pub fn mass_matrix(&self) -> Result<MassMatrix> {
-        self.require_dense("the mass matrix")?;
         let n = self.coordinates().len();
-        let mut m = DMatrix::zeros(n, n);
+        // The diagonal, added to in link order; the configuration terms are
+        // the only entries off it.
+        let mut diag = vec![0.0; n];
         let (offsets, notes) = self.axis_offsets();
+        let index = offset_index(&offsets);
         let mut configuration = Vec::new();
         for (li, link) in self.links().iter().enumerate() {
             let l = LinkId::from_index(li);
@@ -182,14 +296,14 @@ impl Train {
                     }
                     .into());
                 }
-                m[(c, c)] += copies * i;
+                diag[c] += copies * i;
             }
             let Some(mass) = link.mass.filter(|&v| v > 0.0) else {
                 continue;
             };
-            let f = self.floating_terms(l, &offsets)?;
+            let f = self.floating_terms(l, &index)?;
             for &(a, d) in &f.arms {
-                m[(a, a)] += copies * mass * d * d;
+                diag[a] += copies * mass * d * d;
             }
             for &(s, t, factor, phase) in &f.varying {
                 let carrier = |k: usize| self.coordinates()[f.arms[k].0];
@@ -208,14 +322,30 @@ impl Train {
             self.configuration_angles(&configuration)?
         };
         let angle = |l: LinkId| angles.iter().find(|a| a.0 == l).map_or(0.0, |a| a.1);
+        let mut off: std::collections::BTreeMap<(usize, usize), f64> = Default::default();
         for c in &configuration {
             let [a, b] = c.coordinates;
             let v = c.coefficient * (angle(c.carriers[0]) - angle(c.carriers[1]) + c.phase).cos();
-            m[(a, b)] += v;
-            m[(b, a)] += v;
+            *off.entry((a, b)).or_insert(0.0) += v;
+            *off.entry((b, a)).or_insert(0.0) += v;
+        }
+        // Row-major: the diagonal merged into the off-diagonal entries.
+        let mut entries = Vec::with_capacity(n + off.len());
+        let mut off = off.into_iter().peekable();
+        for (r, &d) in diag.iter().enumerate() {
+            while let Some(((i, c), v)) = off.next_if(|e| e.0 < (r, r)) {
+                entries.push((i, c, v));
+            }
+            if d != 0.0 {
+                entries.push((r, r, d));
+            }
+            while let Some(((_, c), v)) = off.next_if(|e| e.0.0 == r) {
+                entries.push((r, c, v));
+            }
         }
         Ok(MassMatrix {
-            matrix: m,
+            n,
+            entries,
             configuration,
             angles,
             offsets,
@@ -228,11 +358,11 @@ impl Train {
     ///
     /// # Errors
     /// [`AnalysisError::MissingData`] naming an offset that is not known.
-    pub(crate) fn floating_terms(&self, l: LinkId, offsets: &[Offset]) -> Result<FloatingTerms> {
+    pub(crate) fn floating_terms(&self, l: LinkId, offsets: &OffsetIndex) -> Result<FloatingTerms> {
         let link = self.link(l);
         let mut arms = Vec::new();
         for (carrier, lv) in self.offset_chain(l) {
-            let d = offsets.iter().find(|o| o.levels == lv).map(|o| o.distance).ok_or_else(|| {
+            let d = offsets.get(&lv).copied().ok_or_else(|| {
                 AnalysisError::MissingData {
                     what: format!("the offset between axis levels `{}` and `{}`", self.level_name(lv[0]), self.level_name(lv[1])),
                     analysis: format!("the kinetic energy of link `{}` (eq. 4)", link.name),
@@ -275,11 +405,12 @@ impl Train {
     /// with the carrier angles because of them (empty for most trains).
     pub fn configuration_links(&self) -> Vec<LinkId> {
         let (offsets, _) = self.axis_offsets();
+        let index = offset_index(&offsets);
         (0..self.links().len())
             .map(LinkId::from_index)
             .filter(|&l| self.link(l).mass.is_some_and(|m| m > 0.0))
             .filter(|&l| {
-                self.floating_terms(l, &offsets)
+                self.floating_terms(l, &index)
                     .is_ok_and(|f| !f.varying.is_empty())
             })
             .collect()
@@ -371,7 +502,7 @@ impl Train {
             .iter()
             .map(|l| speed[l.index()])
             .collect();
-        let w = nalgebra::DVector::from_vec(w);
-        0.5 * w.dot(&(&mass.matrix * &w))
+        let mw = mass.mul_vec(&w);
+        0.5 * w.iter().zip(&mw).map(|(a, b)| a * b).sum::<f64>()
     }
 }

@@ -780,7 +780,7 @@ impl Train {
             mib: dense_bytes(n) >> 20,
             limit_mib: MAX_DENSE_BYTES >> 20,
             most: most_dense_links(),
-            what: "the topology check and the float kinematics are sparse and take it".into(),
+            what: "the topology check, the float kinematics, inverse dynamics and power flow are sparse and take it".into(),
         }
         .into())
     }

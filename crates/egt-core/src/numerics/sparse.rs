@@ -16,7 +16,8 @@ use faer::sparse::linalg::lu::{
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par};
 
-use super::linalg::{Factored, inverse_norm1};
+use super::linalg::{Factored, inverse_norm1, refuse, singular};
+use crate::error::AnalysisError;
 
 /// The pattern could not be analysed (faer ran out of memory or index room).
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -192,6 +193,32 @@ impl SparseLu {
             })?;
         self.factored = true;
         Ok(())
+    }
+
+    /// Factor and estimate the condition, as [`Lu`](super::linalg::Lu)'s
+    /// checked factorisation: `what` names the system and `detail` says what
+    /// a zero pivot means for it.
+    ///
+    /// # Errors
+    /// [`AnalysisError::Singular`] on a structurally or numerically zero
+    /// pivot; [`AnalysisError::IllConditioned`] past
+    /// [`COND_REFUSE`](super::linalg::COND_REFUSE);
+    /// [`AnalysisError::OutOfMemory`] when faer cannot allocate.
+    pub(crate) fn factor_checked(&mut self, what: &str, detail: &str) -> crate::error::Result<f64> {
+        self.factor().map_err(|e| match e {
+            FactorError::Singular(_) => singular(what, detail),
+            FactorError::Failed(d) => AnalysisError::OutOfMemory {
+                what: what.into(),
+                detail: d,
+            }
+            .into(),
+        })?;
+        let cond = self.condition();
+        if cond.is_infinite() {
+            return Err(singular(what, "a pivot is zero"));
+        }
+        refuse(cond, what)?;
+        Ok(cond)
     }
 
     /// Solve A x = b in place (after [`SparseLu::factor`]).

@@ -15,8 +15,8 @@ use crate::error::{AnalysisError, Error, Result};
 use crate::model::equations::{self, willis_row};
 use crate::model::train::{LinkId, Train};
 use crate::numerics::exact::{self, Q, QMatrix};
-use crate::numerics::linalg::{self, COND_WARN, Lu};
-use crate::numerics::sparse::{FactorError, SparseLu};
+use crate::numerics::linalg::{COND_WARN, Lu};
+use crate::numerics::sparse::SparseLu;
 
 /// One prescribed input speed.
 #[derive(Debug, Clone, PartialEq)]
@@ -263,19 +263,7 @@ impl KinematicsPlan {
                 cond
             }
             Factor::Sparse(lu, _) => {
-                lu.factor().map_err(|e| match e {
-                    FactorError::Singular(_) => linalg::singular(what, detail),
-                    FactorError::Failed(d) => AnalysisError::OutOfMemory {
-                        what: what.into(),
-                        detail: d,
-                    }
-                    .into(),
-                })?;
-                let cond = lu.condition();
-                if cond.is_infinite() {
-                    return Err(linalg::singular(what, "a pivot is zero"));
-                }
-                linalg::refuse(cond, what)?;
+                let cond = lu.factor_checked(what, detail)?;
                 lu.solve(&mut self.rhs);
                 cond
             }

@@ -26,9 +26,11 @@ use num_traits::Zero;
 
 use crate::error::{AnalysisError, Result};
 use crate::model::equations::willis_row;
+use crate::model::mass::MassMatrix;
 use crate::model::train::{LinkId, Train};
 use crate::numerics::exact::{self, Q, QMatrix};
 use crate::numerics::linalg::Lu;
+use crate::numerics::sparse::SparseLu;
 use crate::solve::losses::{
     Directions, Driver, ForceSolution, LossySolver, Meshes, idle_tolerance, mesh_torque,
 };
@@ -66,9 +68,9 @@ impl MassModel {
     /// As [`Train::mass_matrix`]: a link with a mass whose offsets are unknown,
     /// or an inertia given for a planet whose speed is unknown.
     pub fn new(train: &Train) -> Result<Self> {
-        train.require_dense("the mass matrix")?;
         // The offsets, the arms and the errors come from the one definition in mass.rs.
         let (offsets, notes) = train.axis_offsets();
+        let offsets = crate::model::mass::offset_index(&offsets);
         let n = train.coordinates().len();
         let mut entries = Vec::new();
         let mut terms = Vec::new();
@@ -207,6 +209,27 @@ impl MassModel {
 }
 
 impl MassModel {
+    /// [`MassModel::fill`] as a list of (row, column, value) terms (repeated
+    /// positions add), for a sparse workspace. Allocates nothing once `m`
+    /// has held a fill.
+    pub fn fill_entries(&self, inertia: &[f64], mass: &[f64], m: &mut Vec<(usize, usize, f64)>) {
+        m.clear();
+        for e in &self.entries {
+            if let Some((c, s)) = e.spin {
+                m.push((c, c, e.copies * inertia[s]));
+            }
+            if let Some((s, range)) = &e.float {
+                let w = e.copies * mass[*s];
+                let terms = &self.terms[range.clone()];
+                for &(a, da) in terms {
+                    for &(b, db) in terms {
+                        m.push((a, b, w * da * db));
+                    }
+                }
+            }
+        }
+    }
+
     /// \[M\] in exact rationals, from exact inertias and masses (the offsets
     /// taken exactly as their f64 values): a reference to verify the float
     /// fill against (the accuracy study in `lab/` does).
@@ -270,9 +293,9 @@ pub struct Scenario<'a> {
     pub mass: &'a [f64],
     /// Basic mesh efficiencies, one per gear pair (read by `Power` only).
     pub efficiency: &'a [f64],
-    /// A whole mass matrix (row-major, n x n) to use instead of filling one
-    /// from `inertia` and `mass`: a single analysis with a given \[M\].
-    pub mass_matrix: Option<&'a [f64]>,
+    /// A whole mass matrix to use instead of filling one from `inertia` and
+    /// `mass`: a single analysis with a given \[M\].
+    pub mass_matrix: Option<&'a MassMatrix>,
 }
 
 /// A power balance (for [`Compute::Power`]).
@@ -306,18 +329,127 @@ pub struct PreparedTrain {
     force_shared: bool,
     mass: MassModel,
     radii: Vec<Option<f64>>,
+    /// For large trains, the sparse LUs of the three systems (their
+    /// patterns analysed once; each workspace clones them), and \[M\] is
+    /// held as a list of terms; else everything is dense.
+    sparse: Option<Box<[Factor; 3]>>,
+}
+
+/// Coordinates from which a [`PreparedTrain`] factors sparsely and holds
+/// \[M\] as a list of terms: time and memory per scenario then grow about
+/// linearly in the links. Below it the dense kernels (unrolled for small
+/// orders, eight scenarios per instruction in a batch) are faster; every
+/// production train is far below it.
+pub const PREPARED_SPARSE_FROM: usize = 64;
+
+/// A factorisation of one of the three systems.
+#[derive(Debug, Clone)]
+enum Factor {
+    Dense(Lu),
+    /// With the value slot of each term [`PreparedTrain::for_each_entry`] visits.
+    Sparse(Box<SparseLu>, Vec<usize>),
+}
+
+impl Factor {
+    /// Fill system `system` (0 speeds, 1 \[Psi_w\], 2 force) for `ratios`,
+    /// factor it and estimate its condition (the checked factorisation).
+    fn fill_factor(
+        &mut self,
+        plan: &PreparedTrain,
+        ratios: &[f64],
+        system: usize,
+        what: &str,
+        detail: &str,
+    ) -> Result<f64> {
+        match self {
+            Factor::Dense(lu) => {
+                match system {
+                    0 => plan.kinematic_matrix(ratios, lu.matrix_mut()),
+                    1 => plan.acceleration_matrix(ratios, lu.matrix_mut()),
+                    _ => plan.force_matrix(ratios, lu.matrix_mut()),
+                }
+                lu.factor_checked(what, detail)
+            }
+            Factor::Sparse(lu, slots) => {
+                let values = lu.values_mut();
+                values.iter_mut().for_each(|v| *v = 0.0);
+                let mut k = 0;
+                plan.for_each_entry(ratios, system, |_, _, v| {
+                    values[slots[k]] += v;
+                    k += 1;
+                });
+                lu.factor_checked(what, detail)
+            }
+        }
+    }
+
+    fn solve(&mut self, b: &mut [f64]) {
+        match self {
+            Factor::Dense(lu) => lu.solve(b),
+            Factor::Sparse(lu, _) => lu.solve(b),
+        }
+    }
+
+    fn solve2(&mut self, b: &mut [f64], c: &mut [f64]) {
+        match self {
+            Factor::Dense(lu) => lu.solve2(b, c),
+            Factor::Sparse(lu, _) => {
+                lu.solve(b);
+                lu.solve(c);
+            }
+        }
+    }
+
+    fn solve_transpose(&mut self, b: &mut [f64]) {
+        match self {
+            Factor::Dense(lu) => lu.solve_transpose(b),
+            Factor::Sparse(lu, _) => lu.solve_transpose(b),
+        }
+    }
+}
+
+/// \[M\] of a workspace: dense (row-major n x n) or a list of terms.
+#[derive(Debug, Clone)]
+enum Mass {
+    Dense(Vec<f64>),
+    Terms(Vec<(usize, usize, f64)>),
+}
+
+impl Mass {
+    /// \[M\]{x} into `out` (dense: each row's products summed in order).
+    fn mul_vec(&self, n: usize, x: &[f64], out: &mut [f64]) {
+        match self {
+            Mass::Dense(m) => {
+                for (k, o) in out.iter_mut().enumerate() {
+                    *o = m[k * n..(k + 1) * n]
+                        .iter()
+                        .zip(x)
+                        .map(|(a, b)| a * b)
+                        .sum::<f64>();
+                }
+            }
+            Mass::Terms(t) => {
+                out.iter_mut().for_each(|v| *v = 0.0);
+                for &(r, c, v) in t {
+                    out[r] += v * x[c];
+                }
+            }
+        }
+    }
 }
 
 /// Per-thread buffers for [`PreparedTrain::solve`]; results are read from here.
 #[derive(Debug, Clone)]
 pub struct Workspace {
-    kin: Lu,
-    acc: Lu,
-    force: Lu,
+    kin: Factor,
+    acc: Factor,
+    force: Factor,
     speed: Vec<f64>,
     accel: Vec<f64>,
     x: Vec<f64>,
-    m: Vec<f64>,
+    m: Mass,
+    /// \[M\]{w'} (power balance, residual).
+    mw: Vec<f64>,
     rhs: Vec<f64>,
     tau: Vec<f64>,
     rolling: Vec<f64>,
@@ -383,13 +515,12 @@ impl PreparedTrain {
         driving: &[LinkId],
         extras: &[Extra],
     ) -> Result<Self> {
-        train.require_dense("the prepared solver (batch, dynamics, power flow)")?;
         let (n, f) = dof_with(train, extras)?;
         let inputs = link_columns(train, inputs, f, "input links")?;
         let accelerated = link_columns(train, accelerated, f, "prescribed accelerations")?;
         let driving = link_columns(train, driving, f, "driving (unknown-torque) links")?;
         let Rows { circuits, extras } = Rows::new(train, extras);
-        Ok(PreparedTrain {
+        PreparedTrain {
             n,
             circuits,
             extras,
@@ -399,12 +530,14 @@ impl PreparedTrain {
             accelerated,
             driving,
             mass: MassModel::empty(n),
+            sparse: None,
             radii: train
                 .gears()
                 .iter()
                 .map(|g| g.radii.map(|r| r[0]))
                 .collect(),
-        })
+        }
+        .with_sparse(n >= PREPARED_SPARSE_FROM)
     }
 
     /// Number of coordinates (links but the frame).
@@ -431,22 +564,75 @@ impl PreparedTrain {
     pub fn radii(&self) -> &[Option<f64>] {
         &self.radii
     }
+    /// Whether the systems are factored sparsely and \[M\] held as terms
+    /// (from [`PREPARED_SPARSE_FROM`] coordinates, unless set).
+    pub fn is_sparse(&self) -> bool {
+        self.sparse.is_some()
+    }
+
+    /// Factor sparsely (or densely) whatever the size: to compare the two
+    /// on one train. Workspaces made before keep their kind.
+    ///
+    /// # Errors
+    /// [`AnalysisError::OutOfMemory`] when faer cannot set up the analysis
+    /// of a sparse pattern.
+    pub fn with_sparse(mut self, sparse: bool) -> Result<Self> {
+        self.sparse = if sparse {
+            Some(self.sparse_factors()?)
+        } else {
+            None
+        };
+        Ok(self)
+    }
+
     /// How many LU factorisations an ideal scenario costs (1 to 3).
     pub fn factorisations(&self) -> usize {
         1 + usize::from(!self.accel_shared) + usize::from(!self.force_shared)
     }
 
+    /// The sparse LUs of the three systems, their patterns analysed.
+    ///
+    /// # Errors
+    /// [`AnalysisError::OutOfMemory`] when faer cannot set up an analysis.
+    fn sparse_factors(&self) -> Result<Box<[Factor; 3]>> {
+        let g = self.circuits.len();
+        let factor = |system: usize| -> Result<Factor> {
+            let mut entries = Vec::new();
+            self.for_each_entry(&vec![2.0; g], system, |r, c, _| entries.push((r, c)));
+            let (lu, slots) =
+                SparseLu::new(self.n, &entries).map_err(|e| AnalysisError::OutOfMemory {
+                    what: "the sparse LU of the prepared train".into(),
+                    detail: e.0,
+                })?;
+            Ok(Factor::Sparse(Box::new(lu), slots))
+        };
+        Ok(Box::new([factor(0)?, factor(1)?, factor(2)?]))
+    }
+
     /// Buffers for one thread.
     pub fn workspace(&self) -> Workspace {
         let (n, g) = (self.n, self.circuits.len());
+        let [kin, acc, force] = match &self.sparse {
+            Some(f) => (**f).clone(),
+            None => [
+                Factor::Dense(Lu::new(n)),
+                Factor::Dense(Lu::new(n)),
+                Factor::Dense(Lu::new(n)),
+            ],
+        };
         Workspace {
-            kin: Lu::new(n),
-            acc: Lu::new(n),
-            force: Lu::new(n),
+            kin,
+            acc,
+            force,
             speed: vec![0.0; n],
             accel: vec![0.0; n],
             x: vec![0.0; n],
-            m: vec![0.0; n * n],
+            m: if self.sparse.is_some() {
+                Mass::Terms(Vec::with_capacity(n))
+            } else {
+                Mass::Dense(vec![0.0; n * n])
+            },
+            mw: vec![0.0; n],
             rhs: vec![0.0; n],
             tau: vec![0.0; g],
             rolling: vec![0.0; g],
@@ -457,6 +643,70 @@ impl PreparedTrain {
             power: PowerSummary::default(),
             key: vec![f64::NAN; g],
             cache: Cache::default(),
+        }
+    }
+
+    /// \[V\] of eq. (23) for `ratios`: the speed of every coordinate per unit
+    /// speed of each input (one dense column per input), by the speed
+    /// system's factorisation (sparse for a large train), with its condition.
+    ///
+    /// # Errors
+    /// The checked factorisation's, naming the system `what` and what a
+    /// zero pivot means (`detail`).
+    pub(crate) fn velocity_columns(
+        &self,
+        ratios: &[f64],
+        what: &str,
+        detail: &str,
+    ) -> Result<(nalgebra::DMatrix<f64>, f64)> {
+        let (n, f) = (self.n, self.inputs.len());
+        let mut lu = match &self.sparse {
+            Some(factors) => factors[0].clone(),
+            None => Factor::Dense(Lu::new(n)),
+        };
+        let cond = lu.fill_factor(self, ratios, 0, what, detail)?;
+        let c = self.constraints();
+        let mut v = nalgebra::DMatrix::zeros(n, f);
+        let mut b = vec![0.0; n];
+        for col in 0..f {
+            b.iter_mut().for_each(|x| *x = 0.0);
+            b[c + col] = 1.0;
+            lu.solve(&mut b);
+            for (r, &x) in b.iter().enumerate() {
+                v[(r, col)] = x;
+            }
+        }
+        Ok((v, cond))
+    }
+
+    /// Every term of system `system` (0: speeds, 1: \[Psi_w\], 2: the force
+    /// matrix) for `ratios` as (row, column, value), in the order and with
+    /// the values the dense fill adds them: the Willis rows (1, -tau, tau - 1),
+    /// the extra rows, then the unit (or, for the force matrix, -1) rows.
+    fn for_each_entry(&self, ratios: &[f64], system: usize, mut f: impl FnMut(usize, usize, f64)) {
+        for (m, (cols, &t)) in self.circuits.iter().zip(ratios).enumerate() {
+            for (k, v) in cols.iter().zip(willis_row(t)) {
+                if let Some(k) = k {
+                    f(m, *k, v);
+                }
+            }
+        }
+        let base = self.circuits.len();
+        for (e, row) in self.extras.iter().enumerate() {
+            for &(k, v) in row {
+                if let Some(k) = k {
+                    f(base + e, k, v);
+                }
+            }
+        }
+        let c = self.constraints();
+        let (links, v) = match system {
+            0 => (&self.inputs, 1.0),
+            1 => (&self.accelerated, 1.0),
+            _ => (&self.driving, -1.0),
+        };
+        for (r, &k) in links.iter().enumerate() {
+            f(c + r, k, v);
         }
     }
 
@@ -658,8 +908,10 @@ impl PreparedTrain {
         if speeds {
             if !ws.cache.kin {
                 // Speeds: the Willis equations (eq. 2) completed by the input rows.
-                self.kinematic_matrix(s.ratios, ws.kin.matrix_mut());
-                ws.cond[0] = ws.kin.factor_checked(
+                ws.cond[0] = ws.kin.fill_factor(
+                    self,
+                    s.ratios,
+                    0,
                     "the speed system (eq. 2)",
                     "the inputs do not determine the motion",
                 )?;
@@ -693,8 +945,10 @@ impl PreparedTrain {
                 ws.kin.solve(&mut ws.speed);
             }
             if moving && !ws.cache.acc {
-                self.acceleration_matrix(s.ratios, ws.acc.matrix_mut());
-                ws.psi_cond = ws.acc.factor_checked(
+                ws.psi_cond = ws.acc.fill_factor(
+                    self,
+                    s.ratios,
+                    1,
                     "[Psi_w] (eq. 8)",
                     "the prescribed accelerations do not determine the motion",
                 )?;
@@ -717,17 +971,34 @@ impl PreparedTrain {
         if speeds {
             self.keep_inputs(s.speeds, &mut ws.speed);
         }
-        match s.mass_matrix {
-            Some(m) => ws.m.copy_from_slice(m),
-            None => self.mass.fill(s.inertia, s.mass, &mut ws.m),
+        let n = self.n;
+        match (&mut ws.m, s.mass_matrix) {
+            (Mass::Dense(m), Some(given)) => {
+                m.iter_mut().for_each(|v| *v = 0.0);
+                for &(r, c, v) in given.entries() {
+                    m[r * n + c] = v;
+                }
+            }
+            (Mass::Dense(m), None) => self.mass.fill(s.inertia, s.mass, m),
+            (Mass::Terms(t), Some(given)) => {
+                t.clear();
+                t.extend_from_slice(given.entries());
+            }
+            (Mass::Terms(t), None) => self.mass.fill_entries(s.inertia, s.mass, t),
         }
-        self.force_rhs(&ws.m, s.torques, &ws.accel, &mut ws.rhs);
+        // {Q} - [M]{w'}.
+        ws.m.mul_vec(n, &ws.accel, &mut ws.mw);
+        for ((r, &q), &mw) in ws.rhs.iter_mut().zip(s.torques).zip(&ws.mw) {
+            *r = q - mw;
+        }
         ws.tau.copy_from_slice(s.ratios);
         self.solve_forces(ws, true)?;
         if what == Compute::Power {
             self.power(ws, s)?;
         }
-        debug_assert!(self.residual_of_motion(ws, s) < 1e-8);
+        // The check is quadratic (it scans the circuits per coordinate, to
+        // allocate nothing): large trains are checked by their tests instead.
+        debug_assert!(self.n > 256 || self.residual_of_motion(ws, s) < 1e-8);
         Ok(())
     }
 
@@ -750,7 +1021,11 @@ impl PreparedTrain {
             && let Some(psi) = ws.psi
         {
             // F = D [Psi_w] with D = diag(1, .., 1, -1, .., -1): x = D [Psi_w]^-T r.
-            let lu = if psi == Psi::Kin { &ws.kin } else { &ws.acc };
+            let lu = if psi == Psi::Kin {
+                &mut ws.kin
+            } else {
+                &mut ws.acc
+            };
             lu.solve_transpose(&mut ws.x);
             ws.x[c..].iter_mut().for_each(|v| *v = -*v);
             ws.cond[2] = ws.psi_cond;
@@ -760,8 +1035,10 @@ impl PreparedTrain {
         // ratios depend on the power-flow directions) never is.
         if !(ideal && ws.cache.force) {
             ws.cache.force = false;
-            self.force_matrix(&ws.tau, ws.force.matrix_mut());
-            ws.cond[2] = ws.force.factor_checked(
+            ws.cond[2] = ws.force.fill_factor(
+                self,
+                &ws.tau,
+                2,
                 "the force system (eq. 10)",
                 "the driving links cannot balance the loads",
             )?;
@@ -819,8 +1096,7 @@ impl PreparedTrain {
             } else {
                 output -= p;
             }
-            let mw: f64 = (0..n).map(|j| ws.m[k * n + j] * ws.accel[j]).sum();
-            kinetic_rate += mw * ws.speed[k];
+            kinetic_rate += ws.mw[k] * ws.speed[k];
         }
         let loss = (0..self.circuits.len())
             .map(|m| ws.x[m] * (s.ratios[m] - ws.tau[m]) * ws.rolling[m])
@@ -842,7 +1118,7 @@ impl PreparedTrain {
         let mut worst = 0.0_f64;
         let mut scale = 1e-300_f64;
         for k in 0..n {
-            let mut r: f64 = (0..n).map(|j| ws.m[k * n + j] * ws.accel[j]).sum();
+            let mut r = ws.mw[k];
             r -= s.torques[k];
             scale = scale.max(s.torques[k].abs());
             for (m, cols) in self.circuits.iter().enumerate() {
@@ -974,9 +1250,13 @@ impl Workspace {
     pub fn driving_torques(&self, plan: &PreparedTrain) -> &[f64] {
         &self.x[plan.constraints()..]
     }
-    /// The mass matrix of the last scenario (row-major).
-    pub fn mass_matrix(&self) -> &[f64] {
-        &self.m
+    /// The mass matrix of the last scenario, row-major, when held dense
+    /// (a train below [`PREPARED_SPARSE_FROM`] coordinates).
+    pub fn mass_matrix(&self) -> Option<&[f64]> {
+        match &self.m {
+            Mass::Dense(m) => Some(m),
+            Mass::Terms(_) => None,
+        }
     }
     /// The force ratios of the last scenario (the Willis ratios unless losses applied).
     pub fn force_ratios(&self) -> &[f64] {
@@ -1023,7 +1303,7 @@ mod tests {
         let n = mm.n();
         for r in 0..n {
             for c in 0..n {
-                assert_eq!(buf[r * n + c], reference.matrix[(r, c)], "({r}, {c})");
+                assert_eq!(buf[r * n + c], reference.get(r, c), "({r}, {c})");
             }
         }
     }

@@ -190,7 +190,7 @@ proptest! {
             let w: Vec<f64> = t.coordinates().iter().map(|l| pf.speeds.speed[l.index()]).collect();
             let wd: Vec<f64> = t.coordinates().iter().map(|l| pf.dynamics.acceleration[l.index()]).collect();
             let mut kdot = 0.0;
-            for (i, wi) in w.iter().enumerate() { for (j, wdj) in wd.iter().enumerate() { kdot += wi * mass.matrix[(i, j)] * wdj; } }
+            for (i, wi) in w.iter().enumerate() { for (j, wdj) in wd.iter().enumerate() { kdot += wi * mass.get(i, j) * wdj; } }
             prop_assert!((kdot - pf.kinetic_rate).abs() <= 1e-10 * kdot.abs().max(1e-9));
             if !losses { prop_assert_eq!(pf.loss, 0.0); }
             prop_assert!(pf.meshes.iter().all(|m| m.loss >= -1e-9 * scale), "losses are dissipative");
@@ -516,7 +516,7 @@ fn nested_carrier_with_spaced_satellites_has_no_coupling() {
         let mass = t.mass_matrix().unwrap();
         let (c1, c2) = (id(&t, "C1"), id(&t, "C2"));
         let (k1, k2) = (t.coordinate(c1).unwrap(), t.coordinate(c2).unwrap());
-        assert_eq!(mass.matrix[(k1, k2)], 0.0, "{copies} copies");
+        assert_eq!(mass.get(k1, k2), 0.0, "{copies} copies");
         assert!(mass.configuration.is_empty());
         for &(th, w) in &[
             ([0.0, 0.0], [1.0, 0.0]),
@@ -599,8 +599,7 @@ fn nested_carrier_with_unbalanced_satellites_follows_the_lagrangian() {
                 }
                 let dk = (energy(shift(th, a, h), w) - energy(shift(th, a, -h), w)) / (2.0 * h);
                 let lagrange = dp - dk;
-                let egt =
-                    mass.matrix[(k[a], k[0])] * wd[0] + mass.matrix[(k[a], k[1])] * wd[1] - v[k[a]];
+                let egt = mass.get(k[a], k[0]) * wd[0] + mass.get(k[a], k[1]) * wd[1] - v[k[a]];
                 assert!(
                     (egt - lagrange).abs() <= 1e-6 * (1.0 + lagrange.abs()),
                     "coordinate {a} at {th:?}, {phases:?}: {egt} against {lagrange}"
@@ -688,10 +687,10 @@ fn spec_offsets_win_over_radii_and_disagreement_is_reported() {
     let text = std::fs::read_to_string(crate::util::example_path("fig3_example61.toml")).unwrap();
     let (i2, m3, n3) = (2.0e-3, 0.12, 3.0); // from the example file
     let carrier = |t: &Train, mass: &egt_core::MassMatrix| {
-        mass.matrix[(
+        mass.get(
             t.coordinate(id(t, "2")).unwrap(),
             t.coordinate(id(t, "2")).unwrap(),
-        )]
+        )
     };
     let derived = train(&text);
     let m = derived.mass_matrix().unwrap();

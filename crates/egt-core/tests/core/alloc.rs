@@ -113,8 +113,13 @@ fn perturbed(base: &[f64], k: usize) -> Vec<f64> {
 #[test]
 fn batch_rows_allocate_nothing() {
     for (name, t) in one_dof_trains() {
-        for compute in [Compute::Kinematics, Compute::Dynamics, Compute::Power] {
-            let p = plan(&t, compute);
+        for (compute, sparse) in [Compute::Kinematics, Compute::Dynamics, Compute::Power]
+            .into_iter()
+            .flat_map(|c| [(c, false), (c, true)])
+        {
+            let p = plan(&t, compute)
+                .with_sparse(sparse)
+                .unwrap_or_else(|e| panic!("{e}"));
             let rows: Vec<Vec<f64>> = (0..50).map(|k| perturbed(p.base(), k)).collect();
             let mut out = vec![0.0; p.outputs().len()];
             let mut w = p.worker();
@@ -122,7 +127,10 @@ fn batch_rows_allocate_nothing() {
                 .unwrap_or_else(|e| panic!("{name} {compute:?}: {e}"));
             let (n, ok) = allocations(|| rows.iter().all(|r| w.eval(r, &mut out).is_ok()));
             assert!(ok, "{name} {compute:?}: a row failed");
-            assert_eq!(n, 0, "{name} {compute:?}: {n} allocations in 50 rows");
+            assert_eq!(
+                n, 0,
+                "{name} {compute:?} (sparse {sparse}): {n} allocations in 50 rows"
+            );
         }
     }
 }
@@ -157,34 +165,42 @@ fn prepared_solves_and_mass_fill_allocate_nothing() {
         assert!(r.is_ok());
         assert_eq!(n, 0, "{name}: KinematicsPlan::solve, sparse");
 
-        // The single analyses' mode: a whole [M], forces only (eq. 8, 10).
-        let req = util::request(&t);
-        let links: Vec<_> = req.accelerations.iter().map(|a| a.0).collect();
-        let pt = PreparedTrain::for_analysis(&t, &links, &links, &req.driving, &req.extras)
-            .unwrap_or_else(|e| panic!("{e}"));
-        let nc = t.coordinates().len();
-        let mut q = vec![0.0; nc];
-        for &(l, v) in &req.torques {
-            q[t.coordinate(l).unwrap_or(0)] += v;
+        // The single analyses' mode: a whole [M], forces only (eq. 8, 10),
+        // dense and sparse (the sparse LUs and [M] as terms of large trains).
+        let whole = t.mass_matrix().unwrap_or_else(|e| panic!("{e}"));
+        for sparse in [false, true] {
+            let req = util::request(&t);
+            let links: Vec<_> = req.accelerations.iter().map(|a| a.0).collect();
+            let pt = PreparedTrain::for_analysis(&t, &links, &links, &req.driving, &req.extras)
+                .and_then(|p| p.with_sparse(sparse))
+                .unwrap_or_else(|e| panic!("{e}"));
+            let nc = t.coordinates().len();
+            let mut q = vec![0.0; nc];
+            for &(l, v) in &req.torques {
+                q[t.coordinate(l).unwrap_or(0)] += v;
+            }
+            let alpha: Vec<f64> = req.accelerations.iter().map(|a| a.1).collect();
+            let zeros = vec![0.0; alpha.len()];
+            let ones = vec![1.0; ratios.len()];
+            let s = Scenario {
+                ratios: &ratios,
+                speeds: &zeros,
+                accelerations: &alpha,
+                torques: &q,
+                inertia: &[],
+                mass: &[],
+                efficiency: &ones,
+                mass_matrix: Some(&whole),
+            };
+            let mut ws = pt.workspace();
+            pt.solve(&mut ws, &s, Compute::Forces)
+                .unwrap_or_else(|e| panic!("{e}"));
+            let (n, r) = allocations(|| pt.solve(&mut ws, &s, Compute::Forces));
+            assert!(r.is_ok());
+            assert_eq!(
+                n, 0,
+                "{name}: PreparedTrain::solve (forces, whole [M], sparse {sparse})"
+            );
         }
-        let alpha: Vec<f64> = req.accelerations.iter().map(|a| a.1).collect();
-        let zeros = vec![0.0; alpha.len()];
-        let ones = vec![1.0; ratios.len()];
-        let s = Scenario {
-            ratios: &ratios,
-            speeds: &zeros,
-            accelerations: &alpha,
-            torques: &q,
-            inertia: &[],
-            mass: &[],
-            efficiency: &ones,
-            mass_matrix: Some(&m),
-        };
-        let mut ws = pt.workspace();
-        pt.solve(&mut ws, &s, Compute::Forces)
-            .unwrap_or_else(|e| panic!("{e}"));
-        let (n, r) = allocations(|| pt.solve(&mut ws, &s, Compute::Forces));
-        assert!(r.is_ok());
-        assert_eq!(n, 0, "{name}: PreparedTrain::solve (forces, whole [M])");
     }
 }

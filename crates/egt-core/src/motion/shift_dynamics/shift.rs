@@ -539,7 +539,7 @@ impl ShiftSim {
             train.coordinate(t.input).expect("checked: input moves"),
             train.coordinate(t.output).expect("checked: output moves"),
         );
-        let mut m = train.mass_matrix()?.matrix;
+        let mut m = train.mass_matrix()?.matrix()?;
         m[(output, output)] += self.vehicle_inertia;
         let n = m.nrows();
         let rows = [

@@ -36,11 +36,13 @@ pub(crate) struct LaneWorkspace {
 }
 
 impl PreparedTrain {
-    /// Buffers for groups of [`LANES`] scenarios on one thread.
+    /// Buffers for groups of [`LANES`] scenarios on one thread (none for a
+    /// sparse train, which the lanes do not solve).
     pub(crate) fn lane_workspace(&self) -> LaneWorkspace {
-        let n = self.n;
+        let dense = !self.is_sparse();
+        let n = if dense { self.n } else { 0 };
         let f = self.inputs.len();
-        let z = |k: usize| vec![[0.0; LANES]; k];
+        let z = |k: usize| vec![[0.0; LANES]; if dense { k } else { 0 }];
         LaneWorkspace {
             kin: LaneLu::new(n),
             acc: LaneLu::new(n),
@@ -99,6 +101,7 @@ impl PreparedTrain {
     /// # Panics
     /// For [`Compute::Forces`] or [`Compute::Power`] (solved one at a time).
     pub(crate) fn solve_lanes(&self, w: &mut LaneWorkspace, live: &mut Live, what: Compute) {
+        assert!(!self.is_sparse(), "lanes solve dense trains");
         assert!(
             matches!(what, Compute::Kinematics | Compute::Dynamics),
             "lanes solve kinematics and ideal dynamics"
