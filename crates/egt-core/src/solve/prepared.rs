@@ -337,9 +337,12 @@ pub struct PreparedTrain {
 
 /// Coordinates from which a [`PreparedTrain`] factors sparsely and holds
 /// \[M\] as a list of terms: time and memory per scenario then grow about
-/// linearly in the links. Below it the dense kernels (unrolled for small
-/// orders, eight scenarios per instruction in a batch) are faster; every
-/// production train is far below it.
+/// linearly in the links. One scenario alone is faster sparse from about 20
+/// coordinates (`cargo bench -p egt-core --bench scenarios --
+/// large::dynamics`: 2.8 against 2.3 µs at 22 links, 19.9 against 8.3 µs at
+/// 66), but a batch solves dense trains eight rows at a time in the lanes
+/// (1.8 µs a row at 30 links), so the switch sits higher; every production
+/// train is far below it.
 pub const PREPARED_SPARSE_FROM: usize = 64;
 
 /// A factorisation of one of the three systems.
