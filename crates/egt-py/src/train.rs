@@ -308,9 +308,14 @@ impl TrainCore {
         guard(|| dmatrix(py, &self.train.willis_jacobian()?))
     }
 
-    /// The mass matrix with the offsets used and notes.
+    /// The mass matrix with the offsets used and notes (dense rows: refused
+    /// past the dense limit, as the other dense matrices).
     fn mass_matrix<'py>(&self, py: Python<'py>) -> Result<Bound<'py, PyAny>> {
-        guard(|| to_py(py, &self.train.mass_matrix()?))
+        guard(|| {
+            let m = self.train.mass_matrix()?;
+            m.require_dense()?;
+            to_py(py, &m)
+        })
     }
 
     /// Inverse dynamics (eq. 6-11).

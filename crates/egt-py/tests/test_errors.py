@@ -245,7 +245,10 @@ def test_a_train_past_the_dense_limit_solves_its_kinematics_and_dynamics_and_ref
     # output load times the speed ratio, which is 1 over the 600 sets.
     d = train.dynamics(accelerations={"m0": 0.0}, torques={"m600": -1.0}, driving=["m0"])
     assert d.driving_torques["m0"] == pytest.approx(1.0, rel=1e-12)
-    # The Willis Jacobian is a dense matrix: refused by name.
+    # The Willis Jacobian and the mass matrix's rows are dense: refused by name.
+    with pytest.raises(egt.AnalysisError) as info:
+        train.mass_matrix()
+    assert info.value.kind == "too_large"
     with pytest.raises(egt.AnalysisError) as info:
         train.willis_jacobian()
     assert info.value.kind == "too_large"

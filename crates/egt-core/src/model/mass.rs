@@ -23,7 +23,7 @@ use nalgebra::DMatrix;
 use serde::Serialize;
 
 use crate::error::{AnalysisError, Result};
-use crate::model::train::{LevelId, LinkId, Train};
+use crate::model::train::{LevelId, LinkId, MAX_DENSE_BYTES, Train, dense_bytes, most_dense_links};
 use crate::spec::MeshKind;
 
 /// |sum_c e^(i psi_c)| at or below this multiple of the copies counts as
@@ -78,8 +78,8 @@ pub(crate) struct FloatingTerms {
 /// so a train of any size holds it in memory linear in its links.
 ///
 /// Serialized as `matrix` (rows) for a train within the dense limit
-/// ([`MAX_DENSE_BYTES`](crate::model::train::MAX_DENSE_BYTES)); past it
-/// `matrix` is null and `entries` lists the non-zeros.
+/// ([`MassMatrix::require_dense`]); past it `matrix` is null and `entries`
+/// lists the non-zeros.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MassMatrix {
     /// Order: the number of coordinates.
@@ -116,33 +116,40 @@ impl MassMatrix {
             .map_or(0.0, |k| self.entries[k].2)
     }
 
-    /// Whether a dense copy fits [`MAX_DENSE_BYTES`](crate::model::train::MAX_DENSE_BYTES).
+    /// Whether the train (n + 1 links) is within the dense limit of
+    /// [`Train::require_dense`](crate::Train::require_dense).
     fn fits_dense(&self) -> bool {
-        self.n
-            .checked_mul(self.n)
-            .and_then(|k| k.checked_mul(8))
-            .is_some_and(|b| b <= crate::model::train::MAX_DENSE_BYTES)
+        dense_bytes(self.n + 1) <= MAX_DENSE_BYTES
+    }
+
+    /// Refuse a dense \[M\] past the dense limit, as
+    /// [`Train::require_dense`](crate::Train::require_dense) does.
+    ///
+    /// # Errors
+    /// [`AnalysisError::TooLarge`] naming the size and the limit.
+    pub fn require_dense(&self) -> Result<()> {
+        if self.fits_dense() {
+            return Ok(());
+        }
+        Err(AnalysisError::TooLarge {
+            analysis: "the dense mass matrix".into(),
+            links: self.n + 1,
+            mib: dense_bytes(self.n + 1) >> 20,
+            limit_mib: MAX_DENSE_BYTES >> 20,
+            most: most_dense_links(),
+            what: "inverse dynamics and power flow hold it sparse and take it".into(),
+        }
+        .into())
     }
 
     /// \[M\] as a dense matrix, for the analyses that work on it whole
     /// (stability, simulation, shifts).
     ///
     /// # Errors
-    /// [`AnalysisError::TooLarge`] when n x n doubles pass
-    /// [`MAX_DENSE_BYTES`](crate::model::train::MAX_DENSE_BYTES).
+    /// [`AnalysisError::TooLarge`] past the dense limit
+    /// ([`MassMatrix::require_dense`]).
     pub fn matrix(&self) -> Result<DMatrix<f64>> {
-        if !self.fits_dense() {
-            let mib = self.n.saturating_mul(self.n).saturating_mul(8) >> 20;
-            return Err(AnalysisError::TooLarge {
-                analysis: "the dense mass matrix".into(),
-                links: self.n + 1,
-                mib,
-                limit_mib: crate::model::train::MAX_DENSE_BYTES >> 20,
-                most: crate::model::train::most_dense_links(),
-                what: "inverse dynamics and power flow hold it sparse and take it".into(),
-            }
-            .into());
-        }
+        self.require_dense()?;
         let mut m = DMatrix::zeros(self.n, self.n);
         for &(r, c, v) in &self.entries {
             m[(r, c)] = v;

@@ -686,31 +686,8 @@ impl PreparedTrain {
     /// matrix) for `ratios` as (row, column, value), in the order and with
     /// the values the dense fill adds them: the Willis rows (1, -tau, tau - 1),
     /// the extra rows, then the unit (or, for the force matrix, -1) rows.
-    fn for_each_entry(&self, ratios: &[f64], system: usize, mut f: impl FnMut(usize, usize, f64)) {
-        for (m, (cols, &t)) in self.circuits.iter().zip(ratios).enumerate() {
-            for (k, v) in cols.iter().zip(willis_row(t)) {
-                if let Some(k) = k {
-                    f(m, *k, v);
-                }
-            }
-        }
-        let base = self.circuits.len();
-        for (e, row) in self.extras.iter().enumerate() {
-            for &(k, v) in row {
-                if let Some(k) = k {
-                    f(base + e, k, v);
-                }
-            }
-        }
-        let c = self.constraints();
-        let (links, v) = match system {
-            0 => (&self.inputs, 1.0),
-            1 => (&self.accelerated, 1.0),
-            _ => (&self.driving, -1.0),
-        };
-        for (r, &k) in links.iter().enumerate() {
-            f(c + r, k, v);
-        }
+    fn for_each_entry(&self, ratios: &[f64], system: usize, f: impl FnMut(usize, usize, f64)) {
+        self.visit_terms(ratios, system, false, f);
     }
 
     /// Write the constraint rows (eq. 2 with `taus`, then the extras) into the
@@ -802,19 +779,29 @@ impl PreparedTrain {
     /// matrix (2) as a sum of terms `f(row, column, coefficient)` whose
     /// coefficients are the data themselves (1, -tau, tau, -1), so that a
     /// residual built from them carries no rounding of tau - 1.
-    pub fn for_each_term(
+    pub fn for_each_term(&self, ratios: &[f64], system: usize, f: impl FnMut(usize, usize, f64)) {
+        self.visit_terms(ratios, system, true, f);
+    }
+
+    /// The terms of system `system`: each Willis row as (1, -tau, tau, -1)
+    /// when `split` ([`PreparedTrain::for_each_term`]), else as the dense
+    /// fill adds it, (1, -tau, tau - 1) ([`PreparedTrain::for_each_entry`]);
+    /// then the extra rows and the input, accelerated or driving rows.
+    fn visit_terms(
         &self,
         ratios: &[f64],
         system: usize,
+        split: bool,
         mut f: impl FnMut(usize, usize, f64),
     ) {
         for (m, (cols, &t)) in self.circuits.iter().zip(ratios).enumerate() {
-            for (k, v) in cols.iter().zip([1.0, -t, t]) {
+            let row = if split { [1.0, -t, t] } else { willis_row(t) };
+            for (k, v) in cols.iter().zip(row) {
                 if let Some(k) = k {
                     f(m, *k, v);
                 }
             }
-            if let Some(k) = cols[2] {
+            if let (true, Some(k)) = (split, cols[2]) {
                 f(m, k, -1.0);
             }
         }

@@ -158,16 +158,17 @@ fn the_sparse_solve_refuses_singular_and_nearly_singular_systems() {
 #[test]
 fn dense_analyses_of_a_train_past_the_limit_are_refused_by_name() {
     let t = util::train(&families::zigzag_chain(600));
-    let e = t
-        .willis_jacobian()
-        .err()
-        .unwrap_or_else(|| panic!("a 1202-link train's dense analysis ran"));
-    assert_eq!(e.code(), "too_large", "{e}");
-    let msg = e.to_string();
-    assert!(
-        msg.contains("1202 links") && msg.contains("at most 1024 links"),
-        "{msg}"
-    );
+    // [M] itself is held sparse; its dense copy is refused like the rest.
+    let mass = t.mass_matrix().unwrap_or_else(|e| panic!("{e}"));
+    for e in [t.willis_jacobian().err(), mass.matrix().err()] {
+        let e = e.unwrap_or_else(|| panic!("a 1202-link train's dense analysis ran"));
+        assert_eq!(e.code(), "too_large", "{e}");
+        let msg = e.to_string();
+        assert!(
+            msg.contains("1202 links") && msg.contains("at most 1024 links"),
+            "{msg}"
+        );
+    }
     assert!(t.willis_jacobian_exact().is_none());
 }
 
