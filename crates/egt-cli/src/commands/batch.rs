@@ -26,6 +26,16 @@ use crate::input;
 
 /// Scenarios solved and written per block (bounds memory; output streams per block).
 const BLOCK: usize = 1 << 14;
+/// Bytes of parameter and result rows one block may hold: the rows of a
+/// large train are wide (a 10 000-link chain has 35 000 parameters and
+/// 40 000 outputs a row, 600 kB), so its blocks hold fewer rows.
+const BLOCK_BYTES: usize = 64 << 20;
+
+/// Rows per block for rows of `width` doubles (parameters and outputs):
+/// [`BLOCK`], or fewer so that a block holds at most [`BLOCK_BYTES`].
+fn block_rows(width: usize) -> usize {
+    (BLOCK_BYTES / 8usize.saturating_mul(width.max(1))).clamp(1, BLOCK)
+}
 /// Rows formatted per parallel task.
 const FORMAT_TASK: usize = 1024;
 
@@ -49,7 +59,9 @@ pub enum BatchOutput {
     Csv,
     /// Apache Parquet (binary; redirect to a file): the CSV's columns, typed,
     /// empty cells as nulls, one row group per block of 16 384 scenarios
-    /// (with `--specs`, the CSV's long form: row, name, quantity, value, error).
+    /// (fewer for a large train, whose rows are wide: a block holds at most
+    /// 64 MiB of them; with `--specs`, the CSV's long form: row, name,
+    /// quantity, value, error).
     Parquet,
     /// Apache Arrow IPC file (binary; redirect to a file), columns as for Parquet.
     Arrow,
@@ -546,14 +558,20 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
         .iter()
         .map(|(_, p)| p.outputs().iter().map(|o| quoted(o)).collect())
         .collect();
-    let blocks = per_plan.div_ceil(BLOCK);
+    // Rows per block: fewer for wide rows (large trains), the same for every plan.
+    let block = plans
+        .iter()
+        .map(|(_, p)| block_rows(p.parameters().len() + p.outputs().len()))
+        .min()
+        .unwrap_or(BLOCK);
+    let blocks = per_plan.div_ceil(block);
     // Block `i` of the whole batch: plan `i / blocks`, its block `i % blocks`.
     let solve = |(buffers, i): (&mut Buffers, usize)| -> anyhow::Result<Done> {
         let (k, b) = (i / blocks, i % blocks);
         let ((state, plan), (cols, sel)) = (&plans[k], (&columns[k], &selected[k]));
         let okeys = &okeys[k];
-        let start = b * BLOCK;
-        let len = BLOCK.min(per_plan - start);
+        let start = b * block;
+        let len = block.min(per_plan - start);
         let (np, nq) = (plan.parameters().len(), plan.outputs().len());
         let Buffers {
             params,
@@ -1574,6 +1592,88 @@ mod columnar_tests {
             .unwrap_or_else(|e| panic!("{e}"))
             .collect::<Result<Vec<_>, _>>()
             .unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// A large train's rows are wide, so its blocks hold fewer rows: at most
+    /// `BLOCK_BYTES` of parameters and outputs at once (16 384 rows of a
+    /// 10 000-link chain would be 10 GB a thread). Here 2 500 rows of a
+    /// 1 502-link chain come out as Parquet row groups (one per block) of
+    /// `block_rows` rows, and each driving torque balances its load (the
+    /// alternating sets' speed ratio is 1).
+    #[test]
+    fn wide_rows_are_cut_into_short_blocks() {
+        use super::{BLOCK, BLOCK_BYTES, block_rows};
+        assert_eq!(block_rows(45), BLOCK);
+        let w = 75_000;
+        let r = block_rows(w);
+        assert!(r < BLOCK && r * w * 8 <= BLOCK_BYTES && (r + 1) * w * 8 > BLOCK_BYTES);
+        assert_eq!(block_rows(usize::MAX / 4), 1);
+
+        let sets = 750;
+        let mut spec = String::from("frame = \"case\"\n");
+        for i in 1..=sets {
+            let (sun, carrier) = if i % 2 == 1 {
+                (format!("m{}", i - 1), format!("m{i}"))
+            } else {
+                (format!("m{i}"), format!("m{}", i - 1))
+            };
+            spec.push_str(&format!(
+                "[[planetary]]\nname = \"P{i}\"\nsun = \"{sun}\"\nring = \"case\"\ncarrier = \"{carrier}\"\nteeth = {{ sun = 30, planet = 21, ring = 72 }}\n"
+            ));
+        }
+        spec.push_str(&format!(
+            "[analysis]\nspeeds = {{ m0 = 100.0 }}\ntorques = {{ m{sets} = -1.0 }}\ndriving = [\"m0\"]\n"
+        ));
+        let dir = std::env::temp_dir().join(format!("egt-wide-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
+        let path = dir.join("chain.toml");
+        std::fs::write(&path, spec).unwrap_or_else(|e| panic!("{e}"));
+        let path = path.display().to_string();
+        let grid = format!("torque.m{sets}=-1:-2:2500");
+        let args = [
+            path.as_str(),
+            "--grid",
+            grid.as_str(),
+            "--columns",
+            "driving_torque.m0",
+            "--output",
+            "parquet",
+        ];
+        let (bytes, r) = batch(&args);
+        r.unwrap_or_else(|e| panic!("{e}"));
+        // The row groups as written (the reader's batches have a size of their own).
+        let file = dir.join("out.parquet");
+        std::fs::write(&file, &bytes).unwrap_or_else(|e| panic!("{e}"));
+        let meta = parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder::try_new(
+            std::fs::File::open(&file).unwrap_or_else(|e| panic!("{e}")),
+        )
+        .unwrap_or_else(|e| panic!("{e}"))
+        .metadata()
+        .clone();
+        let sizes: Vec<i64> = meta.row_groups().iter().map(|g| g.num_rows()).collect();
+        assert_eq!(sizes.iter().sum::<i64>(), 2500);
+        assert!(sizes.len() >= 3, "row groups {sizes:?}");
+        assert!(sizes.iter().all(|&s| s <= sizes[0]), "row groups {sizes:?}");
+        let groups = parquet_batches(bytes);
+        for g in &groups {
+            let column = |name: &str| {
+                g.column_by_name(name)
+                    .and_then(|c| c.as_any().downcast_ref::<arrow_array::Float64Array>())
+                    .unwrap_or_else(|| panic!("no column {name}"))
+                    .clone()
+            };
+            let (load, driving) = (
+                column(&format!("torque.m{sets}")),
+                column("driving_torque.m0"),
+            );
+            for (t, d) in load.iter().zip(driving.iter()) {
+                let (t, d) = (t.unwrap_or(f64::NAN), d.unwrap_or(f64::NAN));
+                assert!(
+                    (d + t).abs() <= 1e-9 * t.abs(),
+                    "load {t}, driving torque {d}"
+                );
+            }
+        }
     }
 
     /// Parquet and Arrow files hold the CSV's cells: a shift table (states,
