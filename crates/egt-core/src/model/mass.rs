@@ -23,7 +23,7 @@ use nalgebra::DMatrix;
 use serde::Serialize;
 
 use crate::error::{AnalysisError, Result};
-use crate::model::train::{LevelId, LinkId, MAX_DENSE_BYTES, Train, dense_bytes, most_dense_links};
+use crate::model::train::{LevelId, LinkId, Train, require_dense_links};
 use crate::spec::MeshKind;
 
 /// |sum_c e^(i psi_c)| at or below this multiple of the copies counts as
@@ -116,30 +116,13 @@ impl MassMatrix {
             .map_or(0.0, |k| self.entries[k].2)
     }
 
-    /// Whether the train (n + 1 links) is within the dense limit of
-    /// [`Train::require_dense`](crate::Train::require_dense).
-    fn fits_dense(&self) -> bool {
-        dense_bytes(self.n + 1) <= MAX_DENSE_BYTES
-    }
-
-    /// Refuse a dense \[M\] past the dense limit, as
-    /// [`Train::require_dense`](crate::Train::require_dense) does.
+    /// Refuse a dense \[M\] past the dense limit of its train (n + 1
+    /// links), as [`Train::require_dense`](crate::Train::require_dense) does.
     ///
     /// # Errors
     /// [`AnalysisError::TooLarge`] naming the size and the limit.
     pub fn require_dense(&self) -> Result<()> {
-        if self.fits_dense() {
-            return Ok(());
-        }
-        Err(AnalysisError::TooLarge {
-            analysis: "the dense mass matrix".into(),
-            links: self.n + 1,
-            mib: dense_bytes(self.n + 1) >> 20,
-            limit_mib: MAX_DENSE_BYTES >> 20,
-            most: most_dense_links(),
-            what: "inverse dynamics and power flow hold it sparse and take it".into(),
-        }
-        .into())
+        require_dense_links(self.n + 1, "the dense mass matrix")
     }
 
     /// \[M\] as a dense matrix, for the analyses that work on it whole
@@ -170,7 +153,7 @@ impl MassMatrix {
 impl Serialize for MassMatrix {
     fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
         use serde::ser::{Error as _, SerializeStruct};
-        let dense = self.fits_dense();
+        let dense = self.require_dense().is_ok();
         let mut st = s.serialize_struct("MassMatrix", if dense { 5 } else { 6 })?;
         if dense {
             let m = self.matrix().map_err(S::Error::custom)?;

@@ -770,20 +770,26 @@ impl Train {
     /// # Errors
     /// [`AnalysisError::TooLarge`] naming the analysis, the size and the limit.
     pub fn require_dense(&self, analysis: &str) -> Result<()> {
-        let n = self.links.len();
-        if dense_bytes(n) <= MAX_DENSE_BYTES {
-            return Ok(());
-        }
-        Err(AnalysisError::TooLarge {
-            analysis: analysis.to_string(),
-            links: n,
-            mib: dense_bytes(n) >> 20,
-            limit_mib: MAX_DENSE_BYTES >> 20,
-            most: most_dense_links(),
-            what: "the topology check, the float kinematics, inverse dynamics and power flow are sparse and take it".into(),
-        }
-        .into())
+        require_dense_links(self.links.len(), analysis)
     }
+}
+
+/// [`Train::require_dense`] for a train of `links` links (the one rule and
+/// message, also for a [`MassMatrix`](crate::MassMatrix) of `links - 1`
+/// coordinates).
+pub(crate) fn require_dense_links(links: usize, analysis: &str) -> Result<()> {
+    if dense_bytes(links) <= MAX_DENSE_BYTES {
+        return Ok(());
+    }
+    Err(AnalysisError::TooLarge {
+        analysis: analysis.to_string(),
+        links,
+        mib: dense_bytes(links) >> 20,
+        limit_mib: MAX_DENSE_BYTES >> 20,
+        most: most_dense_links(),
+        what: "the topology check, the float kinematics, inverse dynamics and power flow are sparse and take it".into(),
+    }
+    .into())
 }
 
 fn build(spec: &Spec, draft: &Draft) -> Result<Train> {

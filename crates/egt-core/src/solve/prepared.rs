@@ -191,16 +191,32 @@ impl MassModel {
         let n = self.n;
         debug_assert_eq!(m.len(), n * n);
         m.iter_mut().for_each(|v| *v = 0.0);
+        self.for_each_term(inertia, mass, |a, b, v| m[a * n + b] += v);
+    }
+
+    /// [`MassModel::fill`] as a list of (row, column, value) terms (repeated
+    /// positions add), for a sparse workspace. Allocates nothing once `m`
+    /// has held a fill.
+    pub fn fill_entries(&self, inertia: &[f64], mass: &[f64], m: &mut Vec<(usize, usize, f64)>) {
+        m.clear();
+        self.for_each_term(inertia, mass, |a, b, v| m.push((a, b, v)));
+    }
+
+    /// Every term of \[M\] as (row, column, value), in the one order both
+    /// fills add them: each link's own rotation (eq. 3), then its eq. (4)
+    /// arms, `(copies m d_a) d_b`.
+    #[inline]
+    fn for_each_term(&self, inertia: &[f64], mass: &[f64], mut f: impl FnMut(usize, usize, f64)) {
         for e in &self.entries {
             if let Some((c, s)) = e.spin {
-                m[c * n + c] += e.copies * inertia[s];
+                f(c, c, e.copies * inertia[s]);
             }
             if let Some((s, range)) = &e.float {
                 let w = e.copies * mass[*s];
                 let terms = &self.terms[range.clone()];
                 for &(a, da) in terms {
                     for &(b, db) in terms {
-                        m[a * n + b] += w * da * db;
+                        f(a, b, w * da * db);
                     }
                 }
             }
@@ -209,27 +225,6 @@ impl MassModel {
 }
 
 impl MassModel {
-    /// [`MassModel::fill`] as a list of (row, column, value) terms (repeated
-    /// positions add), for a sparse workspace. Allocates nothing once `m`
-    /// has held a fill.
-    pub fn fill_entries(&self, inertia: &[f64], mass: &[f64], m: &mut Vec<(usize, usize, f64)>) {
-        m.clear();
-        for e in &self.entries {
-            if let Some((c, s)) = e.spin {
-                m.push((c, c, e.copies * inertia[s]));
-            }
-            if let Some((s, range)) = &e.float {
-                let w = e.copies * mass[*s];
-                let terms = &self.terms[range.clone()];
-                for &(a, da) in terms {
-                    for &(b, db) in terms {
-                        m.push((a, b, w * da * db));
-                    }
-                }
-            }
-        }
-    }
-
     /// \[M\] in exact rationals, from exact inertias and masses (the offsets
     /// taken exactly as their f64 values): a reference to verify the float
     /// fill against (the accuracy study in `lab/` does).
