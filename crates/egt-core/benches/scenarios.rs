@@ -124,10 +124,12 @@ fn sweep_rows(p: &BatchPlan, rows: usize, ratio_ulps: bool) -> Vec<f64> {
     out
 }
 
-/// 10 000 rows of a sweep through `BatchPlan::run` on one thread, per row.
-fn sweep(b: Bencher, t: &Train, ratio_ulps: bool) {
+/// 10 000 rows of a sweep through `BatchPlan::run` on one thread, per row
+/// (with `bounds`, condition estimates only where bounds cannot show a row
+/// well-conditioned).
+fn sweep(b: Bencher, t: &Train, ratio_ulps: bool, bounds: bool) {
     const ROWS: usize = 10_000;
-    let p = plan(t, Compute::Dynamics);
+    let p = plan(t, Compute::Dynamics).with_condition_bounds(bounds);
     let params = sweep_rows(&p, ROWS, ratio_ulps);
     let mut out = vec![0.0; ROWS * p.outputs().len()];
     let pool = rayon::ThreadPoolBuilder::new()
@@ -193,14 +195,21 @@ macro_rules! phases {
             /// A load sweep (ratios fixed): the linear blocks of `run`, one core.
             #[divan::bench(args = $sizes)]
             fn sweep_loads(b: Bencher, links: usize) {
-                sweep(b, &build(&$make(links)), false);
+                sweep(b, &build(&$make(links)), false, false);
             }
 
             /// The same sweep with the ratio moving by one ulp every other
             /// row: every row solved, one core.
             #[divan::bench(args = $sizes)]
             fn sweep_loads_and_ratios(b: Bencher, links: usize) {
-                sweep(b, &build(&$make(links)), true);
+                sweep(b, &build(&$make(links)), true, false);
+            }
+
+            /// The same with condition bounds (`with_condition_bounds`): the
+            /// `cond.*` columns not wanted for themselves.
+            #[divan::bench(args = $sizes)]
+            fn sweep_bounded_ratios(b: Bencher, links: usize) {
+                sweep(b, &build(&$make(links)), true, true);
             }
         }
     };

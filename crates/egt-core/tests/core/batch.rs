@@ -379,17 +379,8 @@ fn linear_blocks_equal_row_by_row_solves() {
     }
 }
 
-/// The lanes of `BatchPlan::run` (rows whose ratios differ, solved eight at
-/// a time) give what a fresh worker gives for each row alone, bit for bit:
-/// every output column, the conditions included, with rows that pivot
-/// differently from their group, singular rows (a ratio of 1 locks a
-/// planetary set's sun to its carrier) and rows with a bad value in among
-/// them. Trains: a nest, a chain, Fig. 3, the two-motor Fig. 5 with
-/// accelerations prescribed on other links than the speeds (eq. 8 factored
-/// apart) and torques solved on a third pair (eq. 10 apart), and every gear
-/// state of the 8HP70 (engaged elements as extra rows, output torque solved).
-#[test]
-fn lanes_equal_fresh_row_by_row_solves_bit_for_bit() {
+/// The lanes' test trains (see `lanes_equal_fresh_row_by_row_solves_bit_for_bit`).
+fn lane_plans() -> Vec<(String, BatchPlan)> {
     use egt_core::batch::BatchSpec;
     let fig5 = crate::util::example("fig5_example62.toml");
     let id = |t: &Train, n: &str| t.link_id(n).unwrap_or_else(|| panic!("no link {n}"));
@@ -428,35 +419,56 @@ fn lanes_equal_fresh_row_by_row_solves_bit_for_bit() {
             BatchPlan::new(&zf, &spec).unwrap_or_else(|e| panic!("{e}")),
         ));
     }
-    for (name, p) in &plans {
+    plans
+}
+
+/// 613 rows for the lanes: every row its own ratios, every 50th far off
+/// (another pivot order), row 5 with a NaN, row 11 singular in most trains.
+fn lane_rows(p: &BatchPlan) -> Vec<f64> {
+    let (np, rows) = (p.parameters().len(), 613);
+    let mut params = Vec::with_capacity(rows * np);
+    for r in 0..rows {
+        let mut row = p.base().to_vec();
+        for (c, v) in row.iter_mut().enumerate() {
+            let col = &p.parameters()[c];
+            let wave = (r as f64 * 0.37 + c as f64).sin();
+            if col.starts_with("ratio.") {
+                // Every row its own ratios; every 50th far off (another pivot order).
+                *v *= if r % 50 == 7 {
+                    -3.0 + wave
+                } else {
+                    1.0 + 0.2 * wave
+                };
+            } else if col.starts_with("accel.") && r % 3 == 0 {
+                *v = 0.0;
+            } else if v.is_finite() && !col.starts_with("inertia.") && !col.starts_with("mass.") {
+                *v = 100.0 * wave;
+            } else if col.starts_with("inertia.") || col.starts_with("mass.") {
+                *v *= 1.0 + 0.5 * wave.abs();
+            }
+        }
+        params.extend(row);
+    }
+    params[5 * np] = f64::NAN;
+    params[11 * np] = 1.0; // a singular row in most trains
+    params
+}
+
+/// The lanes of `BatchPlan::run` (rows whose ratios differ, solved eight at
+/// a time) give what a fresh worker gives for each row alone, bit for bit:
+/// every output column, the conditions included, with rows that pivot
+/// differently from their group, singular rows (a ratio of 1 locks a
+/// planetary set's sun to its carrier) and rows with a bad value in among
+/// them. Trains: a nest, a chain, Fig. 3, the two-motor Fig. 5 with
+/// accelerations prescribed on other links than the speeds (eq. 8 factored
+/// apart) and torques solved on a third pair (eq. 10 apart), and every gear
+/// state of the 8HP70 (engaged elements as extra rows, output torque solved).
+#[test]
+fn lanes_equal_fresh_row_by_row_solves_bit_for_bit() {
+    for (name, p) in &lane_plans() {
         let (np, nq) = (p.parameters().len(), p.outputs().len());
         let rows = 613;
-        let mut params = Vec::with_capacity(rows * np);
-        for r in 0..rows {
-            let mut row = p.base().to_vec();
-            for (c, v) in row.iter_mut().enumerate() {
-                let col = &p.parameters()[c];
-                let wave = (r as f64 * 0.37 + c as f64).sin();
-                if col.starts_with("ratio.") {
-                    // Every row its own ratios; every 50th far off (another pivot order).
-                    *v *= if r % 50 == 7 {
-                        -3.0 + wave
-                    } else {
-                        1.0 + 0.2 * wave
-                    };
-                } else if col.starts_with("accel.") && r % 3 == 0 {
-                    *v = 0.0;
-                } else if v.is_finite() && !col.starts_with("inertia.") && !col.starts_with("mass.")
-                {
-                    *v = 100.0 * wave;
-                } else if col.starts_with("inertia.") || col.starts_with("mass.") {
-                    *v *= 1.0 + 0.5 * wave.abs();
-                }
-            }
-            params.extend(row);
-        }
-        params[5 * np] = f64::NAN;
-        params[11 * np] = 1.0; // a singular row in most trains
+        let params = lane_rows(p);
         for block in params.chunks(256 * np) {
             assert!(!p.is_linear_block(block) && p.lanes_apply(block), "{name}");
         }
@@ -546,4 +558,82 @@ fn the_sparse_engine_gives_the_dense_numbers() {
             }
         }
     }
+}
+
+/// With condition bounds (`with_condition_bounds`) the lanes refuse the same
+/// rows, with the same messages, and give every other output bit for bit as
+/// without; a `cond.*` value differs only where it is an upper bound of the
+/// estimate at most COND_WARN / 2, so every warning is kept. On the lanes'
+/// test trains and Fig. 3 near its lock, where every fifth row takes
+/// tau_2 = (1 + eps) / tau_1 with eps from 10^-1 to 10^-16 (conditions from
+/// 10 to past the refusal): the bounds, the estimates past COND_WARN and
+/// the refusals all occur.
+#[test]
+fn condition_bounds_change_only_small_conditions() {
+    use egt_core::numerics::linalg::COND_WARN;
+    let near = train(&crate::lab::families::near_locked(0.1));
+    let plans = || {
+        let mut v = lane_plans();
+        for compute in [Compute::Kinematics, Compute::Dynamics] {
+            v.push((format!("near-locked {compute:?}"), plan(&near, compute)));
+        }
+        v
+    };
+    let (mut bounded, mut warned, mut refused) = (0, 0, 0);
+    for ((name, p), (_, b)) in plans().iter().zip(plans()) {
+        let b = b.with_condition_bounds(true);
+        let (np, nq) = (p.parameters().len(), p.outputs().len());
+        let mut params = lane_rows(p);
+        let rows = params.len() / np;
+        if let (Some(g1), Some(g2)) = (p.parameter("ratio.G1"), p.parameter("ratio.G2")) {
+            let t1 = p.base()[g1];
+            for r in (2..rows).step_by(5) {
+                let eps = 10f64.powi(-((r / 5 % 16) as i32 + 1));
+                params[r * np + g1] = t1;
+                params[r * np + g2] = (1.0 + eps) / t1;
+            }
+        }
+        let (mut full, mut fast) = (vec![0.0; rows * nq], vec![0.0; rows * nq]);
+        let errors = p.run(&params, &mut full);
+        let errors_bounded = b.run(&params, &mut fast);
+        let show = |e: &[egt_core::batch::RowError]| {
+            e.iter()
+                .map(|e| format!("{} {}", e.row, e.error))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(show(&errors), show(&errors_bounded), "{name}");
+        refused += errors
+            .iter()
+            .filter(|e| {
+                matches!(
+                    e.error,
+                    Error::Analysis(AnalysisError::IllConditioned { .. })
+                )
+            })
+            .count();
+        let conds = p.condition_columns();
+        assert_eq!(conds, b.condition_columns());
+        for r in 0..rows {
+            let (a, z) = (&full[r * nq..(r + 1) * nq], &fast[r * nq..(r + 1) * nq]);
+            for c in 0..nq {
+                let (x, y) = (a[c], z[c]);
+                if x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan()) {
+                    if conds.contains(&c) && x > COND_WARN && x.is_finite() {
+                        warned += 1;
+                    }
+                    continue;
+                }
+                assert!(
+                    conds.contains(&c) && y >= x && y <= 0.5 * COND_WARN,
+                    "{name} row {r} {}: {x} estimated, {y} with bounds",
+                    p.outputs()[c]
+                );
+                bounded += 1;
+            }
+        }
+    }
+    assert!(
+        bounded > 1000 && warned > 10 && refused > 10,
+        "{bounded} bounds, {warned} warnings, {refused} refusals"
+    );
 }

@@ -9,7 +9,7 @@
 use super::{Compute, MassModel, PreparedTrain};
 use crate::model::equations::willis_row;
 use crate::numerics::lanes::{LANES, Lane, LaneLu, Live};
-use crate::numerics::linalg::{Dim, Dynamic, Fixed, dispatch};
+use crate::numerics::linalg::{COND_WARN, Dim, Dynamic, Fixed, dispatch};
 
 /// The scenarios of one group, structure of arrays, and the buffers of their
 /// solve; results are read from here.
@@ -98,9 +98,20 @@ impl PreparedTrain {
     /// dead on entry are not looked at; lanes that die are left for
     /// [`PreparedTrain::solve`].
     ///
+    /// With `bounds`, a condition estimate is made only where
+    /// [`LaneLu::condition_or_bound`] cannot show it below [`COND_WARN`]: the
+    /// same lanes die, every condition past `COND_WARN / 2` is the estimate,
+    /// the others are upper bounds.
+    ///
     /// # Panics
     /// For [`Compute::Forces`] or [`Compute::Power`] (solved one at a time).
-    pub(crate) fn solve_lanes(&self, w: &mut LaneWorkspace, live: &mut Live, what: Compute) {
+    pub(crate) fn solve_lanes(
+        &self,
+        w: &mut LaneWorkspace,
+        live: &mut Live,
+        what: Compute,
+        bounds: bool,
+    ) {
         assert!(!self.is_sparse(), "lanes solve dense trains");
         assert!(
             matches!(what, Compute::Kinematics | Compute::Dynamics),
@@ -114,12 +125,21 @@ impl PreparedTrain {
             w,
             live,
             what,
+            bounds,
         });
     }
 
     #[inline(always)]
-    fn solve_lanes_in<D: Dim>(&self, d: D, w: &mut LaneWorkspace, live: &mut Live, what: Compute) {
+    fn solve_lanes_in<D: Dim>(
+        &self,
+        d: D,
+        w: &mut LaneWorkspace,
+        live: &mut Live,
+        what: Compute,
+        bounds: bool,
+    ) {
         let c = self.constraints();
+
         let LaneWorkspace {
             kin,
             acc,
@@ -140,7 +160,7 @@ impl PreparedTrain {
         } = w;
         self.lane_rows(ratios, &self.inputs, 1.0, kin.matrix_mut());
         kin.factor(d, live);
-        cond[0] = kin.condition(d, live);
+        cond[0] = condition(kin, d, live, bounds);
         rhs(c, speeds, speed);
         if what == Compute::Kinematics {
             kin.solve(d, speed);
@@ -173,7 +193,7 @@ impl PreparedTrain {
                 // A static lane does not need eq. (8): its failure is not the lane's.
                 let mut ok = *live;
                 acc.factor(d, &mut ok);
-                let k = acc.condition(d, &mut ok);
+                let k = condition(acc, d, &mut ok, bounds);
                 for l in 0..LANES {
                     live[l] &= ok[l] || !moving[l];
                 }
@@ -216,7 +236,7 @@ impl PreparedTrain {
             self.lane_rows(ratios, &self.driving, -1.0, force.matrix_mut());
             let mut ok = *live;
             force.factor(d, &mut ok);
-            let k = force.condition(d, &mut ok);
+            let k = condition(force, d, &mut ok, bounds);
             force.solve_transpose(d, x2);
             for l in 0..LANES {
                 if !(self.force_shared && psi[l]) {
@@ -252,6 +272,7 @@ struct Group<'a> {
     w: &'a mut LaneWorkspace,
     live: &'a mut Live,
     what: Compute,
+    bounds: bool,
 }
 
 impl pulp::WithSimd for Group<'_> {
@@ -263,8 +284,9 @@ impl pulp::WithSimd for Group<'_> {
             w,
             live,
             what,
+            bounds,
         } = self;
-        dispatch!(plan.n, d => plan.solve_lanes_in(d, w, live, what));
+        dispatch!(plan.n, d => plan.solve_lanes_in(d, w, live, what, bounds));
     }
 }
 
@@ -298,6 +320,17 @@ impl MassModel {
                 }
             }
         }
+    }
+}
+
+/// The condition estimate, or with `bounds` the bound where it shows the
+/// condition small (see [`PreparedTrain::solve_lanes`]).
+#[inline(always)]
+fn condition<D: Dim>(lu: &mut LaneLu, d: D, live: &mut Live, bounds: bool) -> Lane {
+    if bounds {
+        lu.condition_or_bound(d, live, COND_WARN)
+    } else {
+        lu.condition(d, live)
     }
 }
 
