@@ -40,9 +40,12 @@ fn compute_of(s: &str) -> Result<Compute> {
 /// Prepare a batch. `inputs`, `accelerated`, `driving` default to the spec's
 /// `[analysis]` choices (accelerated and driving: the inputs); with
 /// `gear_state`, to the transmission's input in that state, whose engaged
-/// elements are added to `engaged`.
+/// elements are added to `engaged`. `condition_bounds`: see
+/// [`BatchPlan::with_condition_bounds`].
+// One argument per Python keyword.
+#[allow(clippy::too_many_arguments)]
 #[pyfunction]
-#[pyo3(signature = (core, compute, inputs = None, accelerated = None, driving = None, engaged = Vec::new(), gear_state = None))]
+#[pyo3(signature = (core, compute, inputs = None, accelerated = None, driving = None, engaged = Vec::new(), gear_state = None, condition_bounds = false))]
 pub fn batch_plan(
     core: &TrainCore,
     compute: &str,
@@ -51,6 +54,7 @@ pub fn batch_plan(
     driving: Option<Vec<String>>,
     engaged: Vec<String>,
     gear_state: Option<String>,
+    condition_bounds: bool,
 ) -> Result<BatchPlanCore> {
     let compute = compute_of(compute)?;
     guard(|| {
@@ -77,7 +81,7 @@ pub fn batch_plan(
         spec.extras
             .extend(engaged.iter().cloned().zip(convert::engaged(t, &engaged)?));
         Ok(BatchPlanCore {
-            plan: BatchPlan::new(t, &spec)?,
+            plan: BatchPlan::new(t, &spec)?.with_condition_bounds(condition_bounds),
         })
     })
 }

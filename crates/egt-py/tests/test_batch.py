@@ -183,6 +183,31 @@ def test_plan_columns_and_base(fig3: egt.Train) -> None:
     assert p.shape == (3, len(plan.parameters)) and not bad
 
 
+def test_condition_bounds_keep_every_number_and_refusal(fig3: egt.Train) -> None:
+    # Fig. 3 swept through its lock (tau_2 = 1 / tau_1 = -1.5): the rows next
+    # to it are ill-conditioned, the lock itself is refused.
+    g2 = np.repeat(np.linspace(-1.5000001, -1.4999999, 21), 8)
+    load = np.tile(np.linspace(-10.0, -50.0, 8), 21)
+    values = {"ratio.G2": g2, "torque.4": load}
+    full = fig3.batch("dynamics").evaluate(values)
+    fast = fig3.batch("dynamics", condition_bounds=True).evaluate(values)
+    assert full.outputs == fast.outputs
+    np.testing.assert_array_equal(full.ok, fast.ok)
+    assert {r: e.message for r, e in full.errors.items()} == {r: e.message for r, e in fast.errors.items()}
+    assert (~full.ok).sum() >= 8
+    conds = [k for k, o in enumerate(full.outputs) if o.startswith("cond.")]
+    others = [k for k in range(len(full.outputs)) if k not in conds]
+    np.testing.assert_array_equal(full.values[:, others], fast.values[:, others])
+    a, b = full.values[:, conds], fast.values[:, conds]
+    moved = ~((a == b) | (np.isnan(a) & np.isnan(b)))
+    assert moved.sum() > 100
+    # A changed condition is an upper bound of the estimate, below the warning level.
+    assert (b[moved] >= a[moved]).all() and (b[moved] <= 5e7).all()
+    # Every condition past the warning level is the estimate itself.
+    warned = full.ok[:, None] & (a > 1e8)
+    assert warned.sum() >= 16 and not moved[warned].any()
+
+
 def test_power_batch(fig3: egt.Train) -> None:
     plan = fig3.batch("power")
     res = plan.evaluate({"efficiency.G1": [0.9, 0.98, 1.0], "efficiency.G2": 0.98})

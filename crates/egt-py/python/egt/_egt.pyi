@@ -126,6 +126,7 @@ def batch_plan(
     driving: Optional[List[str]] = None,
     engaged: List[str] = ...,
     gear_state: Optional[str] = None,
+    condition_bounds: bool = False,
 ) -> BatchPlanCore: ...
 
 _Curve = Tuple[str, float, float, float]
