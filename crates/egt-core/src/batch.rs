@@ -953,25 +953,48 @@ fn check(plan: &BatchPlan, row: &[f64]) -> Result<()> {
     let g = plan.groups;
     // One pass per group of columns; the column-by-column search below only
     // runs to name the bad one.
-    let good = row[..g.speed].iter().all(|v| v.is_finite() && *v != 0.0)
+    let good = row[..g.speed].iter().all(|&v| ratio_ok(v))
         && row[g.speed..g.inertia].iter().all(|v| v.is_finite())
         && row[g.inertia..g.efficiency]
             .iter()
-            .all(|v| v.is_finite() && *v >= 0.0)
-        && row[g.efficiency..].iter().all(|v| *v > 0.0 && *v <= 1.0);
+            .all(|&v| non_negative(v))
+        && row[g.efficiency..].iter().all(|&v| efficiency_ok(v));
     if good {
         return Ok(());
     }
     for (c, &v) in row.iter().enumerate() {
-        let bad = !v.is_finite()
-            || (c >= g.inertia && c < g.efficiency && v < 0.0)
-            || (c >= g.efficiency && !(v > 0.0 && v <= 1.0))
-            || (c < g.speed && v == 0.0);
-        if bad {
+        let ok = if c < g.speed {
+            ratio_ok(v)
+        } else if c < g.inertia {
+            v.is_finite()
+        } else if c < g.efficiency {
+            non_negative(v)
+        } else {
+            efficiency_ok(v)
+        };
+        if !ok {
             return Err(bad_parameter(plan, c, v));
         }
     }
     Ok(())
+}
+
+/// The rule of the ratio columns (a zero ratio has no Willis row).
+#[inline(always)]
+fn ratio_ok(v: f64) -> bool {
+    v.is_finite() && v != 0.0
+}
+
+/// The rule of the inertia and mass columns.
+#[inline(always)]
+fn non_negative(v: f64) -> bool {
+    v.is_finite() && v >= 0.0
+}
+
+/// The rule of the efficiency columns.
+#[inline(always)]
+fn efficiency_ok(v: f64) -> bool {
+    v > 0.0 && v <= 1.0
 }
 
 #[cold]

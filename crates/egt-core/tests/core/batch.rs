@@ -422,8 +422,19 @@ fn lane_plans() -> Vec<(String, BatchPlan)> {
     plans
 }
 
+/// Rows of `lane_rows` with a bad value in the last column of a group.
+const BAD_ROWS: [(usize, &str); 6] = [
+    (17, "ratio."),
+    (23, "speed."),
+    (29, "accel."),
+    (31, "torque."),
+    (37, "inertia."),
+    (41, "mass."),
+];
+
 /// 613 rows for the lanes: every row its own ratios, every 50th far off
-/// (another pivot order), row 5 with a NaN, row 11 singular in most trains.
+/// (another pivot order), row 5 with a NaN, row 11 singular in most trains,
+/// the rows of `BAD_ROWS` with a bad value.
 fn lane_rows(p: &BatchPlan) -> Vec<f64> {
     let (np, rows) = (p.parameters().len(), 613);
     let mut params = Vec::with_capacity(rows * np);
@@ -451,6 +462,16 @@ fn lane_rows(p: &BatchPlan) -> Vec<f64> {
     }
     params[5 * np] = f64::NAN;
     params[11 * np] = 1.0; // a singular row in most trains
+    // A bad value in each other group of columns that has one.
+    for ((r, prefix), v) in
+        BAD_ROWS
+            .into_iter()
+            .zip([0.0, f64::INFINITY, f64::NAN, f64::NEG_INFINITY, -1e-3, -0.5])
+    {
+        if let Some(c) = p.parameters().iter().rposition(|n| n.starts_with(prefix)) {
+            params[r * np + c] = v;
+        }
+    }
     params
 }
 
@@ -495,6 +516,13 @@ fn lanes_equal_fresh_row_by_row_solves_bit_for_bit() {
             "{name}"
         );
         assert!(failed.contains(&5), "{name}");
+        for (r, prefix) in BAD_ROWS {
+            let has = p.parameters().iter().any(|n| n.starts_with(prefix));
+            assert!(
+                !has || failed.contains(&r),
+                "{name}: row {r} ({prefix}) {failed:?}"
+            );
+        }
     }
 }
 
