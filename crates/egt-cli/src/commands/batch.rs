@@ -1141,6 +1141,79 @@ impl Row<'_> {
     }
 }
 
+/// Text of `--specs` lines per block: a block holds at most this much, and
+/// at most [`BLOCK`] lines (parsing takes about 30 times the text, so a file
+/// of large trains is read and solved a few lines at a time).
+const SPECS_BLOCK_BYTES: usize = 16 << 20;
+
+/// The non-blank lines of a `--specs` input, read a block at a time (the
+/// file is never held whole). A line longer than a spec may be
+/// ([`MAX_SPEC_BYTES`](egt_core::spec::parse::MAX_SPEC_BYTES)) is not kept:
+/// its error stands in its place and the rest of it is skipped.
+struct SpecLines<R> {
+    reader: R,
+    source: String,
+    /// Lines read so far (blank ones included), for the line numbers.
+    read: usize,
+}
+
+/// A `--specs` line: its number from 0, and its text or why it has none.
+type SpecLine = (usize, Result<String, String>);
+
+impl<R: std::io::BufRead> SpecLines<R> {
+    /// The next block of lines; empty at the end of the input.
+    fn next_block(&mut self) -> anyhow::Result<Vec<SpecLine>> {
+        use egt_core::spec::parse::{MAX_SPEC_BYTES, check_spec_size};
+        use std::io::{BufRead, Read};
+        let (mut block, mut bytes) = (Vec::new(), 0);
+        while block.len() < BLOCK && bytes < SPECS_BLOCK_BYTES {
+            let mut buf = Vec::new();
+            let n = (&mut self.reader)
+                .take(MAX_SPEC_BYTES as u64 + 1)
+                .read_until(b'\n', &mut buf)
+                .with_context(|| format!("reading {}", self.source))?;
+            if n == 0 {
+                break;
+            }
+            let k = self.read;
+            self.read += 1;
+            let text = buf.strip_suffix(b"\n").unwrap_or(&buf);
+            if text.len() > MAX_SPEC_BYTES {
+                // The rest of the line, unread.
+                loop {
+                    let rest = self.reader.fill_buf()?;
+                    if rest.is_empty() {
+                        break;
+                    }
+                    let (used, done) = rest
+                        .iter()
+                        .position(|&c| c == b'\n')
+                        .map_or((rest.len(), false), |i| (i + 1, true));
+                    self.reader.consume(used);
+                    if done {
+                        break;
+                    }
+                }
+                let name = format!("{}:{}", self.source, k + 1);
+                let e = check_spec_size(text.len(), &name)
+                    .err()
+                    .map(|e| e.to_string());
+                block.push((k, Err(e.unwrap_or_default())));
+                continue;
+            }
+            match String::from_utf8(text.to_vec()) {
+                Ok(t) if t.trim().is_empty() => {}
+                Ok(t) => {
+                    bytes += t.len();
+                    block.push((k, Ok(t)));
+                }
+                Err(_) => block.push((k, Err("the line is not UTF-8 text".into()))),
+            }
+        }
+        Ok(block)
+    }
+}
+
 /// `--specs`: one whole spec per line, each its own train and plan.
 fn run_specs(
     args: &Args,
@@ -1148,12 +1221,19 @@ fn run_specs(
     compute: Compute,
     out: &mut dyn Write,
 ) -> anyhow::Result<Outcome> {
-    let text = read(path)?;
-    let lines: Vec<(usize, &str)> = text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim().is_empty())
-        .collect();
+    let reader: Box<dyn std::io::BufRead> = if path.as_os_str() == "-" {
+        Box::new(std::io::stdin().lock())
+    } else {
+        let file =
+            std::fs::File::open(path).with_context(|| format!("reading {}", path.display()))?;
+        Box::new(std::io::BufReader::with_capacity(1 << 20, file))
+    };
+    let source = path.display().to_string();
+    let mut lines = SpecLines {
+        reader,
+        source: source.clone(),
+        read: 0,
+    };
     let json = args.output == BatchOutput::Jsonl;
     let mut columnar = match args.output {
         BatchOutput::Parquet | BatchOutput::Arrow => Some(long_columnar(args.output)?),
@@ -1162,16 +1242,25 @@ fn run_specs(
     if !json && columnar.is_none() {
         out.write_all(b"row,name,quantity,value\n")?;
     }
-    let bar = progress(lines.len());
-    let source = path.display().to_string();
+    // The number of lines is not known before the end.
+    let bar = ProgressBar::no_length();
+    if let Ok(style) = ProgressStyle::with_template("{human_pos} specs") {
+        bar.set_style(style);
+    }
     let (mut failed, mut first_error) = (0, None);
-    for (b, block) in lines.chunks(BLOCK).enumerate() {
+    let mut first = 0;
+    for b in 0.. {
+        let block = lines.next_block()?;
+        if block.is_empty() {
+            break;
+        }
         // Each line solved (its plan dropped at once), then written in the
         // output's form.
         let solved: Vec<Long> = block
             .par_iter()
-            .map(|&(line_no, line)| {
+            .map(|(line_no, line)| {
                 let name = format!("{source}:{}", line_no + 1);
+                let line = line.as_ref().map_err(|e| (name.clone(), e.clone()))?;
                 match one_spec(line, &name, compute, args) {
                     Ok((title, plan, o)) => Ok(Solved {
                         title,
@@ -1186,12 +1275,12 @@ fn run_specs(
             })
             .collect();
         match columnar.as_mut() {
-            Some((encoder, sink)) => sink.append(long_block(encoder, b, &solved)?, out)?,
+            Some((encoder, sink)) => sink.append(long_block(encoder, b, first, &solved)?, out)?,
             None => {
                 let text: Vec<String> = solved
                     .par_iter()
                     .enumerate()
-                    .map(|(r, s)| long_text(b * BLOCK + r, s, json))
+                    .map(|(r, s)| long_text(first + r, s, json))
                     .collect();
                 for t in &text {
                     out.write_all(t.as_bytes())?;
@@ -1201,16 +1290,17 @@ fn run_specs(
         for (r, s) in solved.iter().enumerate() {
             if let Err((name, e)) = s {
                 failed += 1;
-                first_error.get_or_insert(format!("row {} ({name}): {e}", b * BLOCK + r));
+                first_error.get_or_insert(format!("row {} ({name}): {e}", first + r));
             }
         }
+        first += block.len();
         bar.inc(block.len() as u64);
     }
     bar.finish_and_clear();
     if let Some((_, sink)) = columnar {
         sink.finish(out)?;
     }
-    Ok((lines.len(), failed, first_error))
+    Ok((first, failed, first_error))
 }
 
 /// One `--specs` line as JSON Lines or as the CSV's long form (a row per
@@ -1262,15 +1352,21 @@ struct Solved {
 /// One `--specs` line: solved, or its line name and error.
 type Long = Result<Solved, (String, String)>;
 
-/// Block `b` of `--specs` lines in long form, as the CSV writes it: a row
-/// per selected output of each line, or one `error` row for a failed line.
-fn long_block(encoder: &Encoder, b: usize, solved: &[Long]) -> anyhow::Result<Encoded> {
+/// Block `b` of `--specs` lines, whose first is row `first`, in long form,
+/// as the CSV writes it: a row per selected output of each line, or one
+/// `error` row for a failed line.
+fn long_block(
+    encoder: &Encoder,
+    b: usize,
+    first: usize,
+    solved: &[Long],
+) -> anyhow::Result<Encoded> {
     use arrow_array::{ArrayRef, Float64Array, StringArray, UInt64Array};
     use std::sync::Arc;
     let (mut row, mut name, mut quantity) = (Vec::new(), Vec::new(), Vec::new());
     let (mut value, mut error) = (Vec::new(), Vec::new());
     for (r, s) in solved.iter().enumerate() {
-        let r = (b * BLOCK + r) as u64;
+        let r = (first + r) as u64;
         match s {
             Ok(Solved { title, outputs, .. }) => {
                 for (q, v) in outputs {
@@ -1535,6 +1631,80 @@ mod tests {
         assert!(lines[1].get("error").is_some());
         assert_eq!(lines[0]["driving_torque.2"], lines[2]["driving_torque.2"]);
         assert!(lines[0]["driving_torque.2"].as_f64().is_some());
+        assert!(r.is_err());
+    }
+
+    /// A `--specs` input is read a block at a time: at most SPECS_BLOCK_BYTES
+    /// of text (here 1 MiB lines: 16 a block), blank lines skipped, the line
+    /// numbers running on across blocks.
+    #[test]
+    fn specs_lines_come_in_blocks_of_bounded_text() {
+        use super::{SPECS_BLOCK_BYTES, SpecLines};
+        let line = "x".repeat(1 << 20);
+        let mut text = String::new();
+        for k in 0..40 {
+            text.push_str(&line);
+            text.push('\n');
+            if k % 10 == 3 {
+                text.push_str("  \n");
+            }
+        }
+        let mut lines = SpecLines {
+            reader: std::io::Cursor::new(text.into_bytes()),
+            source: "mem".into(),
+            read: 0,
+        };
+        let (mut sizes, mut numbers) = (Vec::new(), Vec::new());
+        loop {
+            let block = lines.next_block().unwrap_or_else(|e| panic!("{e}"));
+            if block.is_empty() {
+                break;
+            }
+            let bytes: usize = block
+                .iter()
+                .map(|(_, l)| l.as_ref().map_or(0, String::len))
+                .sum();
+            assert!(bytes < SPECS_BLOCK_BYTES + (1 << 20));
+            sizes.push(block.len());
+            numbers.extend(block.iter().map(|(k, _)| *k));
+        }
+        assert_eq!(sizes, [16, 16, 8]);
+        // Lines 4, 15, 26, 37 (from 0) are blank.
+        let expected: Vec<usize> = (0..44).filter(|k| ![4, 15, 26, 37].contains(k)).collect();
+        assert_eq!(numbers, expected);
+    }
+
+    /// A `--specs` line past the spec size limit (256 MiB + 1 byte, in a
+    /// sparse file) is refused in its row, naming the limit, without
+    /// stopping the lines after it.
+    #[test]
+    fn a_specs_line_past_the_size_limit_is_refused_in_its_row() {
+        use std::io::{Seek, SeekFrom, Write as _};
+        let text = std::fs::read_to_string(FIG3).unwrap_or_else(|e| panic!("{FIG3}: {e}"));
+        let good = egt_core::parse_spec(&text, egt_core::Format::Toml, "x")
+            .unwrap_or_else(|e| panic!("{e}"));
+        let json = serde_json::to_string(&good).unwrap_or_default();
+        let path = temp("huge.jsonl", "");
+        let mut f = std::fs::OpenOptions::new()
+            .write(true)
+            .open(&path)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let limit = egt_core::spec::parse::MAX_SPEC_BYTES as u64;
+        f.seek(SeekFrom::Start(limit + 1))
+            .and_then(|_| f.write_all(format!("\n{json}\n").as_bytes()))
+            .unwrap_or_else(|e| panic!("{e}"));
+        drop(f);
+        let (text, r) = batch(&["--specs", &path, "--columns", "driving_torque.2"]);
+        let _ = std::fs::remove_file(&path);
+        let lines = json_lines(&text);
+        assert_eq!(lines.len(), 2, "{text}");
+        let e = lines[0]["error"].as_str().unwrap_or_default();
+        assert!(e.contains("huge.jsonl:1") && e.contains("256 MiB"), "{e}");
+        assert!(
+            lines[1]["driving_torque.2"].as_f64().is_some(),
+            "{}",
+            lines[1]
+        );
         assert!(r.is_err());
     }
 
