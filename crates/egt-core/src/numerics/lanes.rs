@@ -450,17 +450,35 @@ mod tests {
     use super::*;
     use crate::numerics::linalg::Lu;
 
-    /// Lanes of random matrices, one of them singular: every live lane gives
-    /// the scalar LU's solutions and condition estimate, bit for bit.
-    #[test]
-    fn lanes_equal_the_scalar_lu_bit_for_bit() {
-        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
-        let mut next = move || {
+    /// Uniform numbers in [-0.5, 0.5) (xorshift64).
+    fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
             seed ^= seed << 13;
             seed ^= seed >> 7;
             seed ^= seed << 17;
             (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        }
+    }
+
+    /// One matrix per lane (row-major, order `d`), factored: the factors
+    /// and the live lanes.
+    fn factored(mats: &[Vec<f64>], d: crate::numerics::linalg::Dynamic) -> (LaneLu, Live) {
+        let mut lanes = LaneLu::new(d.n());
+        for (k, e) in lanes.matrix_mut().iter_mut().enumerate() {
+            for l in 0..LANES {
+                e[l] = mats[l][k];
+            }
+        }
+        let mut live = [true; LANES];
+        lanes.factor(d, &mut live);
+        (lanes, live)
+    }
+
+    /// Lanes of random matrices, one of them singular: every live lane gives
+    /// the scalar LU's solutions and condition estimate, bit for bit.
+    #[test]
+    fn lanes_equal_the_scalar_lu_bit_for_bit() {
+        let mut next = uniform(0x2545_f491_4f6c_dd1d);
         for n in [1, 2, 3, 5, 9, 14] {
             for _ in 0..20 {
                 // A common diagonally heavy part keeps most lanes on one pivot order.
@@ -479,15 +497,8 @@ mod tests {
                         }
                     }
                 }
-                let mut lanes = LaneLu::new(n);
-                for (k, e) in lanes.matrix_mut().iter_mut().enumerate() {
-                    for l in 0..LANES {
-                        e[l] = mats[l][k];
-                    }
-                }
-                let mut live = [true; LANES];
                 let d = crate::numerics::linalg::Dynamic(n);
-                lanes.factor(d, &mut live);
+                let (mut lanes, mut live) = factored(&mats, d);
                 let cond = lanes.condition(d, &mut live);
                 assert!(!live[3], "the singular lane is dead");
                 let rhs: Vec<f64> = (0..n).map(|_| next()).collect();
@@ -523,13 +534,7 @@ mod tests {
     /// `condition` kills and returns the estimate past its limit.
     #[test]
     fn the_condition_bound_is_at_least_the_condition_number() {
-        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut next = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut next = uniform(0x9e37_79b9_7f4a_7c15);
         let (mut bounded, mut estimated, mut loose) = (0, 0, 0.0_f64);
         for n in [1, 2, 3, 5, 9, 14] {
             for round in 0..30 {
@@ -549,15 +554,8 @@ mod tests {
                         }
                     }
                 }
-                let mut lanes = LaneLu::new(n);
-                for (k, e) in lanes.matrix_mut().iter_mut().enumerate() {
-                    for l in 0..LANES {
-                        e[l] = mats[l][k];
-                    }
-                }
-                let mut live = [true; LANES];
                 let d = crate::numerics::linalg::Dynamic(n);
-                lanes.factor(d, &mut live);
+                let (mut lanes, live) = factored(&mats, d);
                 let bound = lanes.condition_bound(d);
                 let (mut dead, mut guarded) = (live, live);
                 let cond = lanes.condition(d, &mut dead);
