@@ -469,7 +469,7 @@ class Train:
         themselves, estimate a condition only where a cheap upper bound (from
         the LU factors) cannot show it below 1e8 / 2; the same rows are
         refused and every other output is unchanged, but a ``cond.*`` value at
-        most 5e7 may then be that bound instead of the estimate (10 to 25 %
+        most 5e7 may then be that bound instead of the estimate (10 to 30 %
         faster when every row has its own ratios). See :class:`egt.BatchPlan`.
         """
         args = (

@@ -99,7 +99,7 @@ impl PreparedTrain {
     /// [`PreparedTrain::solve`].
     ///
     /// With `bounds`, a condition estimate is made only where
-    /// [`LaneLu::condition_or_bound`] cannot show it below [`COND_WARN`]: the
+    /// [`LaneLu::condition_or_bound`] cannot show it below [`COND_WARN`] / 2: the
     /// same lanes die, every condition past `COND_WARN / 2` is the estimate,
     /// the others are upper bounds.
     ///
@@ -139,7 +139,6 @@ impl PreparedTrain {
         bounds: bool,
     ) {
         let c = self.constraints();
-
         let LaneWorkspace {
             kin,
             acc,
