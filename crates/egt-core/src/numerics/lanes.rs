@@ -460,6 +460,17 @@ mod tests {
         }
     }
 
+    /// One random `n x n` matrix per lane (row-major), each near a common,
+    /// diagonally heavy one, which keeps most lanes on one pivot order.
+    fn near_one_matrix(n: usize, next: &mut impl FnMut() -> f64) -> Vec<Vec<f64>> {
+        let common: Vec<f64> = (0..n * n)
+            .map(|k| next() + if k % (n + 1) == 0 { 3.0 } else { 0.0 })
+            .collect();
+        (0..LANES)
+            .map(|_| common.iter().map(|c| c + 0.3 * next()).collect())
+            .collect()
+    }
+
     /// One matrix per lane (row-major, order `d`), factored: the factors
     /// and the live lanes.
     fn factored(mats: &[Vec<f64>], d: crate::numerics::linalg::Dynamic) -> (LaneLu, Live) {
@@ -481,15 +492,8 @@ mod tests {
         let mut next = uniform(0x2545_f491_4f6c_dd1d);
         for n in [1, 2, 3, 5, 9, 14] {
             for _ in 0..20 {
-                // A common diagonally heavy part keeps most lanes on one pivot order.
-                let common: Vec<f64> = (0..n * n)
-                    .map(|k| next() + if k % (n + 1) == 0 { 3.0 } else { 0.0 })
-                    .collect();
-                let mut mats = vec![vec![0.0; n * n]; LANES];
+                let mut mats = near_one_matrix(n, &mut next);
                 for (l, m) in mats.iter_mut().enumerate() {
-                    for (k, v) in m.iter_mut().enumerate() {
-                        *v = common[k] + 0.3 * next();
-                    }
                     if l == 3 {
                         // A zero column: singular.
                         for i in 0..n {
@@ -538,14 +542,8 @@ mod tests {
         let (mut bounded, mut estimated, mut loose) = (0, 0, 0.0_f64);
         for n in [1, 2, 3, 5, 9, 14] {
             for round in 0..30 {
-                let common: Vec<f64> = (0..n * n)
-                    .map(|k| next() + if k % (n + 1) == 0 { 3.0 } else { 0.0 })
-                    .collect();
-                let mut mats = vec![vec![0.0; n * n]; LANES];
+                let mut mats = near_one_matrix(n, &mut next);
                 for (l, m) in mats.iter_mut().enumerate() {
-                    for (k, v) in m.iter_mut().enumerate() {
-                        *v = common[k] + 0.3 * next();
-                    }
                     if n > 1 && l > 0 {
                         // Row n-1 nearly row 0: the condition grows as 1/eps.
                         let eps = 10f64.powi(-((l as i32 * 2 + round) % 15));
