@@ -1454,6 +1454,14 @@ mod tests {
             .collect()
     }
 
+    /// Fig. 3's spec as one line of JSON (a `--specs` line).
+    pub(super) fn fig3_json() -> String {
+        let text = std::fs::read_to_string(FIG3).unwrap_or_else(|e| panic!("{FIG3}: {e}"));
+        let good = egt_core::parse_spec(&text, egt_core::Format::Toml, "x")
+            .unwrap_or_else(|e| panic!("{e}"));
+        serde_json::to_string(&good).unwrap_or_else(|e| panic!("{e}"))
+    }
+
     fn temp(name: &str, text: &str) -> String {
         let dir = std::env::temp_dir().join(format!("egt-batch-test-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
@@ -1617,10 +1625,7 @@ mod tests {
 
     #[test]
     fn specs_file_one_train_per_line_with_a_broken_line() {
-        let text = std::fs::read_to_string(FIG3).unwrap_or_else(|e| panic!("{FIG3}: {e}"));
-        let good = egt_core::parse_spec(&text, egt_core::Format::Toml, "x")
-            .unwrap_or_else(|e| panic!("{e}"));
-        let json = serde_json::to_string(&good).unwrap_or_default();
+        let json = fig3_json();
         let specs = temp(
             "specs.jsonl",
             &format!("{json}\n{{\"frame\": 3}}\n{json}\n"),
@@ -1680,10 +1685,7 @@ mod tests {
     #[test]
     fn a_specs_line_past_the_size_limit_is_refused_in_its_row() {
         use std::io::{Seek, SeekFrom, Write as _};
-        let text = std::fs::read_to_string(FIG3).unwrap_or_else(|e| panic!("{FIG3}: {e}"));
-        let good = egt_core::parse_spec(&text, egt_core::Format::Toml, "x")
-            .unwrap_or_else(|e| panic!("{e}"));
-        let json = serde_json::to_string(&good).unwrap_or_default();
+        let json = fig3_json();
         let path = temp("huge.jsonl", "");
         let mut f = std::fs::OpenOptions::new()
             .write(true)
@@ -1999,11 +2001,7 @@ mod columnar_tests {
 
     #[test]
     fn columnar_output_of_whole_spec_lines_holds_the_long_csv() {
-        let fig3 = example("fig3_example61.toml");
-        let text = std::fs::read_to_string(&fig3).unwrap_or_else(|e| panic!("{fig3}: {e}"));
-        let good = egt_core::parse_spec(&text, egt_core::Format::Toml, "x")
-            .unwrap_or_else(|e| panic!("{e}"));
-        let json = serde_json::to_string(&good).unwrap_or_default();
+        let json = super::tests::fig3_json();
         let dir = std::env::temp_dir().join(format!("egt-columnar-specs-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
         let specs = dir.join("specs.jsonl");
