@@ -43,10 +43,11 @@ wheel: venv ## Build the abi3 manylinux2014 wheel (stripped, with the licences a
 test-wheel: wheel ## Install the wheel into a fresh virtualenv with no Rust on PATH; run the egt command and the README's Python block
 	bash scripts/test_wheel.sh
 
-test-python: python-dev ## Python tests (pytest, warnings as errors; stubtest and mypy included)
-	@if [ -d crates/egt-py/tests ]; then \
-		$(VPY) -m pytest -q -W error crates/egt-py/tests; \
-	else echo "no Python package yet"; fi
+# The tests run against the wheel `make wheel` builds (installed into .venv),
+# so CI's wheel job and the tests share one release build.
+test-python: wheel ## Python tests against the built wheel (pytest, warnings as errors; stubtest and mypy included)
+	$(VPY) -m pip install --quiet --force-reinstall --no-deps "$$(ls -t target/wheels/egt_gears-*-cp39-abi3-manylinux2014_x86_64*.whl | head -n 1)"
+	$(VPY) -m pytest -q -W error crates/egt-py/tests
 
 fmt: ## Format the Rust code
 	cargo fmt --all
