@@ -414,8 +414,18 @@ mod batch {
     /// The same with a different ratio in every row: every scenario factors.
     #[divan::bench(sample_count = 10)]
     fn chain6_inverse_dynamics_new_ratios(b: Bencher) {
+        new_ratios(b, false);
+    }
+
+    /// The same with condition bounds: the straight-line program.
+    #[divan::bench(sample_count = 10)]
+    fn chain6_inverse_dynamics_new_ratios_bounded(b: Bencher) {
+        new_ratios(b, true);
+    }
+
+    fn new_ratios(b: Bencher, bounds: bool) {
         let t = build(&chain(6));
-        let p = plan(&t, Compute::Dynamics);
+        let p = plan(&t, Compute::Dynamics).with_condition_bounds(bounds);
         let load = p
             .parameter("torque.c2")
             .unwrap_or_else(|| panic!("no load column"));

@@ -47,8 +47,22 @@
 //! matrices of the factors (one substitution, no iteration), and is
 //! estimated only when the bound cannot show every row below `COND_WARN` / 2.
 //! The estimate is a lower bound of the condition number, so the rows warned
-//! about or refused, and every other output, are exactly those without
-//! bounds (tested on trains swept through their lock).
+//! about or refused are exactly those without bounds (tested on trains swept
+//! through their lock).
+//!
+//! **Straight-line program.** With condition bounds, a dense train's
+//! kinematics and ideal dynamics are eliminated once, symbolically, in the
+//! base row's pivot order: the program keeps only the operations on
+//! structural non-zeros (the constants folded in), gives each result a slot
+//! reused once its last reader has run, and runs each operation over 64
+//! rows at once. Each row checks that the fixed order is still a safe pivot
+//! order (no multiplier past 2 in magnitude), bounds each system's condition
+//! number as above, and that every result is finite; a row that fails any
+//! check, or holds a bad value, goes to the lanes, which give its estimate,
+//! warning or error. The program's numbers differ from the row-by-row
+//! solve's by rounding only (another order of the same operations; tested
+//! within 1e-12 of the row's largest output); the rows warned about or
+//! refused are the same (tested).
 //!
 //! ```
 //! use egt_core::batch::{BatchPlan, BatchSpec};
@@ -112,8 +126,11 @@ use rayon::prelude::*;
 use crate::error::{AnalysisError, Error, Result};
 use crate::model::train::{LinkId, Train};
 use crate::numerics::lanes::{LANES, Lane};
-use crate::solve::prepared::LaneWorkspace;
 use crate::solve::prepared::{Compute, PreparedTrain, Scenario, Workspace};
+use crate::solve::prepared::{
+    LaneWorkspace, PROGRAM_BLOCK, Program, ProgramColumns, ProgramWorkspace, efficiency_ok,
+    non_negative, ratio_ok,
+};
 use crate::solve::rows::Extra;
 
 /// The worker threads for a batch: the request, capped at the machine's
@@ -266,6 +283,9 @@ pub struct BatchPlan {
     /// Condition bounds where they show a row well-conditioned (see
     /// [`BatchPlan::with_condition_bounds`]).
     bounds: bool,
+    /// With bounds, the straight-line program of the train (see
+    /// `solve/prepared/tape.rs`), when the base row factors.
+    program: Option<Program>,
 }
 
 impl BatchPlan {
@@ -392,6 +412,7 @@ impl BatchPlan {
             known,
             forces,
             bounds: false,
+            program: None,
         })
     }
 
@@ -437,6 +458,7 @@ impl BatchPlan {
     /// As [`PreparedTrain::with_sparse`].
     pub fn with_sparse(mut self, sparse: bool) -> Result<Self> {
         self.prepared = self.prepared.with_sparse(sparse)?;
+        self.program = self.program();
         Ok(self)
     }
 
@@ -445,15 +467,46 @@ impl BatchPlan {
     /// not wanted for themselves: rows solved eight at a time first bound
     /// their condition numbers from the LU factors (one substitution; see
     /// the module docs), and only a group where the bound cannot show every
-    /// row below `COND_WARN` / 2 (10^8 / 2) is estimated. Every other output,
-    /// every refused row and every row whose condition is past `COND_WARN`
-    /// (those warned about, or refused) are as without bounds; the
-    /// `cond.*` columns of the other rows then hold either the estimate or an
-    /// upper bound of the condition number at most `COND_WARN` / 2. Off by
-    /// default.
+    /// row below `COND_WARN` / 2 (10^8 / 2) is estimated. Every refused row
+    /// and every row whose condition is past `COND_WARN` (those warned
+    /// about, or refused) are as without bounds; the `cond.*` columns of the
+    /// other rows then hold either the estimate or an upper bound of the
+    /// condition number at most `COND_WARN` / 2. Kinematics and ideal
+    /// dynamics of trains up to [`PROGRAM_MAX_COORDINATES`] coordinates are
+    /// then solved by the straight-line program (see the module docs),
+    /// whose other outputs differ from the row-by-row solve's by rounding
+    /// only. Off by default.
     pub fn with_condition_bounds(mut self, bounds: bool) -> Self {
         self.bounds = bounds;
+        self.program = self.program();
         self
+    }
+
+    /// The straight-line program the bounds allow, for a train of at most
+    /// [`PROGRAM_MAX_COORDINATES`] coordinates whose base row factors.
+    fn program(&self) -> Option<Program> {
+        let g = self.groups;
+        let cols = ProgramColumns {
+            ratio: g.ratio,
+            speed: g.speed,
+            accel: g.accel,
+            torque: g.torque,
+            inertia: g.inertia,
+            mass: g.mass,
+            end: g.efficiency,
+        };
+        (self.bounds && self.prepared.n() <= PROGRAM_MAX_COORDINATES)
+            .then(|| {
+                self.prepared
+                    .program(self.compute, cols, &self.base, &self.known, &self.forces)
+            })
+            .flatten()
+    }
+
+    /// Whether rows are solved by the straight-line program (see
+    /// [`BatchPlan::with_condition_bounds`]).
+    pub fn has_program(&self) -> bool {
+        self.program.is_some()
     }
 
     /// The prepared train underneath.
@@ -499,6 +552,10 @@ impl BatchPlan {
     fn lanes(&self) -> Lanes {
         Lanes {
             w: self.prepared.lane_workspace(),
+            program: self.program.as_ref().map(Program::workspace),
+            left: Vec::new(),
+            left_rows: Vec::new(),
+            left_out: Vec::new(),
         }
     }
 
@@ -533,7 +590,11 @@ impl BatchPlan {
                     if w.eval_linear(lin, pin, pout, first, &mut errors) {
                         // Solved as y0 + sum p_j R_j.
                     } else if self.lanes_apply(pin) {
-                        w.eval_lanes(lanes, pin, pout, first, &mut errors);
+                        if self.program.is_some() {
+                            w.eval_program(lanes, pin, pout, first, &mut errors);
+                        } else {
+                            w.eval_lanes(lanes, pin, pout, first, &mut errors);
+                        }
                     } else {
                         for (r, (row, o)) in pin.chunks(p).zip(pout.chunks_mut(q)).enumerate() {
                             if let Err(error) = w.eval(row, o) {
@@ -585,10 +646,21 @@ struct Linear {
     valid: bool,
 }
 
-/// Buffers of the lanes path: the group's structure of arrays.
+/// Coordinates up to which a batch with condition bounds runs the
+/// straight-line program rather than the lanes (measured: see docs/benchmarks.md).
+pub const PROGRAM_MAX_COORDINATES: usize = 64;
+
+/// Buffers of the lanes path: the group's structure of arrays; the
+/// program's block, and the rows it leaves to the lanes.
 #[derive(Debug)]
 struct Lanes {
     w: LaneWorkspace,
+    program: Option<ProgramWorkspace>,
+    /// Rows of the task the program left (their index, their parameters,
+    /// their outputs): kept between tasks, so they allocate once.
+    left: Vec<usize>,
+    left_rows: Vec<f64>,
+    left_out: Vec<f64>,
 }
 
 /// Evaluates rows one at a time with buffers of its own.
@@ -703,6 +775,81 @@ impl Worker<'_> {
             }
             debug_assert!(count <= LANES);
         }
+        solved
+    }
+
+    /// A block of rows by the straight-line program ([`PROGRAM_BLOCK`] rows at
+    /// once); the rows it leaves (a bad parameter, other pivots, a bound past
+    /// `COND_WARN` / 2, a result not finite) go to the lanes together.
+    /// Returns how many rows the program solved.
+    fn eval_program(
+        &mut self,
+        lanes: &mut Lanes,
+        rows: &[f64],
+        out: &mut [f64],
+        first: usize,
+        errors: &mut Vec<RowError>,
+    ) -> usize {
+        let plan = self.plan;
+        let (p, q) = (plan.parameters.len(), plan.outputs.len());
+        let Some(program) = &plan.program else {
+            unreachable!("eval_program runs with a program")
+        };
+        let Lanes {
+            program: Some(pw),
+            left,
+            left_rows,
+            left_out,
+            ..
+        } = lanes
+        else {
+            unreachable!("a plan with a program gives its workspace")
+        };
+        left.clear();
+        left_rows.clear();
+        for (k, (block, bout)) in rows
+            .chunks(p * PROGRAM_BLOCK)
+            .zip(out.chunks_mut(q * PROGRAM_BLOCK))
+            .enumerate()
+        {
+            program.run(pw, block, p);
+            program.write(pw, bout);
+            for (r, row) in block.chunks(p).enumerate() {
+                if !pw.valid[r] {
+                    left.push(k * PROGRAM_BLOCK + r);
+                    left_rows.extend_from_slice(row);
+                }
+            }
+        }
+        let solved = rows.len() / p - left.len();
+        if left.is_empty() {
+            return solved;
+        }
+        left_out.clear();
+        left_out.resize(left.len() * q, 0.0);
+        let (left, left_rows, mut left_out) = (
+            std::mem::take(&mut lanes.left),
+            std::mem::take(&mut lanes.left_rows),
+            std::mem::take(&mut lanes.left_out),
+        );
+        let mut failed = Vec::new();
+        if plan.lanes_apply(&left_rows) {
+            self.eval_lanes(lanes, &left_rows, &mut left_out, 0, &mut failed);
+        } else {
+            for (r, (row, o)) in left_rows.chunks(p).zip(left_out.chunks_mut(q)).enumerate() {
+                if let Err(error) = self.eval(row, o) {
+                    failed.push(RowError { row: r, error });
+                }
+            }
+        }
+        for (j, &i) in left.iter().enumerate() {
+            out[i * q..(i + 1) * q].copy_from_slice(&left_out[j * q..(j + 1) * q]);
+        }
+        errors.extend(failed.into_iter().map(|e| RowError {
+            row: first + left[e.row],
+            error: e.error,
+        }));
+        (lanes.left, lanes.left_rows, lanes.left_out) = (left, left_rows, left_out);
         solved
     }
 
@@ -979,24 +1126,6 @@ fn check(plan: &BatchPlan, row: &[f64]) -> Result<()> {
     Ok(())
 }
 
-/// The rule of the ratio columns (a zero ratio has no Willis row).
-#[inline(always)]
-fn ratio_ok(v: f64) -> bool {
-    v.is_finite() && v != 0.0
-}
-
-/// The rule of the inertia and mass columns.
-#[inline(always)]
-fn non_negative(v: f64) -> bool {
-    v.is_finite() && v >= 0.0
-}
-
-/// The rule of the efficiency columns.
-#[inline(always)]
-fn efficiency_ok(v: f64) -> bool {
-    v > 0.0 && v <= 1.0
-}
-
 #[cold]
 fn bad_parameter(plan: &BatchPlan, c: usize, v: f64) -> Error {
     let g = plan.groups;
@@ -1061,5 +1190,61 @@ mod tests {
         assert_eq!(solved, rows - 2);
         assert_eq!(errors.len(), 1);
         assert_eq!(errors[0].row, 3);
+    }
+
+    /// The straight-line program solves a sweep's rows and leaves the bad,
+    /// the far-off and the ill-conditioned ones to the lanes, which give
+    /// their error or estimate; its numbers are the lanes' within rounding.
+    #[test]
+    fn the_program_solves_the_rows_it_can_vouch_for() {
+        let text = include_str!("../../../examples/fig3_example61.toml");
+        let t = Train::from_str(text, Format::Toml, "fig3").unwrap_or_else(|e| panic!("{e}"));
+        let p = BatchPlan::new(
+            &t,
+            &BatchSpec::from_analysis(&t, Compute::Dynamics).unwrap_or_else(|e| panic!("{e}")),
+        )
+        .unwrap_or_else(|e| panic!("{e}"))
+        .with_condition_bounds(true);
+        assert!(p.has_program());
+        let (np, nq) = (p.parameters().len(), p.outputs().len());
+        let rows = 300;
+        let mut params = Vec::new();
+        for r in 0..rows {
+            let mut row = p.base().to_vec();
+            row[0] *= 1.0 + 0.001 * r as f64;
+            params.extend(row);
+        }
+        let col = |name: &str| p.parameter(name).unwrap_or_else(|| panic!("no {name}"));
+        let (g1, g2) = (col("ratio.G1"), col("ratio.G2"));
+        let t1 = p.base()[g1];
+        params[3 * np + 1] = f64::NAN;
+        // Far from the base ratio: other pivots.
+        params[9 * np] *= -40.0;
+        // Near the lock (tau_1 tau_2 = 1): past the warning.
+        params[70 * np + g1] = t1;
+        params[70 * np + g2] = (1.0 + 1e-10) / t1;
+        let mut out = vec![0.0; rows * nq];
+        let (mut w, mut lanes) = (p.worker(), p.lanes());
+        let mut errors = Vec::new();
+        let solved = w.eval_program(&mut lanes, &params, &mut out, 0, &mut errors);
+        assert_eq!(solved, rows - 3);
+        assert_eq!(errors.len(), 1);
+        assert_eq!(errors[0].row, 3);
+        let conds = p.condition_columns();
+        let cond = out[70 * nq..][conds.clone()]
+            .iter()
+            .fold(0.0, |a: f64, &b| a.max(b));
+        assert!(cond > crate::numerics::linalg::COND_WARN, "{cond}");
+        let mut reference = vec![0.0; rows * nq];
+        let mut errors = Vec::new();
+        let lanes_solved = w.eval_lanes(&mut lanes, &params, &mut reference, 0, &mut errors);
+        assert!(lanes_solved >= rows - 3);
+        for r in (0..rows).filter(|&r| r != 3) {
+            let (a, b) = (&out[r * nq..][..nq], &reference[r * nq..][..nq]);
+            let scale = a.iter().map(|v| v.abs()).fold(0.0, f64::max);
+            for c in (0..nq).filter(|c| !conds.contains(c)) {
+                assert!((a[c] - b[c]).abs() <= 1e-13 * scale, "row {r} column {c}");
+            }
+        }
     }
 }

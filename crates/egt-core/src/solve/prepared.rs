@@ -19,7 +19,11 @@
 use std::ops::Range;
 
 mod lanes;
+mod tape;
 pub(crate) use lanes::LaneWorkspace;
+pub(crate) use tape::{
+    BLOCK as PROGRAM_BLOCK, Columns as ProgramColumns, Program, ProgramWorkspace,
+};
 
 use crate::solve::rows::{Extra, Rows, dof_with, link_columns};
 use num_traits::Zero;
@@ -306,6 +310,27 @@ pub struct PowerSummary {
     pub kinetic_rate: f64,
     /// Direction iterations used.
     pub iterations: usize,
+}
+
+// The rules of a scenario's parameters (one place, for the batch's check
+// and the straight-line program's).
+
+/// The rule of the ratio columns (a zero ratio has no Willis row).
+#[inline(always)]
+pub(crate) fn ratio_ok(v: f64) -> bool {
+    v.is_finite() && v != 0.0
+}
+
+/// The rule of the inertia and mass columns.
+#[inline(always)]
+pub(crate) fn non_negative(v: f64) -> bool {
+    v.is_finite() && v >= 0.0
+}
+
+/// The rule of the efficiency columns.
+#[inline(always)]
+pub(crate) fn efficiency_ok(v: f64) -> bool {
+    v > 0.0 && v <= 1.0
 }
 
 /// A train prepared for one choice of input links, driving links and extra
