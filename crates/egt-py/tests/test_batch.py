@@ -183,7 +183,7 @@ def test_plan_columns_and_base(fig3: egt.Train) -> None:
     assert p.shape == (3, len(plan.parameters)) and not bad
 
 
-def test_condition_bounds_keep_every_number_and_refusal(fig3: egt.Train) -> None:
+def test_condition_bounds_keep_every_refusal_and_number_to_rounding(fig3: egt.Train) -> None:
     # Fig. 3 swept through its lock (tau_2 = 1 / tau_1 = -1.5): the rows next
     # to it are ill-conditioned, the lock itself is refused.
     g2 = np.repeat(np.linspace(-1.5000001, -1.4999999, 21), 8)
@@ -197,7 +197,12 @@ def test_condition_bounds_keep_every_number_and_refusal(fig3: egt.Train) -> None
     assert (~full.ok).sum() >= 8
     conds = [k for k, o in enumerate(full.outputs) if o.startswith("cond.")]
     others = [k for k in range(len(full.outputs)) if k not in conds]
-    np.testing.assert_array_equal(full.values[:, others], fast.values[:, others])
+    # The rows the straight-line program solves differ by rounding only.
+    x, y = full.values[:, others], fast.values[:, others]
+    ok = full.ok
+    scale = np.abs(x[ok]).max(axis=1, keepdims=True)
+    np.testing.assert_array_less(np.abs(x[ok] - y[ok]), 1e-12 * scale + 1e-300)
+    assert np.isnan(y[~ok]).all()
     a, b = full.values[:, conds], fast.values[:, conds]
     moved = ~((a == b) | (np.isnan(a) & np.isnan(b)))
     assert moved.sum() > 100

@@ -467,10 +467,13 @@ class Train:
         its engaged elements adding ``lambda.<element>`` reaction columns).
         ``condition_bounds``: when the ``cond.*`` columns are not wanted for
         themselves, estimate a condition only where a cheap upper bound (from
-        the LU factors) cannot show it below 1e8 / 2; the same rows are
-        refused and every other output is unchanged, but a ``cond.*`` value at
-        most 5e7 may then be that bound instead of the estimate (10 to 30 %
-        faster when every row has its own ratios). See :class:`egt.BatchPlan`.
+        the LU factors) cannot show it below 1e8 / 2, and solve kinematics
+        and ideal dynamics by the train's straight-line program (eliminated
+        once, run over 64 rows at a time): the same rows are warned about and
+        refused, the other outputs differ by rounding only (within 1e-12 of
+        the row's largest), and a ``cond.*`` value at most 5e7 may be that
+        bound instead of the estimate (about twice as fast when every row has
+        its own ratios). See :class:`egt.BatchPlan`.
         """
         args = (
             compute,
