@@ -170,6 +170,44 @@ fn main() {
                 "errors": egt["errors"],
             }));
         }
+        // egt's straight-line program: the same 10 000 rows with condition
+        // bounds (the `cond.*` columns not wanted), each operation over 64
+        // rows. Its rows differ from the worker's by rounding: their error
+        // against exact rationals is measured here, on both rows.
+        {
+            const ROWS: usize = 10_000;
+            let plan = p.plan().clone().with_condition_bounds(true);
+            assert!(plan.has_program(), "{links} links: no program");
+            let a = plan.base().to_vec();
+            let mut b = a.clone();
+            b[0] = f64::from_bits(b[0].to_bits() + 1);
+            let rows: Vec<f64> = (0..ROWS)
+                .flat_map(|r| if r % 2 == 0 { a.clone() } else { b.clone() })
+                .collect();
+            let q = plan.outputs().len();
+            let mut out = vec![0.0; ROWS * q];
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .build()
+                .unwrap_or_else(|e| panic!("{e}"));
+            let seconds = time(0.2, || {
+                pool.install(|| black_box(plan.run(black_box(&rows), &mut out)));
+            }) / ROWS as f64;
+            let errors = [&out[..q], &out[q..2 * q]]
+                .map(|row| lab::accuracy::row_errors(&plan, &t, row, &exact));
+            let worst = |f: fn(&lab::accuracy::Errors) -> f64| f(&errors[0]).max(f(&errors[1]));
+            let max = errors[0].max().max(errors[1].max());
+            eprintln!(
+                "{links:>2} links  {:<22} {:>10.3} us  error {max:.1e}",
+                "egt program",
+                seconds * 1e6
+            );
+            methods.push(json!({
+                "method": "egt program", "seconds": seconds, "error": max,
+                "errors": {"speeds": worst(|e| e.speeds), "accelerations": worst(|e| e.accelerations),
+                           "multipliers": worst(|e| e.multipliers), "torques": worst(|e| e.torques)},
+            }));
+        }
         // The floor: one LU (2n^3/3), two solves for speeds and accelerations,
         // [M]{w'} and the transposed solve (2n^2 each).
         let nf = n as f64;

@@ -113,6 +113,54 @@ impl Errors {
     }
 }
 
+/// The errors of one row of a dynamics batch's outputs (the speeds and
+/// accelerations of its known coordinates, the multipliers, the driving
+/// torques) against `exact`, the columns matched by name.
+///
+/// # Panics
+/// When an output names a coordinate `train` does not have, or a group of
+/// columns is missing.
+pub fn row_errors(plan: &BatchPlan, train: &Train, row: &[f64], exact: &Solution) -> Errors {
+    let coordinate = |link: &str| {
+        train
+            .coordinates()
+            .iter()
+            .position(|&l| train.link_name(l) == link)
+            .unwrap_or_else(|| panic!("no coordinate {link}"))
+    };
+    // (computed, exact) per group of columns, in the outputs' order.
+    let mut groups: [(Vec<f64>, Vec<f64>); 4] = Default::default();
+    let (mut lambdas, mut drivers) = (0, 0);
+    for (c, o) in plan.outputs().iter().enumerate() {
+        let (g, x) = if let Some(l) = o.strip_prefix("speed.") {
+            (0, exact.speeds[coordinate(l)])
+        } else if let Some(l) = o.strip_prefix("accel.") {
+            (1, exact.accelerations[coordinate(l)])
+        } else if o.starts_with("lambda.") {
+            lambdas += 1;
+            (2, exact.multipliers[lambdas - 1])
+        } else if o.starts_with("driving_torque.") {
+            drivers += 1;
+            (3, exact.torques[drivers - 1])
+        } else {
+            continue;
+        };
+        groups[g].0.push(row[c]);
+        groups[g].1.push(x);
+    }
+    assert!(
+        groups.iter().all(|g| !g.0.is_empty()),
+        "a group of columns is missing"
+    );
+    let e = |g: usize| relative_error(&groups[g].0, &groups[g].1);
+    Errors {
+        speeds: e(0),
+        accelerations: e(1),
+        multipliers: e(2),
+        torques: e(3),
+    }
+}
+
 /// ||x - x*||_inf / ||x*||_inf (0 when both are zero; infinite for a non-finite x).
 pub fn relative_error(x: &[f64], exact: &[f64]) -> f64 {
     let scale = exact.iter().fold(0.0_f64, |m, v| m.max(v.abs()));

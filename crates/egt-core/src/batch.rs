@@ -647,8 +647,10 @@ struct Linear {
 }
 
 /// Coordinates up to which a batch with condition bounds runs the
-/// straight-line program rather than the lanes (measured: see docs/benchmarks.md).
-pub const PROGRAM_MAX_COORDINATES: usize = 64;
+/// straight-line program rather than the lanes: every dense train (the
+/// program was 1.8 to 5 times faster than the lanes from 4 to 30 links, its
+/// lead growing with the size; docs/benchmarks.md).
+pub const PROGRAM_MAX_COORDINATES: usize = crate::solve::prepared::PREPARED_SPARSE_FROM;
 
 /// Buffers of the lanes path: the group's structure of arrays; the
 /// program's block, and the rows it leaves to the lanes.

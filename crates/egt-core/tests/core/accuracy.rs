@@ -4,7 +4,7 @@
 //! more than round-off); past COND_REFUSE egt refuses instead of returning
 //! numbers, and below it its error stays within what the condition allows.
 
-use crate::lab::accuracy::{Method, Problem, relative_error, residual};
+use crate::lab::accuracy::{Method, Problem, relative_error, residual, row_errors};
 use crate::lab::families;
 use egt_core::numerics::linalg::{COND_REFUSE, COND_WARN};
 use egt_core::{AnalysisError, Error, SpeedInput, Train};
@@ -55,6 +55,39 @@ fn every_method_is_within_1e_13_of_exact_on_well_conditioned_trains() {
                 assert_eq!(e.max(), 0.0, "{name}: exact is exact");
             }
         }
+    }
+}
+
+/// The batch's straight-line program (condition bounds on; 64 rows, the
+/// ratio one ulp apart in every other row, so that no linear block forms) is
+/// within 1e-13 of the exact speeds, accelerations, multipliers and driving
+/// torques on every well-conditioned train, each group normwise.
+#[test]
+fn the_straight_line_program_is_within_1e_13_of_exact() {
+    for (name, t) in well_conditioned() {
+        let p = problem(&t);
+        let exact = p.exact().unwrap_or_else(|e| panic!("{name}: {e}"));
+        let plan = p.plan().clone().with_condition_bounds(true);
+        assert!(plan.has_program(), "{name}: no program");
+        let (np, nq) = (plan.parameters().len(), plan.outputs().len());
+        let base = plan.base().to_vec();
+        let mut params = Vec::with_capacity(64 * np);
+        for r in 0..64 {
+            let mut row = base.clone();
+            if r % 2 == 1 {
+                row[0] = f64::from_bits(row[0].to_bits() + 1);
+            }
+            params.extend(row);
+        }
+        let mut out = vec![0.0; 64 * nq];
+        let errors = plan.run(&params, &mut out);
+        assert!(errors.is_empty(), "{name}: {errors:?}");
+        let e = row_errors(&plan, &t, &out[..nq], &exact);
+        assert!(e.max() <= 1e-13, "{name}: {e:?}");
+        // The odd rows are their own trains (a ratio one ulp off): they
+        // agree with the even ones to rounding.
+        let odd = row_errors(&plan, &t, &out[nq..2 * nq], &exact);
+        assert!(odd.max() <= 1e-13, "{name} (odd row): {odd:?}");
     }
 }
 
