@@ -12,9 +12,11 @@ EXAMPLE ?= examples/fig3_example61.toml
 help: ## List the targets
 	@grep -E '^[a-zA-Z_-]+:.*?## ' $(MAKEFILE_LIST) | awk -F':.*?## ' '{printf "  %-12s %s\n", $$1, $$2}'
 
+# A debug build: the quickest to compile, instant on the example, and the
+# build `make test` reuses (`cargo build --release` for a fast binary).
 demo: ## Run egt on a bundled example: topology checks, circuit table, speeds
-	cargo run --release --quiet -p egt-cli -- check $(EXAMPLE)
-	cargo run --release --quiet -p egt-cli -- kinematics $(EXAMPLE)
+	cargo run --quiet -p egt-cli -- check $(EXAMPLE)
+	cargo run --quiet -p egt-cli -- kinematics $(EXAMPLE)
 
 test: test-rust test-python ## Run every test (Rust and Python)
 
