@@ -63,6 +63,28 @@ fn flop_rate() -> f64 {
     2.0 * (n * n * n) as f64 / t
 }
 
+/// Seconds per row of `plan.run` on one thread over 10 000 rows: the base
+/// row and the base row one ulp off in its first ratio, alternating (so
+/// every row is its own train). Also the two rows and the outputs.
+fn batch_seconds(plan: &egt_core::batch::BatchPlan) -> (f64, [Vec<f64>; 2], Vec<f64>) {
+    const ROWS: usize = 10_000;
+    let a = plan.base().to_vec();
+    let mut b = a.clone();
+    b[0] = f64::from_bits(b[0].to_bits() + 1);
+    let rows: Vec<f64> = (0..ROWS)
+        .flat_map(|r| if r % 2 == 0 { a.clone() } else { b.clone() })
+        .collect();
+    let mut out = vec![0.0; ROWS * plan.outputs().len()];
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap_or_else(|e| panic!("{e}"));
+    let seconds = time(0.2, || {
+        pool.install(|| black_box(plan.run(black_box(&rows), &mut out)));
+    }) / ROWS as f64;
+    (seconds, [a, b], out)
+}
+
 fn main() {
     let dir = std::env::args()
         .nth(1)
@@ -127,23 +149,9 @@ fn main() {
         // of eight go through the SIMD lanes). Its rows are the worker's
         // numbers bit for bit (checked here), so its error is egt LU's.
         {
-            const ROWS: usize = 10_000;
             let plan = p.plan();
-            let a = plan.base().to_vec();
-            let mut b = a.clone();
-            b[0] = f64::from_bits(b[0].to_bits() + 1);
-            let rows: Vec<f64> = (0..ROWS)
-                .flat_map(|r| if r % 2 == 0 { a.clone() } else { b.clone() })
-                .collect();
+            let (seconds, [a, b], out) = batch_seconds(plan);
             let q = plan.outputs().len();
-            let mut out = vec![0.0; ROWS * q];
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(1)
-                .build()
-                .unwrap_or_else(|e| panic!("{e}"));
-            let seconds = time(0.2, || {
-                pool.install(|| black_box(plan.run(black_box(&rows), &mut out)));
-            }) / ROWS as f64;
             let mut one = vec![0.0; q];
             for (r, row) in [&a, &b].into_iter().enumerate() {
                 plan.worker()
@@ -175,24 +183,10 @@ fn main() {
         // rows. Its rows differ from the worker's by rounding: their error
         // against exact rationals is measured here, on both rows.
         {
-            const ROWS: usize = 10_000;
             let plan = p.plan().clone().with_condition_bounds(true);
             assert!(plan.has_program(), "{links} links: no program");
-            let a = plan.base().to_vec();
-            let mut b = a.clone();
-            b[0] = f64::from_bits(b[0].to_bits() + 1);
-            let rows: Vec<f64> = (0..ROWS)
-                .flat_map(|r| if r % 2 == 0 { a.clone() } else { b.clone() })
-                .collect();
+            let (seconds, _, out) = batch_seconds(&plan);
             let q = plan.outputs().len();
-            let mut out = vec![0.0; ROWS * q];
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(1)
-                .build()
-                .unwrap_or_else(|e| panic!("{e}"));
-            let seconds = time(0.2, || {
-                pool.install(|| black_box(plan.run(black_box(&rows), &mut out)));
-            }) / ROWS as f64;
             let errors = [&out[..q], &out[q..2 * q]]
                 .map(|row| lab::accuracy::row_errors(&plan, &t, row, &exact));
             let worst = |f: fn(&lab::accuracy::Errors) -> f64| f(&errors[0]).max(f(&errors[1]));

@@ -596,14 +596,7 @@ impl BatchPlan {
                             w.eval_lanes(lanes, pin, pout, first, &mut errors);
                         }
                     } else {
-                        for (r, (row, o)) in pin.chunks(p).zip(pout.chunks_mut(q)).enumerate() {
-                            if let Err(error) = w.eval(row, o) {
-                                errors.push(RowError {
-                                    row: first + r,
-                                    error,
-                                });
-                            }
-                        }
+                        w.eval_rows(pin, pout, first, &mut errors);
                     }
                     errors
                 },
@@ -711,6 +704,26 @@ impl Worker<'_> {
         pt.solve(&mut self.ws, &s, plan.compute)?;
         write_outputs(plan, &(&self.ws, plan), out);
         Ok(())
+    }
+
+    /// Rows one at a time (row-major); the failed ones, numbered from
+    /// `first`, to `errors`.
+    fn eval_rows(
+        &mut self,
+        rows: &[f64],
+        out: &mut [f64],
+        first: usize,
+        errors: &mut Vec<RowError>,
+    ) {
+        let (p, q) = (self.plan.parameters.len(), self.plan.outputs.len());
+        for (r, (row, o)) in rows.chunks(p).zip(out.chunks_mut(q)).enumerate() {
+            if let Err(error) = self.eval(row, o) {
+                errors.push(RowError {
+                    row: first + r,
+                    error,
+                });
+            }
+        }
     }
 
     /// The workspace of the last row (all coordinates, multipliers, mass matrix).
@@ -838,11 +851,7 @@ impl Worker<'_> {
         if plan.lanes_apply(&left_rows) {
             self.eval_lanes(lanes, &left_rows, &mut left_out, 0, &mut failed);
         } else {
-            for (r, (row, o)) in left_rows.chunks(p).zip(left_out.chunks_mut(q)).enumerate() {
-                if let Err(error) = self.eval(row, o) {
-                    failed.push(RowError { row: r, error });
-                }
-            }
+            self.eval_rows(&left_rows, &mut left_out, 0, &mut failed);
         }
         for (j, &i) in left.iter().enumerate() {
             out[i * q..(i + 1) * q].copy_from_slice(&left_out[j * q..(j + 1) * q]);

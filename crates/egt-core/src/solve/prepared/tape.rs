@@ -75,7 +75,13 @@ enum Op {
 impl Op {
     /// The result's slot (none for a check).
     fn dest(&self) -> Option<u32> {
-        match *self {
+        let mut op = *self;
+        op.dest_mut().map(|d| *d)
+    }
+
+    /// The result's slot, to rename it.
+    fn dest_mut(&mut self) -> Option<&mut u32> {
+        match self {
             Op::Neg(d, _)
             | Op::AddC(d, _, _)
             | Op::MulC(d, _, _)
@@ -118,25 +124,6 @@ impl Op {
                 f(c);
             }
             Op::Const(..) => {}
-        }
-    }
-
-    fn set_dest(&mut self, to: u32) {
-        match self {
-            Op::Neg(d, _)
-            | Op::AddC(d, _, _)
-            | Op::MulC(d, _, _)
-            | Op::DivC(d, _, _)
-            | Op::Add(d, _, _)
-            | Op::Sub(d, _, _)
-            | Op::Mul(d, _, _)
-            | Op::SubMul(d, _, _, _)
-            | Op::AddMul(d, _, _, _)
-            | Op::Recip(d, _)
-            | Op::Abs(d, _)
-            | Op::Const(d, _)
-            | Op::Max(d, _, _) => *d = to,
-            Op::NoLarger(..) | Op::AtMost(..) | Op::Finite(..) => {}
         }
     }
 }
@@ -738,13 +725,13 @@ impl Program {
                 read.push(*a);
                 *a = slot[*a as usize];
             });
-            if let Some(d) = op.dest() {
+            if let Some(d) = op.dest_mut() {
                 let s = free.pop().unwrap_or_else(|| {
                     slots += 1;
                     slots - 1
                 });
-                slot[d as usize] = s;
-                op.set_dest(s);
+                slot[*d as usize] = s;
+                *d = s;
             }
             // Freed after the result has its slot, so no result overwrites an operand.
             read.sort_unstable();
