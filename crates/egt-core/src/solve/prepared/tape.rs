@@ -138,8 +138,6 @@ const FORCE: u8 = 2;
 pub(crate) struct Program {
     ops: Vec<Op>,
     slots: usize,
-    /// The parameter columns loaded into slots `0..params`.
-    params: usize,
     /// The batch's output columns, in its order: the slot of each.
     outputs: Vec<u32>,
     /// What a static row holds instead, with \[Psi_w\] apart (zero
@@ -147,7 +145,8 @@ pub(crate) struct Program {
     statics: Vec<(usize, f64)>,
     /// The systems each row must pass: speeds, \[Psi_w\] apart, force apart.
     needs: [bool; 3],
-    /// The parameter columns.
+    /// The parameter columns; those before `cols.end` are loaded into slots
+    /// `0..cols.end`.
     cols: Columns,
 }
 
@@ -671,7 +670,6 @@ impl PreparedTrain {
         let mut program = Program {
             ops: b.ops,
             slots: 0,
-            params: cols.end,
             outputs,
             statics,
             needs,
@@ -688,7 +686,7 @@ impl Program {
     /// results' slots are never reused).
     fn allocate(&mut self, count: usize) {
         let mut pinned = vec![false; count];
-        pinned[..self.params].iter_mut().for_each(|p| *p = true);
+        pinned[..self.cols.end].iter_mut().for_each(|p| *p = true);
         for &v in &self.outputs {
             pinned[v as usize] = true;
         }
@@ -713,11 +711,11 @@ impl Program {
             op.operands(|a| last[*a as usize] = i);
         }
         let mut slot = vec![u32::MAX; count];
-        for (v, s) in slot.iter_mut().enumerate().take(self.params) {
+        for (v, s) in slot.iter_mut().enumerate().take(self.cols.end) {
             *s = v as u32;
         }
         let mut free: Vec<u32> = Vec::new();
-        let mut slots = self.params as u32;
+        let mut slots = self.cols.end as u32;
         let mut read: Vec<u32> = Vec::with_capacity(3);
         for (i, op) in ops.iter_mut().enumerate() {
             read.clear();
@@ -811,7 +809,7 @@ impl Program {
         let c = self.cols;
         let mut good = [true; BLOCK];
         w.moving = [false; BLOCK];
-        for (k, v) in w.vals[..self.params].iter_mut().enumerate() {
+        for (k, v) in w.vals[..self.cols.end].iter_mut().enumerate() {
             for (x, &y) in v.iter_mut().zip(rows[k..].iter().step_by(p)) {
                 *x = y;
             }
