@@ -5,7 +5,10 @@
 //! The elimination knows which entries are structurally zero (a Willis row
 //! has three non-zeros, the input rows one, \[M\] is sparse), so the program
 //! holds only the operations on non-zeros: about a third of the dense LU's
-//! at 6 links. Each operation runs over a whole block, so a dependent chain
+//! at 6 links. Each operation is emitted once however often the elimination
+//! asks for it (the three systems share their Willis rows and often their
+//! pivots; |-x| is |x|): 155 operations at 6 links, 199 before for the Fig. 3
+//! train's dynamics and 147 after. Each operation runs over a whole block, so a dependent chain
 //! (a substitution) no longer waits on its own latency, and the cost of
 //! reading the program is shared by the block's rows.
 //!
@@ -173,23 +176,93 @@ pub(crate) struct Columns {
     pub end: usize,
 }
 
+/// An operation with its result's slot left out, operands of commutative
+/// operations in order, constants by their bits: equal keys, equal results.
+type Key = (u8, [u32; 3], u64);
+
+impl Op {
+    /// The key of the value (or check) this operation computes.
+    fn key(&self) -> Key {
+        let ord = |a: u32, b: u32| if a <= b { [a, b] } else { [b, a] };
+        match *self {
+            Op::Neg(_, a) => (0, [a, 0, 0], 0),
+            Op::AddC(_, a, c) => (1, [a, 0, 0], c.to_bits()),
+            Op::MulC(_, a, c) => (2, [a, 0, 0], c.to_bits()),
+            Op::DivC(_, a, c) => (3, [a, 0, 0], c.to_bits()),
+            Op::Add(_, a, b) => (4, [ord(a, b)[0], ord(a, b)[1], 0], 0),
+            Op::Sub(_, a, b) => (5, [a, b, 0], 0),
+            Op::Mul(_, a, b) => (6, [ord(a, b)[0], ord(a, b)[1], 0], 0),
+            Op::SubMul(_, a, b, c) => (7, [a, ord(b, c)[0], ord(b, c)[1]], 0),
+            Op::AddMul(_, a, b, c) => (8, [a, ord(b, c)[0], ord(b, c)[1]], 0),
+            Op::Recip(_, a) => (9, [a, 0, 0], 0),
+            Op::Abs(_, a) => (10, [a, 0, 0], 0),
+            Op::Const(_, c) => (11, [0, 0, 0], c.to_bits()),
+            Op::Max(_, a, b) => (12, [ord(a, b)[0], ord(a, b)[1], 0], 0),
+            Op::NoLarger(m, a, b) => (13, [a, b, u32::from(m)], 0),
+            Op::AtMost(m, a, c) => (14, [a, u32::from(m), 0], c.to_bits()),
+            Op::Finite(m, a) => (15, [a, u32::from(m), 0], 0),
+        }
+    }
+}
+
 struct Builder {
     ops: Vec<Op>,
     next: u32,
+    /// The value each key was computed into, or the check already made:
+    /// an operation is emitted once however often the elimination asks for
+    /// it (the systems share their Willis rows, and often their pivots).
+    seen: std::collections::HashMap<Key, S>,
+    /// The operation that computed each value, from the first result on.
+    first: u32,
+    defs: Vec<Op>,
 }
 
 impl Builder {
+    fn new(first: u32) -> Self {
+        Builder {
+            ops: Vec::new(),
+            next: first,
+            seen: std::collections::HashMap::new(),
+            first,
+            defs: Vec::new(),
+        }
+    }
+
     fn push(&mut self, f: impl FnOnce(u32) -> Op) -> S {
         let d = self.next;
+        let op = f(d);
+        let key = op.key();
+        if let Some(&v) = self.seen.get(&key) {
+            return v;
+        }
         self.next += 1;
-        self.ops.push(f(d));
+        self.ops.push(op);
+        self.defs.push(op);
+        self.seen.insert(key, S::V(d));
         S::V(d)
+    }
+
+    /// A check, once.
+    fn check(&mut self, op: Op) {
+        if self.seen.insert(op.key(), S::C(0.0)).is_none() {
+            self.ops.push(op);
+        }
+    }
+
+    /// The operation that computed `v` (none for a parameter).
+    fn def(&self, v: u32) -> Option<Op> {
+        v.checked_sub(self.first)
+            .and_then(|i| self.defs.get(i as usize))
+            .copied()
     }
 
     fn neg(&mut self, a: S) -> S {
         match a {
             S::C(c) => S::C(-c),
-            S::V(a) => self.push(|d| Op::Neg(d, a)),
+            S::V(a) => match self.def(a) {
+                Some(Op::Neg(_, x)) => S::V(x),
+                _ => self.push(|d| Op::Neg(d, a)),
+            },
         }
     }
 
@@ -263,7 +336,11 @@ impl Builder {
     fn abs(&mut self, a: S) -> S {
         match a {
             S::C(c) => S::C(c.abs()),
-            S::V(a) => self.push(|d| Op::Abs(d, a)),
+            S::V(a) => match self.def(a) {
+                Some(Op::Neg(_, x)) => self.abs(S::V(x)),
+                Some(Op::Abs(..)) => S::V(a),
+                _ => self.push(|d| Op::Abs(d, a)),
+            },
         }
     }
 
@@ -296,7 +373,7 @@ impl Builder {
             S::C(c) if c <= limit => Ok(()),
             S::C(_) => Err(()),
             S::V(a) => {
-                self.ops.push(Op::AtMost(m, a, limit));
+                self.check(Op::AtMost(m, a, limit));
                 Ok(())
             }
         }
@@ -310,7 +387,7 @@ impl Builder {
             (S::C(0.0), _) => Ok(()),
             _ => {
                 let (a, p) = (self.slot(a), self.slot(pivot));
-                self.ops.push(Op::NoLarger(m, a, p));
+                self.check(Op::NoLarger(m, a, p));
                 Ok(())
             }
         }
@@ -548,10 +625,7 @@ impl PreparedTrain {
         }
         let n = self.n;
         let c = self.constraints();
-        let mut b = Builder {
-            ops: Vec::new(),
-            next: u32::try_from(cols.end).ok()?,
-        };
+        let mut b = Builder::new(u32::try_from(cols.end).ok()?);
         let slot = |k: usize| S::V(k as u32);
         let base_ratios = &base[cols.ratio..cols.speed];
         let willis: Vec<Willis> = (cols.ratio..cols.speed)
@@ -653,7 +727,7 @@ impl PreparedTrain {
         }
         for v in &outputs {
             if let S::V(v) = v.0 {
-                b.ops.push(Op::Finite(KIN, v));
+                b.check(Op::Finite(KIN, v));
             }
         }
         outputs.push((cond[0], None));
@@ -800,19 +874,54 @@ impl Program {
     /// Afterwards `w.valid[r]` says whether row `r` passed the parameter
     /// rules (as the batch's check) and every check of the program, so that
     /// its results are those [`Program::write`] wrote.
-    #[allow(clippy::needless_range_loop)]
     pub(crate) fn run(&self, w: &mut ProgramWorkspace, rows: &[f64], p: usize) {
         let count = rows.len() / p;
         debug_assert!(count <= BLOCK);
         // Column by column; each row's numbers touch only its own lane, so a
         // bad row's NaN (or a stale row past the last) harms no other.
-        let c = self.cols;
-        let mut good = [true; BLOCK];
-        w.moving = [false; BLOCK];
         for (k, v) in w.vals[..self.cols.end].iter_mut().enumerate() {
             for (x, &y) in v.iter_mut().zip(rows[k..].iter().step_by(p)) {
                 *x = y;
             }
+        }
+        self.check_and_run(w, count);
+    }
+
+    /// [`Program::run`] on up to [`BLOCK`] rows held column by column:
+    /// `column(k)` is the block's part of parameter column `k`, all of one
+    /// length.
+    pub(crate) fn run_columns<'c>(
+        &self,
+        w: &mut ProgramWorkspace,
+        column: impl Fn(usize) -> &'c [f64],
+    ) {
+        let mut count = BLOCK;
+        for (k, v) in w.vals[..self.cols.end].iter_mut().enumerate() {
+            let c = column(k);
+            count = c.len();
+            v[..count].copy_from_slice(c);
+        }
+        self.check_and_run(w, count);
+    }
+
+    /// The parameter rules on the loaded columns, the operations, and each
+    /// row's validity.
+    fn check_and_run(&self, w: &mut ProgramWorkspace, count: usize) {
+        let arch = w.arch;
+        arch.dispatch(Run {
+            program: self,
+            w,
+            count,
+        });
+    }
+
+    /// The parameter rules on the loaded columns (`good`), and the rows
+    /// that prescribe an acceleration (`w.moving`).
+    #[inline(always)]
+    fn check_params(&self, w: &mut ProgramWorkspace, good: &mut [bool; BLOCK]) {
+        let c = self.cols;
+        w.moving = [false; BLOCK];
+        for (k, v) in w.vals[..self.cols.end].iter().enumerate() {
             let column = good.iter_mut().zip(v.iter());
             if k < c.speed {
                 column.for_each(|(g, &x)| *g &= super::ratio_ok(x));
@@ -826,13 +935,6 @@ impl Program {
                     *m |= x != 0.0;
                 }
             }
-        }
-        w.ok = [[true; BLOCK]; 3];
-        let arch = w.arch;
-        arch.dispatch(Run { program: self, w });
-        for r in 0..BLOCK {
-            let ok = |m: u8| !self.needs[m as usize] || w.ok[m as usize][r];
-            w.valid[r] = r < count && good[r] && ok(KIN) && ok(PSI) && ok(FORCE);
         }
     }
 
@@ -974,19 +1076,53 @@ impl Program {
             }
         }
     }
+
+    /// [`Program::write`] column by column: rows `at..to` of each output
+    /// column `out[o]` (the rows of the last [`Program::run_columns`]).
+    pub(crate) fn write_columns(
+        &self,
+        w: &ProgramWorkspace,
+        out: &mut [&mut [f64]],
+        at: usize,
+        to: usize,
+    ) {
+        for (d, &k) in out.iter_mut().zip(&self.outputs) {
+            d[at..to].copy_from_slice(&w.vals[k as usize][..to - at]);
+        }
+        for &(o, v) in &self.statics {
+            for (d, &m) in out[o][at..to].iter_mut().zip(&w.moving) {
+                if !m {
+                    *d = v;
+                }
+            }
+        }
+    }
 }
 
 /// One block's run as a [`pulp::WithSimd`], compiled for the detected
-/// instruction set (as the lanes' `Group`).
+/// instruction set (as the lanes' `Group`): the parameter rules, the
+/// operations, and each row's validity.
 struct Run<'a> {
     program: &'a Program,
     w: &'a mut ProgramWorkspace,
+    /// Rows loaded; those past it are stale and never valid.
+    count: usize,
 }
 
 impl pulp::WithSimd for Run<'_> {
     type Output = ();
     #[inline(always)]
+    #[allow(clippy::needless_range_loop)]
     fn with_simd<S: pulp::Simd>(self, _: S) {
-        self.program.run_ops(self.w);
+        let Run { program, w, count } = self;
+        let mut good = [true; BLOCK];
+        program.check_params(w, &mut good);
+        w.ok = [[true; BLOCK]; 3];
+        program.run_ops(w);
+        let needs = program.needs;
+        for r in 0..BLOCK {
+            let ok = |m: u8| !needs[m as usize] || w.ok[m as usize][r];
+            w.valid[r] = r < count && good[r] && ok(KIN) && ok(PSI) && ok(FORCE);
+        }
     }
 }
