@@ -27,6 +27,7 @@ SERIES = [
     ("egt LU", "egt (prepared, in-place LU)", "#d62728", "circle"),
     ("egt batch", "egt batch: 10 000 rows, 8 per SIMD group", "#7b0000", "circle"),
     ("egt program", "egt batch, condition bounds: straight-line program", "#ff9896", "circle"),
+    ("egt columns", "egt program, column-major (run_columns)", "#e7969c", "circle"),
     ("egt LU + refinement", "egt LU + 1 refinement step", "#ff7f0e", "circle"),
     ("nalgebra LU", "nalgebra LU", "#1f77b4", "square"),
     ("faer LU", "faer LU", "#17becf", "square"),
@@ -192,25 +193,30 @@ def summary(rust: dict[str, Any], python: dict[str, Any], data: dict[str, list[t
         "worker's numbers bit for bit, checked in the run). \"batch\" routes evaluate 10 000 scenarios at once and divide. "
         "A ratio below 1× means the other route is faster than egt (batch against egt batch). egt program is the same "
         "batch with condition bounds (the `cond.*` columns not wanted): the train's straight-line program, 64 rows per "
-        "operation, its rows within rounding of the worker's (its errors against exact rationals are measured in the run).",
+        "operation, its rows within rounding of the worker's (its errors against exact rationals are measured in the run). "
+        "egt columns is the program through `BatchPlan::run_columns`: parameters and outputs column-major, one contiguous "
+        "array each, as NumPy's and SymPy's routes hold them (the same numbers bit for bit, checked in the run).",
         "",
-        "| links | n | egt | egt batch | egt program | flop floor | egt batch / floor | program / floor | NumPy | NumPy / egt | NumPy batch | NumPy batch / egt batch | NumPy batch / program | SymPy lambdify | SymPy cse | SymPy cse batch | cse batch / egt batch | cse batch / program | SymPy subs |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| links | n | egt | egt batch | egt program | egt columns | flop floor | egt batch / floor | program / floor | columns / floor | NumPy | NumPy / egt | NumPy batch | NumPy batch / egt batch | NumPy batch / program | NumPy batch / columns | SymPy lambdify | SymPy cse | SymPy cse batch | cse batch / egt batch | cse batch / program | cse batch / columns | SymPy subs |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for size in rust["sizes"]:
         links = size["links"]
         egt = t("egt LU", links)
         eb = t("egt batch", links)
         ep = t("egt program", links)
+        ec = t("egt columns", links)
         floor = size["floor_seconds"]
         lines.append(
-            f"| {links} | {size['n']} | {fmt_time(egt)} | {fmt_time(eb)} | {fmt_time(ep)} | {fmt_time(floor)} "
-            f"| {fmt_ratio(eb, floor)} | {fmt_ratio(ep, floor)} "
+            f"| {links} | {size['n']} | {fmt_time(egt)} | {fmt_time(eb)} | {fmt_time(ep)} | {fmt_time(ec)} | {fmt_time(floor)} "
+            f"| {fmt_ratio(eb, floor)} | {fmt_ratio(ep, floor)} | {fmt_ratio(ec, floor)} "
             f"| {fmt_time(t('numpy', links))} | {fmt_ratio(t('numpy', links), egt)} | {fmt_time(t('numpy-batch', links))} "
             f"| {fmt_ratio(t('numpy-batch', links), eb)} | {fmt_ratio(t('numpy-batch', links), ep)} "
+            f"| {fmt_ratio(t('numpy-batch', links), ec)} "
             f"| {fmt_time(t('sympy', links))} | {fmt_time(t('sympy-cse', links))} "
             f"| {fmt_time(t('sympy-cse-batch', links))} | {fmt_ratio(t('sympy-cse-batch', links), eb)} "
-            f"| {fmt_ratio(t('sympy-cse-batch', links), ep)} | {fmt_time(t('sympy-subs', links))} |"
+            f"| {fmt_ratio(t('sympy-cse-batch', links), ep)} | {fmt_ratio(t('sympy-cse-batch', links), ec)} "
+            f"| {fmt_time(t('sympy-subs', links))} |"
         )
     lines += [
         "",
@@ -232,12 +238,12 @@ def summary(rust: dict[str, Any], python: dict[str, Any], data: dict[str, list[t
         "",
         "Time per scenario of every Rust method and its largest relative error against exact rationals:",
         "",
-        "| links | " + " | ".join(k for k, *_ in SERIES[:9]) + " |",
-        "|---|" + "---|" * 9,
+        "| links | " + " | ".join(k for k, *_ in SERIES[:10]) + " |",
+        "|---|" + "---|" * 10,
     ]
     for size in rust["sizes"]:
         cells = []
-        for k, *_ in SERIES[:9]:
+        for k, *_ in SERIES[:10]:
             tt, e = by[k].get(size["links"], (None, None))
             cells.append(f"{fmt_time(tt)} ({e:.0e})" if tt is not None else "–")
         lines.append(f"| {size['links']} | " + " | ".join(cells) + " |")

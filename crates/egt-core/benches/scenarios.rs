@@ -128,16 +128,34 @@ fn sweep_rows(p: &BatchPlan, rows: usize, ratio_ulps: bool) -> Vec<f64> {
 /// (with `bounds`, condition estimates only where bounds cannot show a row
 /// well-conditioned).
 fn sweep(b: Bencher, t: &Train, ratio_ulps: bool, bounds: bool) {
+    sweep_layout(b, t, ratio_ulps, bounds, false);
+}
+
+/// [`sweep`] with the matrices column-major or not (`BatchPlan::run_columns`).
+fn sweep_layout(b: Bencher, t: &Train, ratio_ulps: bool, bounds: bool, columns: bool) {
     const ROWS: usize = 10_000;
     let p = plan(t, Compute::Dynamics).with_condition_bounds(bounds);
-    let params = sweep_rows(&p, ROWS, ratio_ulps);
+    let mut params = sweep_rows(&p, ROWS, ratio_ulps);
+    let np = p.parameters().len();
+    if columns {
+        params = (0..np)
+            .flat_map(|k| params[k..].iter().step_by(np).copied().collect::<Vec<_>>())
+            .collect();
+    }
     let mut out = vec![0.0; ROWS * p.outputs().len()];
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
         .unwrap_or_else(|e| panic!("{e}"));
-    b.counter(ItemsCount::new(ROWS))
-        .bench_local(|| pool.install(|| p.run(black_box(&params), black_box(&mut out))));
+    b.counter(ItemsCount::new(ROWS)).bench_local(|| {
+        pool.install(|| {
+            if columns {
+                p.run_columns(black_box(&params), black_box(&mut out))
+            } else {
+                p.run(black_box(&params), black_box(&mut out))
+            }
+        })
+    });
 }
 
 macro_rules! phases {
@@ -210,6 +228,12 @@ macro_rules! phases {
             #[divan::bench(args = $sizes)]
             fn sweep_bounded_ratios(b: Bencher, links: usize) {
                 sweep(b, &build(&$make(links)), true, true);
+            }
+
+            /// The same, column-major (`BatchPlan::run_columns`).
+            #[divan::bench(args = $sizes)]
+            fn sweep_bounded_ratios_columns(b: Bencher, links: usize) {
+                sweep_layout(b, &build(&$make(links)), true, true, true);
             }
         }
     };

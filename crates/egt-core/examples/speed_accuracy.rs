@@ -66,22 +66,45 @@ fn flop_rate() -> f64 {
 /// Seconds per row of `plan.run` on one thread over 10 000 rows: the base
 /// row and the base row one ulp off in its first ratio, alternating (so
 /// every row is its own train). Also the two rows and the outputs.
-fn batch_seconds(plan: &egt_core::batch::BatchPlan) -> (f64, [Vec<f64>; 2], Vec<f64>) {
+fn batch_seconds(
+    plan: &egt_core::batch::BatchPlan,
+    columns: bool,
+) -> (f64, [Vec<f64>; 2], Vec<f64>) {
     const ROWS: usize = 10_000;
     let a = plan.base().to_vec();
     let mut b = a.clone();
     b[0] = f64::from_bits(b[0].to_bits() + 1);
-    let rows: Vec<f64> = (0..ROWS)
+    let mut rows: Vec<f64> = (0..ROWS)
         .flat_map(|r| if r % 2 == 0 { a.clone() } else { b.clone() })
         .collect();
-    let mut out = vec![0.0; ROWS * plan.outputs().len()];
+    let (p, q) = (plan.parameters().len(), plan.outputs().len());
+    if columns {
+        // Column-major (as NumPy's and SymPy's arrays, one per parameter).
+        rows = (0..p)
+            .flat_map(|k| rows[k..].iter().step_by(p).copied().collect::<Vec<_>>())
+            .collect();
+    }
+    let mut out = vec![0.0; ROWS * q];
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
         .unwrap_or_else(|e| panic!("{e}"));
     let seconds = time(0.2, || {
-        pool.install(|| black_box(plan.run(black_box(&rows), &mut out)));
+        pool.install(|| {
+            if columns {
+                black_box(plan.run_columns(black_box(&rows), &mut out))
+            } else {
+                black_box(plan.run(black_box(&rows), &mut out))
+            }
+        });
     }) / ROWS as f64;
+    if columns {
+        // Back to rows, for the callers' checks.
+        out = (0..ROWS)
+            .flat_map(|r| (0..q).map(move |o| (o, r)))
+            .map(|(o, r)| out[o * ROWS + r])
+            .collect();
+    }
     (seconds, [a, b], out)
 }
 
@@ -150,7 +173,7 @@ fn main() {
         // numbers bit for bit (checked here), so its error is egt LU's.
         {
             let plan = p.plan();
-            let (seconds, [a, b], out) = batch_seconds(plan);
+            let (seconds, [a, b], out) = batch_seconds(plan, false);
             let q = plan.outputs().len();
             let mut one = vec![0.0; q];
             for (r, row) in [&a, &b].into_iter().enumerate() {
@@ -180,27 +203,40 @@ fn main() {
         }
         // egt's straight-line program: the same 10 000 rows with condition
         // bounds (the `cond.*` columns not wanted), each operation over 64
-        // rows. Its rows differ from the worker's by rounding: their error
-        // against exact rationals is measured here, on both rows.
+        // rows; row-major, and column-major as NumPy's arrays are. Its rows
+        // differ from the worker's by rounding: their error against exact
+        // rationals is measured here, on both rows (the two layouts give the
+        // same numbers, checked).
         {
             let plan = p.plan().clone().with_condition_bounds(true);
             assert!(plan.has_program(), "{links} links: no program");
-            let (seconds, _, out) = batch_seconds(&plan);
             let q = plan.outputs().len();
-            let errors = [&out[..q], &out[q..2 * q]]
-                .map(|row| lab::accuracy::row_errors(&plan, &t, row, &exact));
-            let worst = |f: fn(&lab::accuracy::Errors) -> f64| f(&errors[0]).max(f(&errors[1]));
-            let max = errors[0].max().max(errors[1].max());
-            eprintln!(
-                "{links:>2} links  {:<22} {:>10.3} us  error {max:.1e}",
-                "egt program",
-                seconds * 1e6
-            );
-            methods.push(json!({
-                "method": "egt program", "seconds": seconds, "error": max,
-                "errors": {"speeds": worst(|e| e.speeds), "accelerations": worst(|e| e.accelerations),
-                           "multipliers": worst(|e| e.multipliers), "torques": worst(|e| e.torques)},
-            }));
+            let mut by_rows = Vec::new();
+            for (route, columns) in [("egt program", false), ("egt columns", true)] {
+                let (seconds, _, out) = batch_seconds(&plan, columns);
+                let errors = [&out[..q], &out[q..2 * q]]
+                    .map(|row| lab::accuracy::row_errors(&plan, &t, row, &exact));
+                let worst = |f: fn(&lab::accuracy::Errors) -> f64| f(&errors[0]).max(f(&errors[1]));
+                let max = errors[0].max().max(errors[1].max());
+                eprintln!(
+                    "{links:>2} links  {route:<22} {:>10.3} us  error {max:.1e}",
+                    seconds * 1e6
+                );
+                methods.push(json!({
+                    "method": route, "seconds": seconds, "error": max,
+                    "errors": {"speeds": worst(|e| e.speeds), "accelerations": worst(|e| e.accelerations),
+                               "multipliers": worst(|e| e.multipliers), "torques": worst(|e| e.torques)},
+                }));
+                if columns {
+                    let same = out
+                        .iter()
+                        .zip(&by_rows)
+                        .all(|(x, y): (&f64, &f64)| x.to_bits() == y.to_bits());
+                    assert!(same, "{links} links: the layouts differ");
+                } else {
+                    by_rows = out;
+                }
+            }
         }
         // The floor: one LU (2n^3/3), two solves for speeds and accelerations,
         // [M]{w'} and the transposed solve (2n^2 each).
