@@ -106,10 +106,13 @@ impl BatchPlanCore {
         convert::vec1(py, self.plan.base().to_vec())
     }
 
-    /// Solve every row of `params` (rows x parameters, C-contiguous float64)
-    /// in parallel with the GIL released; `threads` sizes a private pool
-    /// (default: rayon's global pool). Returns the outputs (rows x outputs,
-    /// 0.0 in failed rows) and the failed rows as (row, kind, message).
+    /// Solve every row of `params` (rows x parameters, float64, C- or
+    /// Fortran-contiguous) in parallel with the GIL released; `threads`
+    /// sizes a private pool (default: rayon's global pool). Returns the
+    /// outputs (rows x outputs, in the order of `params`: a Fortran-ordered
+    /// input is solved column by column, `BatchPlan::run_columns`, and each
+    /// output column comes back contiguous; 0.0 in failed rows) and the
+    /// failed rows as (row, kind, message).
     #[pyo3(signature = (params, threads = None))]
     #[allow(clippy::type_complexity)]
     fn run<'py>(
@@ -130,30 +133,42 @@ impl BatchPlanCore {
             )));
         }
         let rows = shape[0];
+        // A C-contiguous array is read as rows (also when it is both, one
+        // row or one column); otherwise a Fortran-contiguous one as columns.
+        let columns = !params.is_c_contiguous() && params.is_fortran_contiguous();
         let input = params
             .as_slice()
-            .map_err(|_| value_error("params must be C-contiguous"))?;
+            .map_err(|_| value_error("params must be C- or Fortran-contiguous"))?;
         let efficiency = self.plan.output("power.efficiency");
         guard(|| {
             let mut out = vec![0.0; rows * q];
+            // Element (row, output) of `out`.
+            let at = |r: usize, o: usize| if columns { o * rows + r } else { r * q + o };
             let errors = py.detach(|| -> Result<_> {
+                let solve = |out: &mut [f64]| {
+                    if columns {
+                        self.plan.run_columns(input, out)
+                    } else {
+                        self.plan.run(input, out)
+                    }
+                };
                 let errors = match threads {
                     Some(n) => rayon::ThreadPoolBuilder::new()
                         .num_threads(egt_core::batch::worker_threads(Some(n)).0)
                         .build()
                         .map_err(|e| value_error(e.to_string()))?
-                        .install(|| self.plan.run(input, &mut out)),
-                    None => self.plan.run(input, &mut out),
+                        .install(|| solve(&mut out)),
+                    None => solve(&mut out),
                 };
                 for e in &errors {
-                    out[e.row * q..(e.row + 1) * q]
-                        .iter_mut()
-                        .for_each(|v| *v = 0.0);
+                    for o in 0..q {
+                        out[at(e.row, o)] = 0.0;
+                    }
                 }
                 if let Some(c) = efficiency {
-                    for row in out.chunks_mut(q.max(1)) {
-                        if row[c].is_nan() {
-                            row[c] = 0.0;
+                    for r in 0..rows {
+                        if out[at(r, c)].is_nan() {
+                            out[at(r, c)] = 0.0;
                         }
                     }
                 }
@@ -163,7 +178,12 @@ impl BatchPlanCore {
                 .into_iter()
                 .map(|e| (e.row, kind(&e.error), e.error.to_string()))
                 .collect();
-            Ok((mat2(py, rows, q, out)?, errors))
+            let values = if columns {
+                convert::mat2_columns(py, rows, q, out)?
+            } else {
+                mat2(py, rows, q, out)?
+            };
+            Ok((values, errors))
         })
     }
 

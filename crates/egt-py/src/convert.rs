@@ -99,6 +99,20 @@ pub fn mat2<'py>(
     Ok(a.into_pyarray(py))
 }
 
+/// A column-major buffer as a 2-D NumPy array in Fortran order (no copy:
+/// each column is contiguous).
+pub fn mat2_columns<'py>(
+    py: Python<'py>,
+    rows: usize,
+    cols: usize,
+    data: Vec<f64>,
+) -> Result<Bound<'py, PyArray2<f64>>> {
+    use numpy::ndarray::ShapeBuilder;
+    let a = Array2::from_shape_vec((rows, cols).f(), data)
+        .map_err(|e| crate::errors::value_error(e.to_string()))?;
+    Ok(a.into_pyarray(py))
+}
+
 /// A nalgebra matrix (column-major) as a 2-D NumPy array.
 pub fn dmatrix<'py>(py: Python<'py>, m: &DMatrix<f64>) -> Result<Bound<'py, PyArray2<f64>>> {
     let mut out = Vec::with_capacity(m.nrows() * m.ncols());

@@ -274,3 +274,25 @@ def test_documented_run_of_params_and_exact_echo(fig3: egt.Train) -> None:
     b = fig3.batch_kinematics({"2": [75.0, 0.0]})
     assert b.speed("2")[0] == 75.0
     assert not np.signbit(b.speeds[1]).any()
+
+
+@pytest.mark.parametrize("bounds", [False, True])
+def test_fortran_and_c_ordered_params_give_the_same_numbers(fig3: egt.Train, bounds: bool) -> None:
+    # Through the lock, as above: program rows, left rows, refused rows.
+    plan = fig3.batch("dynamics", condition_bounds=bounds)
+    g2 = np.repeat(np.linspace(-1.5000001, -1.4999999, 21), 40)
+    load = np.tile(np.linspace(-10.0, -50.0, 40), 21)
+    p, bad = plan.params({"ratio.G2": g2, "torque.4": load})
+    assert not bad
+    assert p.flags.f_contiguous and not p.flags.c_contiguous
+    p[5, plan.column("ratio.G1")] = np.nan
+    by_columns = plan.run(p)
+    by_rows = plan.run(np.ascontiguousarray(p))
+    assert by_columns.values.flags.f_contiguous and not by_columns.values.flags.c_contiguous
+    assert by_rows.values.flags.c_contiguous
+    assert by_columns.values.view(np.int64).tolist() == by_rows.values.view(np.int64).tolist()
+    np.testing.assert_array_equal(by_columns.ok, by_rows.ok)
+    assert {r: e.message for r, e in by_columns.errors.items()} == {r: e.message for r, e in by_rows.errors.items()}
+    assert (~by_rows.ok).sum() >= 9 and 5 in by_rows.errors
+    # A column of the result is a view, contiguous.
+    assert all(by_columns[o].flags.c_contiguous for o in by_columns.outputs)

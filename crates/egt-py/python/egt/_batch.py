@@ -244,11 +244,11 @@ class BatchPlan:
         teeth: Optional[ArrayLike] = None,
         rows: Optional[int] = None,
     ) -> Tuple[np.ndarray, Dict[int, RowError]]:
-        """The parameter matrix: the base row repeated, with the columns in
-        ``values`` (name -> scalar or one value per row) and the ratio columns
-        from ``ratios`` ((gears,) or (rows, gears)) or ``teeth`` ((gears, 2)
-        or (rows, gears, 2)) replaced. Also returns the rows whose tooth
-        counts are invalid."""
+        """The parameter matrix (Fortran order): the base row repeated, with
+        the columns in ``values`` (name -> scalar or one value per row) and
+        the ratio columns from ``ratios`` ((gears,) or (rows, gears)) or
+        ``teeth`` ((gears, 2) or (rows, gears, 2)) replaced. Also returns the
+        rows whose tooth counts are invalid."""
         names, cols = columns(values or {}, "values")
         per_row: List[Tuple[str, np.ndarray, int]] = [(f"values[{n!r}]", c, 0) for n, c in zip(names, cols)]
         r_arr = None if ratios is None else _numeric(ratios, "ratios")
@@ -264,7 +264,10 @@ class BatchPlan:
             if any(_rows_of(a, nd) not in (None, rows) for _, a, nd in per_row):
                 raise ArgumentError(f"rows={rows} disagrees with the per-row arrays")
             n_rows = rows
-        p = np.repeat(self.base.reshape(1, -1), n_rows, axis=0)
+        # Fortran order: each column contiguous, as the native side solves
+        # it (no transposition either way; :meth:`run` keeps the order).
+        p = np.empty((n_rows, len(self.parameters)), dtype=np.float64, order="F")
+        p[:] = self.base
         bad: Dict[int, RowError] = {}
         ratio_cols = [self.column(f"ratio.{g}") for g in self._gears]
         if r_arr is not None:
@@ -287,7 +290,12 @@ class BatchPlan:
     ) -> BatchResult:
         """Solve every row of ``params`` ((rows, parameters) or one row), or of
         what :meth:`params` returned (the matrix and its refused rows, which
-        are then reported failed): ``plan.run(plan.params({...}))``."""
+        are then reported failed): ``plan.run(plan.params({...}))``.
+
+        A Fortran-ordered matrix (as :meth:`params` builds) is solved column
+        by column and the values come back in Fortran order, each output
+        column contiguous; any other is solved as C-ordered rows. Both give
+        the same numbers bit for bit."""
         refused: Dict[int, RowError] = {}
         if isinstance(params, tuple) and len(params) == 2 and isinstance(params[1], dict):
             params, refused = params
@@ -303,9 +311,12 @@ class BatchPlan:
             threads = count(threads, "threads", 2**32)
             if threads < 1:
                 raise ArgumentError(f"threads must be a positive integer, got {threads}")
-        values, raw = self._core.run(
-            np.ascontiguousarray(a, dtype=np.float64), None if threads is None else int(threads)
-        )
+        a = np.asarray(a, dtype=np.float64)
+        if not a.flags.f_contiguous or a.flags.c_contiguous:
+            a = np.ascontiguousarray(a)
+        # A Fortran-ordered matrix (as :meth:`params` builds) is solved
+        # column by column and its outputs come back in Fortran order too.
+        values, raw = self._core.run(a, None if threads is None else int(threads))
         ok = np.ones(values.shape[0], dtype=bool)
         errors = {r: RowError(r, k, m) for r, k, m in raw}
         errors.update(refused)  # rows params() refused (their ratios were placeholders)
