@@ -564,13 +564,12 @@ impl BatchPlan {
         }
     }
 
-    /// Solve every row of `params` (row-major, `parameters().len()` columns)
-    /// into `out` (row-major, `outputs().len()` columns), in parallel on the
-    /// current rayon pool. Failed rows get NaN outputs and are returned, in row order.
+    /// The rows of `params`, whose length must be a whole number of rows
+    /// with `out` as long in outputs.
     ///
     /// # Panics
     /// When the slice lengths do not match the column counts.
-    pub fn run(&self, params: &[f64], out: &mut [f64]) -> Vec<RowError> {
+    fn rows_of(&self, params: &[f64], out: &[f64]) -> usize {
         let (p, q) = (self.parameters.len(), self.outputs.len());
         let rows = params.len().checked_div(p).unwrap_or(0);
         assert_eq!(
@@ -583,6 +582,18 @@ impl BatchPlan {
             rows * q,
             "out does not have one row per scenario"
         );
+        rows
+    }
+
+    /// Solve every row of `params` (row-major, `parameters().len()` columns)
+    /// into `out` (row-major, `outputs().len()` columns), in parallel on the
+    /// current rayon pool. Failed rows get NaN outputs and are returned, in row order.
+    ///
+    /// # Panics
+    /// When the slice lengths do not match the column counts.
+    pub fn run(&self, params: &[f64], out: &mut [f64]) -> Vec<RowError> {
+        let (p, q) = (self.parameters.len(), self.outputs.len());
+        self.rows_of(params, out);
         let mut errors: Vec<RowError> = params
             .par_chunks(p * ROWS_PER_TASK)
             .zip(out.par_chunks_mut(q * ROWS_PER_TASK))
@@ -630,17 +641,7 @@ impl BatchPlan {
     /// When the slice lengths do not match the column counts.
     pub fn run_columns(&self, params: &[f64], out: &mut [f64]) -> Vec<RowError> {
         let (p, q) = (self.parameters.len(), self.outputs.len());
-        let rows = params.len().checked_div(p).unwrap_or(0);
-        assert_eq!(
-            params.len(),
-            rows * p,
-            "params is not a whole number of rows"
-        );
-        assert_eq!(
-            out.len(),
-            rows * q,
-            "out does not have one row per scenario"
-        );
+        let rows = self.rows_of(params, out);
         if rows == 0 {
             return Vec::new();
         }

@@ -94,9 +94,7 @@ pub fn mat2<'py>(
     cols: usize,
     data: Vec<f64>,
 ) -> Result<Bound<'py, PyArray2<f64>>> {
-    let a = Array2::from_shape_vec((rows, cols), data)
-        .map_err(|e| crate::errors::value_error(e.to_string()))?;
-    Ok(a.into_pyarray(py))
+    mat2_ordered(py, rows, cols, data, false)
 }
 
 /// A column-major buffer as a 2-D NumPy array in Fortran order (no copy:
@@ -107,8 +105,18 @@ pub fn mat2_columns<'py>(
     cols: usize,
     data: Vec<f64>,
 ) -> Result<Bound<'py, PyArray2<f64>>> {
+    mat2_ordered(py, rows, cols, data, true)
+}
+
+fn mat2_ordered<'py>(
+    py: Python<'py>,
+    rows: usize,
+    cols: usize,
+    data: Vec<f64>,
+    fortran: bool,
+) -> Result<Bound<'py, PyArray2<f64>>> {
     use numpy::ndarray::ShapeBuilder;
-    let a = Array2::from_shape_vec((rows, cols).f(), data)
+    let a = Array2::from_shape_vec((rows, cols).set_f(fortran), data)
         .map_err(|e| crate::errors::value_error(e.to_string()))?;
     Ok(a.into_pyarray(py))
 }
