@@ -178,11 +178,7 @@ impl BatchPlanCore {
                 .into_iter()
                 .map(|e| (e.row, kind(&e.error), e.error.to_string()))
                 .collect();
-            let values = if columns {
-                convert::mat2_columns(py, rows, q, out)?
-            } else {
-                mat2(py, rows, q, out)?
-            };
+            let values = convert::mat2_ordered(py, rows, q, out, columns)?;
             Ok((values, errors))
         })
     }

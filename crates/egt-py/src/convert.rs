@@ -97,18 +97,9 @@ pub fn mat2<'py>(
     mat2_ordered(py, rows, cols, data, false)
 }
 
-/// A column-major buffer as a 2-D NumPy array in Fortran order (no copy:
-/// each column is contiguous).
-pub fn mat2_columns<'py>(
-    py: Python<'py>,
-    rows: usize,
-    cols: usize,
-    data: Vec<f64>,
-) -> Result<Bound<'py, PyArray2<f64>>> {
-    mat2_ordered(py, rows, cols, data, true)
-}
-
-fn mat2_ordered<'py>(
+/// A buffer as a 2-D NumPy array: row-major, or column-major (`fortran`)
+/// into a Fortran-ordered array (no copy: each column is contiguous).
+pub fn mat2_ordered<'py>(
     py: Python<'py>,
     rows: usize,
     cols: usize,
