@@ -438,18 +438,37 @@ mod batch {
     /// The same with a different ratio in every row: every scenario factors.
     #[divan::bench(sample_count = 10)]
     fn chain6_inverse_dynamics_new_ratios(b: Bencher) {
-        new_ratios(b, false);
+        new_ratios(b, false, &[]);
     }
 
     /// The same with condition bounds: the straight-line program.
     #[divan::bench(sample_count = 10)]
     fn chain6_inverse_dynamics_new_ratios_bounded(b: Bencher) {
-        new_ratios(b, true);
+        new_ratios(b, true, &[]);
     }
 
-    fn new_ratios(b: Bencher, bounds: bool) {
+    /// The same, the input torque and the conditions chosen (as `egt batch
+    /// --columns driving_torque.s1` chooses them).
+    #[divan::bench(sample_count = 10)]
+    fn chain6_inverse_dynamics_new_ratios_bounded_one_column(b: Bencher) {
+        new_ratios(
+            b,
+            true,
+            &[
+                "driving_torque.s1",
+                "cond.speeds",
+                "cond.accelerations",
+                "cond.forces",
+            ],
+        );
+    }
+
+    fn new_ratios(b: Bencher, bounds: bool, chosen: &[&str]) {
         let t = build(&chain(6));
-        let p = plan(&t, Compute::Dynamics).with_condition_bounds(bounds);
+        let mut p = plan(&t, Compute::Dynamics).with_condition_bounds(bounds);
+        if !chosen.is_empty() {
+            p = p.with_outputs(chosen).unwrap_or_else(|e| panic!("{e}"));
+        }
         let load = p
             .parameter("torque.c2")
             .unwrap_or_else(|| panic!("no load column"));

@@ -20,6 +20,12 @@
 //! transposing them, so column-major is the quicker (about 20 % at 6 links).
 //! A row allocates nothing unless it fails.
 //!
+//! **Chosen outputs.** [`BatchPlan::with_outputs`] keeps only the columns
+//! asked for (`egt batch --columns`, `Train.batch(..., outputs=...)`): the
+//! output matrix is that narrow, and the straight-line program drops every
+//! operation they do not need (at 6 links, a driving torque and the
+//! conditions need no meshing force, acceleration output or multiplier).
+//!
 //! **Linear blocks.** Kinematics and inverse dynamics are linear in the input
 //! speeds, the prescribed accelerations and the applied torques once the
 //! ratios, inertias and masses are fixed. [`BatchPlan::run`] recognises a
@@ -279,7 +285,14 @@ pub struct BatchPlan {
     compute: Compute,
     parameters: Vec<String>,
     base: Vec<f64>,
-    outputs: Vec<String>,
+    /// Every output the solve writes, in its order (see
+    /// [`BatchPlan::outputs`] for the chosen ones).
+    all: Vec<String>,
+    /// The chosen outputs: their columns in `all`, their names, and the
+    /// positions of the `cond.*` columns among them.
+    chosen: Vec<usize>,
+    names: Vec<String>,
+    cond_at: Vec<usize>,
     groups: Groups,
     /// Coordinates whose speed is known (sized links), in link order.
     known: Vec<usize>,
@@ -407,18 +420,100 @@ impl BatchPlan {
             outputs.push("cond.accelerations".into());
             outputs.push("cond.forces".into());
         }
-        Ok(BatchPlan {
+        let mut plan = BatchPlan {
             prepared,
             compute: spec.compute,
             parameters,
             base,
-            outputs,
+            all: outputs,
+            chosen: Vec::new(),
+            names: Vec::new(),
+            cond_at: Vec::new(),
             groups,
             known,
             forces,
             bounds: false,
             program: None,
-        })
+        };
+        plan.choose((0..plan.all.len()).collect());
+        Ok(plan)
+    }
+
+    fn choose(&mut self, chosen: Vec<usize>) {
+        let conds = self.all_conditions().start;
+        self.names = chosen.iter().map(|&o| self.all[o].clone()).collect();
+        self.cond_at = (chosen.iter().enumerate())
+            .filter(|(_, o)| **o >= conds)
+            .map(|(k, _)| k)
+            .collect();
+        self.chosen = chosen;
+    }
+
+    /// Keep only the output columns `names`, in that order: [`BatchPlan::run`]
+    /// then writes those columns, and the straight-line program (with
+    /// condition bounds) computes only what they need (a driving torque
+    /// alone needs no meshing force, and kinematics outputs no multiplier).
+    /// The rows solved, their errors and their warnings are the same with any
+    /// choice; the numbers of a chosen column are those of the plan with
+    /// every output, bit for bit.
+    ///
+    /// # Errors
+    /// An empty list, an output the plan does not have, or one named twice.
+    pub fn with_outputs<S: AsRef<str>>(mut self, names: &[S]) -> Result<Self> {
+        let invalid =
+            |message: String| Error::spec("outputs", crate::SpecErrorKind::Invalid { message });
+        if names.is_empty() {
+            return Err(invalid("no output column chosen".into()));
+        }
+        let mut chosen = Vec::with_capacity(names.len());
+        for name in names {
+            let name = name.as_ref();
+            let o = self.all.iter().position(|a| a == name).ok_or_else(|| {
+                invalid(format!(
+                    "unknown output column `{name}`; the plan has {}",
+                    self.all.join(", ")
+                ))
+            })?;
+            if chosen.contains(&o) {
+                return Err(invalid(format!("output column `{name}` chosen twice")));
+            }
+            chosen.push(o);
+        }
+        self.choose(chosen);
+        self.program = self.program();
+        Ok(self)
+    }
+
+    /// Every output column is written, in the solve's order.
+    fn writes_all(&self) -> bool {
+        self.chosen.len() == self.all.len() && self.chosen.iter().enumerate().all(|(k, &o)| k == o)
+    }
+
+    /// The chosen columns of a row of every output.
+    #[inline]
+    fn gather(&self, all: &[f64], out: &mut [f64]) {
+        for (d, &o) in out.iter_mut().zip(&self.chosen) {
+            *d = all[o];
+        }
+    }
+
+    /// Rows of every output (`all`, `n` rows) into the chosen columns of `out`.
+    fn gather_rows(&self, all: &[f64], out: &mut [f64]) {
+        let (qa, q) = (self.all.len(), self.names.len());
+        for (a, o) in all.chunks_exact(qa).zip(out.chunks_exact_mut(q)) {
+            self.gather(a, o);
+        }
+    }
+
+    /// The columns of the condition estimates (`cond.*`) among every output: the last ones.
+    fn all_conditions(&self) -> std::ops::Range<usize> {
+        let q = self.all.len();
+        let k = if self.compute == Compute::Kinematics {
+            1
+        } else {
+            3
+        };
+        q - k..q
     }
 
     /// Parameter column names, in row order.
@@ -433,23 +528,23 @@ impl BatchPlan {
     pub fn base(&self) -> &[f64] {
         &self.base
     }
-    /// Output column names, in row order.
+    /// Output column names, in row order: every output, or those of
+    /// [`BatchPlan::with_outputs`].
     pub fn outputs(&self) -> &[String] {
-        &self.outputs
+        &self.names
     }
     /// The output column of a name.
     pub fn output(&self, name: &str) -> Option<usize> {
-        self.outputs.iter().position(|p| p == name)
+        self.names.iter().position(|p| p == name)
     }
-    /// The output columns of the condition estimates (`cond.*`), the last ones.
-    pub fn condition_columns(&self) -> std::ops::Range<usize> {
-        let q = self.outputs.len();
-        let k = if self.compute == Compute::Kinematics {
-            1
-        } else {
-            3
-        };
-        q - k..q
+    /// Every output column the plan can write (those [`BatchPlan::with_outputs`] chooses from).
+    pub fn all_outputs(&self) -> &[String] {
+        &self.all
+    }
+    /// The output columns of the condition estimates (`cond.*`) among
+    /// [`BatchPlan::outputs`] (with every output, the last ones).
+    pub fn condition_columns(&self) -> &[usize] {
+        &self.cond_at
     }
     /// What each row computes.
     pub fn compute(&self) -> Compute {
@@ -502,8 +597,13 @@ impl BatchPlan {
         };
         (self.bounds && self.prepared.n() <= PROGRAM_MAX_COORDINATES)
             .then(|| {
-                self.prepared
-                    .program(self.compute, cols, &self.base, &self.known, &self.forces)
+                self.prepared.program(
+                    self.compute,
+                    cols,
+                    &self.base,
+                    (&self.known, &self.forces),
+                    &self.chosen,
+                )
             })
             .flatten()
     }
@@ -512,6 +612,13 @@ impl BatchPlan {
     /// [`BatchPlan::with_condition_bounds`]).
     pub fn has_program(&self) -> bool {
         self.program.is_some()
+    }
+
+    /// The length of the straight-line program (operations and checks),
+    /// when rows are solved by one: it shrinks with
+    /// [`BatchPlan::with_outputs`].
+    pub fn program_operations(&self) -> Option<usize> {
+        self.program.as_ref().map(Program::len)
     }
 
     /// The prepared train underneath.
@@ -523,6 +630,7 @@ impl BatchPlan {
         Worker {
             plan: self,
             ws: self.prepared.workspace(),
+            all: vec![0.0; self.all.len()],
         }
     }
 
@@ -561,6 +669,7 @@ impl BatchPlan {
             left: Vec::new(),
             left_rows: Vec::new(),
             left_out: Vec::new(),
+            all: Vec::new(),
         }
     }
 
@@ -570,7 +679,7 @@ impl BatchPlan {
     /// # Panics
     /// When the slice lengths do not match the column counts.
     fn rows_of(&self, params: &[f64], out: &[f64]) -> usize {
-        let (p, q) = (self.parameters.len(), self.outputs.len());
+        let (p, q) = (self.parameters.len(), self.names.len());
         let rows = params.len().checked_div(p).unwrap_or(0);
         assert_eq!(
             params.len(),
@@ -592,7 +701,7 @@ impl BatchPlan {
     /// # Panics
     /// When the slice lengths do not match the column counts.
     pub fn run(&self, params: &[f64], out: &mut [f64]) -> Vec<RowError> {
-        let (p, q) = (self.parameters.len(), self.outputs.len());
+        let (p, q) = (self.parameters.len(), self.names.len());
         self.rows_of(params, out);
         let mut errors: Vec<RowError> = params
             .par_chunks(p * ROWS_PER_TASK)
@@ -640,7 +749,7 @@ impl BatchPlan {
     /// # Panics
     /// When the slice lengths do not match the column counts.
     pub fn run_columns(&self, params: &[f64], out: &mut [f64]) -> Vec<RowError> {
-        let (p, q) = (self.parameters.len(), self.outputs.len());
+        let (p, q) = (self.parameters.len(), self.names.len());
         let rows = self.rows_of(params, out);
         if rows == 0 {
             return Vec::new();
@@ -747,6 +856,8 @@ struct Lanes {
     left: Vec<usize>,
     left_rows: Vec<f64>,
     left_out: Vec<f64>,
+    /// A task's rows of every output, when only some are chosen.
+    all: Vec<f64>,
 }
 
 /// The plan's program and a thread's workspace for it (`Lanes::program`).
@@ -765,6 +876,8 @@ fn program_of<'p, 'w>(
 pub struct Worker<'a> {
     plan: &'a BatchPlan,
     ws: Workspace,
+    /// A row of every output, when only some are chosen.
+    all: Vec<f64>,
 }
 
 impl Worker<'_> {
@@ -780,7 +893,19 @@ impl Worker<'_> {
     pub fn eval(&mut self, row: &[f64], out: &mut [f64]) -> Result<()> {
         let plan = self.plan;
         assert_eq!(row.len(), plan.parameters.len(), "wrong parameter count");
-        assert_eq!(out.len(), plan.outputs.len(), "wrong output count");
+        assert_eq!(out.len(), plan.names.len(), "wrong output count");
+        if plan.writes_all() {
+            return self.eval_all(row, out);
+        }
+        let mut all = std::mem::take(&mut self.all);
+        let result = self.eval_all(row, &mut all);
+        plan.gather(&all, out);
+        self.all = all;
+        result
+    }
+
+    /// [`Worker::eval`] into every output column (`BatchPlan::all`).
+    fn eval_all(&mut self, row: &[f64], out: &mut [f64]) -> Result<()> {
         let result = self.eval_inner(row, out);
         if result.is_err() {
             out.iter_mut().for_each(|v| *v = f64::NAN);
@@ -817,9 +942,9 @@ impl Worker<'_> {
         first: usize,
         errors: &mut Vec<RowError>,
     ) {
-        let (p, q) = (self.plan.parameters.len(), self.plan.outputs.len());
+        let (p, q) = (self.plan.parameters.len(), self.plan.all.len());
         for (r, (row, o)) in rows.chunks(p).zip(out.chunks_mut(q)).enumerate() {
-            if let Err(error) = self.eval(row, o) {
+            if let Err(error) = self.eval_all(row, o) {
                 errors.push(RowError {
                     row: first + r,
                     error,
@@ -848,7 +973,7 @@ impl Worker<'_> {
         let plan = self.plan;
         let g = plan.groups;
         let pt = &plan.prepared;
-        let (p, q) = (plan.parameters.len(), plan.outputs.len());
+        let (p, q) = (plan.parameters.len(), plan.all.len());
         let lw = &mut lanes.w;
         let mut solved = 0;
         for (k, (group, gout)) in rows
@@ -883,7 +1008,7 @@ impl Worker<'_> {
                 if live[l] {
                     solved += 1;
                     write_outputs(plan, &(&*lw, l), o);
-                } else if let Err(error) = self.eval(row, o) {
+                } else if let Err(error) = self.eval_all(row, o) {
                     errors.push(RowError {
                         row: first + k * LANES + l,
                         error,
@@ -907,17 +1032,35 @@ impl Worker<'_> {
         errors: &mut Vec<RowError>,
     ) {
         let plan = self.plan;
-        if self.eval_linear(lin, rows, out, first, errors) {
-            // Solved as y0 + sum p_j R_j.
-        } else if plan.lanes_apply(rows) {
-            if plan.program.is_some() {
-                self.eval_program(lanes, rows, out, first, errors);
-            } else {
-                self.eval_lanes(lanes, rows, out, first, errors);
-            }
-        } else {
-            self.eval_rows(rows, out, first, errors);
+        // The paths other than the program write every output: into `out`
+        // when all are chosen, else into `lanes.all` and then the chosen.
+        let mut all = std::mem::take(&mut lanes.all);
+        let whole = plan.writes_all();
+        if !whole {
+            all.clear();
+            all.resize(rows.len() / plan.parameters.len() * plan.all.len(), 0.0);
         }
+        let target = if whole { &mut *out } else { &mut all[..] };
+        let program = plan.program.is_some();
+        let wrote = if self.eval_linear(lin, rows, target, first, errors) {
+            // Solved as y0 + sum p_j R_j.
+            true
+        } else if plan.lanes_apply(rows) && program {
+            self.eval_program(lanes, rows, out, first, errors);
+            false
+        } else {
+            let target = if whole { &mut *out } else { &mut all[..] };
+            if plan.lanes_apply(rows) {
+                self.eval_lanes(lanes, rows, target, first, errors);
+            } else {
+                self.eval_rows(rows, target, first, errors);
+            }
+            true
+        };
+        if wrote && !whole {
+            plan.gather_rows(&all, out);
+        }
+        lanes.all = all;
     }
 
     /// A block of rows by the straight-line program ([`PROGRAM_BLOCK`] rows at
@@ -933,7 +1076,7 @@ impl Worker<'_> {
         errors: &mut Vec<RowError>,
     ) -> usize {
         let plan = self.plan;
-        let (p, q) = (plan.parameters.len(), plan.outputs.len());
+        let (p, q) = (plan.parameters.len(), plan.names.len());
         let (program, pw) = program_of(plan, &mut lanes.program);
         lanes.left.clear();
         lanes.left_rows.clear();
@@ -953,8 +1096,8 @@ impl Worker<'_> {
         }
         let solved = rows.len() / p - lanes.left.len();
         self.eval_left(lanes, first, errors);
-        for (&i, o) in lanes.left.iter().zip(lanes.left_out.chunks(q)) {
-            out[i * q..(i + 1) * q].copy_from_slice(o);
+        for (&i, o) in lanes.left.iter().zip(lanes.left_out.chunks(plan.all.len())) {
+            plan.gather(o, &mut out[i * q..(i + 1) * q]);
         }
         solved
     }
@@ -988,10 +1131,10 @@ impl Worker<'_> {
         }
         let solved = n - lanes.left.len();
         self.eval_left(lanes, first, errors);
-        let q = plan.outputs.len();
+        let q = plan.all.len();
         for (&i, o) in lanes.left.iter().zip(lanes.left_out.chunks(q)) {
-            for (c, &v) in out.iter_mut().zip(o) {
-                c[i] = v;
+            for (c, &k) in out.iter_mut().zip(&plan.chosen) {
+                c[i] = o[k];
             }
         }
         solved
@@ -1001,7 +1144,7 @@ impl Worker<'_> {
     /// or row by row into `lanes.left_out`; their errors numbered from `first`.
     fn eval_left(&mut self, lanes: &mut Lanes, first: usize, errors: &mut Vec<RowError>) {
         let plan = self.plan;
-        let q = plan.outputs.len();
+        let q = plan.all.len();
         if lanes.left.is_empty() {
             lanes.left_out.clear();
             return;
@@ -1039,7 +1182,7 @@ impl Worker<'_> {
     ) -> bool {
         let plan = self.plan;
         let g = plan.groups;
-        let (p, q) = (plan.parameters.len(), plan.outputs.len());
+        let (p, q) = (plan.parameters.len(), plan.all.len());
         let n = rows.len().checked_div(p).unwrap_or(0);
         if plan.compute == Compute::Power || n < LINEAR_MIN_ROWS {
             return false;
@@ -1077,7 +1220,7 @@ impl Worker<'_> {
         if !same && !self.linear_response(lin, row0) {
             return false;
         }
-        let conds = plan.condition_columns().start;
+        let conds = plan.all_conditions().start;
         let m = lin.varying.len();
         for (r, (row, o)) in rows.chunks(p).zip(out.chunks_mut(q)).enumerate() {
             // Every other column equals the base row's, which solved: only
@@ -1116,7 +1259,7 @@ impl Worker<'_> {
     fn linear_response(&mut self, lin: &mut Linear, row0: &[f64]) -> bool {
         let plan = self.plan;
         let g = plan.groups;
-        let q = plan.outputs.len();
+        let q = plan.all.len();
         lin.valid = false;
         lin.varying.clear();
         lin.varying
@@ -1127,7 +1270,7 @@ impl Worker<'_> {
             lin.row[c] = 0.0;
         }
         lin.y0.resize(q, 0.0);
-        if self.eval(&lin.row, &mut lin.y0).is_err() {
+        if self.eval_all(&lin.row, &mut lin.y0).is_err() {
             return false;
         }
         let m = lin.varying.len();
@@ -1136,7 +1279,7 @@ impl Worker<'_> {
             let c = lin.varying[j];
             lin.row[c] = 1.0;
             let rj = &mut lin.response[j * q..(j + 1) * q];
-            let solved = self.eval(&lin.row, rj);
+            let solved = self.eval_all(&lin.row, rj);
             lin.row[c] = 0.0;
             if solved.is_err() {
                 return false;
@@ -1147,7 +1290,7 @@ impl Worker<'_> {
         }
         // The conditions are not linear: eq. (8) is factored only when some
         // acceleration is prescribed. Keep those of a moving row apart.
-        let conds = plan.condition_columns().start;
+        let conds = plan.all_conditions().start;
         let accel = g.accel..g.torque;
         lin.static_base = accel.clone().all(|c| lin.row[c] == 0.0);
         lin.accel_varying.clear();
@@ -1404,9 +1547,9 @@ mod tests {
         assert_eq!(errors.len(), 1);
         assert_eq!(errors[0].row, 3);
         let conds = p.condition_columns();
-        let cond = out[70 * nq..][conds.clone()]
-            .iter()
-            .fold(0.0, |a: f64, &b| a.max(b));
+        let cond = (conds.iter())
+            .map(|&c| out[70 * nq + c])
+            .fold(0.0, f64::max);
         assert!(cond > crate::numerics::linalg::COND_WARN, "{cond}");
         let mut reference = vec![0.0; rows * nq];
         let mut errors = Vec::new();

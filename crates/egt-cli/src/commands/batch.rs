@@ -493,11 +493,6 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
         return Ok((0, 0, None));
     }
     let mut design = design(args, first)?;
-    // The output columns written, per plan.
-    let selected: Vec<Vec<usize>> = plans
-        .iter()
-        .map(|(_, p)| select(&args.columns, p))
-        .collect();
     for name in &args.columns {
         if !plans.iter().any(|(_, p)| p.output(name).is_some()) {
             return Err(Error::spec(
@@ -511,6 +506,31 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
             .into());
         }
     }
+    // Each plan computes only the columns asked for (that it has), and the
+    // conditions, which give the warnings.
+    let plans = if args.columns.is_empty() {
+        plans
+    } else {
+        (plans.into_iter())
+            .map(|(state, plan)| {
+                let chosen: Vec<String> = (args.columns.iter())
+                    .filter(|c| plan.output(c).is_some())
+                    .chain(
+                        (plan.outputs().iter())
+                            .filter(|o| o.starts_with("cond.") && !args.columns.contains(o)),
+                    )
+                    .cloned()
+                    .collect();
+                Ok((state, plan.with_outputs(&chosen)?))
+            })
+            .collect::<anyhow::Result<_>>()?
+    };
+    let first = &plans[0].1;
+    // The output columns written, per plan.
+    let selected: Vec<Vec<usize>> = plans
+        .iter()
+        .map(|(_, p)| select(&args.columns, p))
+        .collect();
     let mut base = first.base().to_vec();
     for (name, v) in &args.set {
         let c = first
@@ -568,10 +588,12 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
         .iter()
         .map(|(_, p)| p.outputs().iter().map(|o| quoted(o)).collect())
         .collect();
-    // Rows per block: fewer for wide rows (large trains), the same for every plan.
+    // Rows per block: fewer for wide rows (large trains), the same for every
+    // plan. Every output counts, chosen or not: the solve holds them all
+    // for the rows of a task.
     let block = plans
         .iter()
-        .map(|(_, p)| block_rows(p.parameters().len() + p.outputs().len()))
+        .map(|(_, p)| block_rows(p.parameters().len() + p.all_outputs().len()))
         .min()
         .unwrap_or(BLOCK);
     let blocks = per_plan.div_ceil(block);
@@ -1053,9 +1075,9 @@ struct Row<'a> {
 
 /// The warning of a row whose condition estimate exceeds COND_WARN.
 fn warning(plan: &BatchPlan, o: &[f64]) -> Option<String> {
-    let worst = o[plan.condition_columns()]
-        .iter()
-        .fold(0.0, |a: f64, &b| a.max(b));
+    let worst = (plan.condition_columns().iter())
+        .map(|&c| o[c])
+        .fold(0.0, f64::max);
     (worst > COND_WARN).then(|| {
         format!(
             "ill-conditioned (condition {worst:.2e}): expect about {:.0} correct digits",

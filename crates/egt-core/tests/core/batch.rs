@@ -358,6 +358,7 @@ fn linear_blocks_equal_row_by_row_solves() {
             let mut out = vec![0.0; rows * nq];
             let errors = p.run(&params, &mut out);
             assert_eq!(errors.iter().map(|e| e.row).collect::<Vec<_>>(), [5]);
+            assert_choice_agrees(&format!("linear {compute:?}"), &p, &params, &out, &errors);
             let mut one = vec![0.0; nq];
             for r in 0..rows {
                 let res = p.worker().eval(&params[r * np..(r + 1) * np], &mut one);
@@ -509,6 +510,98 @@ fn assert_columns_agree(
     }
 }
 
+/// `BatchPlan::with_outputs` (a few columns, out of order, a condition
+/// among them) gives the chosen columns of `out` and the same `errors`,
+/// bit for bit, row-major and column-major; its program is shorter.
+fn assert_choice_agrees(
+    name: &str,
+    p: &BatchPlan,
+    params: &[f64],
+    out: &[f64],
+    errors: &[egt_core::batch::RowError],
+) {
+    let nq = p.outputs().len();
+    let rows = out.len() / nq;
+    // Every third output from the last, so a condition leads.
+    let picks: Vec<usize> = (0..nq).rev().step_by(3).collect();
+    let names: Vec<&str> = picks.iter().map(|&o| p.outputs()[o].as_str()).collect();
+    let c = p
+        .clone()
+        .with_outputs(&names)
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    assert_eq!(c.outputs(), names.as_slice(), "{name}");
+    let conds: Vec<usize> = (picks.iter().enumerate())
+        .filter(|(_, o)| p.condition_columns().contains(o))
+        .map(|(k, _)| k)
+        .collect();
+    assert_eq!(c.condition_columns(), conds.as_slice(), "{name}");
+    if let (Some(all), Some(some)) = (p.program_operations(), c.program_operations()) {
+        assert!(some < all, "{name}: {some} operations chosen, {all} in all");
+    }
+    let mut chosen = vec![0.0; rows * picks.len()];
+    let chosen_errors = c.run(params, &mut chosen);
+    let show = |e: &[egt_core::batch::RowError]| {
+        e.iter()
+            .map(|e| format!("{} {}", e.row, e.error))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(show(errors), show(&chosen_errors), "{name}: chosen outputs");
+    for r in 0..rows {
+        for (k, &o) in picks.iter().enumerate() {
+            let (a, b) = (out[r * nq + o], chosen[r * picks.len() + k]);
+            assert!(
+                a.to_bits() == b.to_bits(),
+                "{name} row {r} {}: {a} of all, {b} chosen",
+                names[k]
+            );
+        }
+    }
+    assert_columns_agree(name, &c, params, &chosen, &chosen_errors);
+}
+
+/// Power flow (row by row) gives the chosen columns too; a bad choice is
+/// refused, naming it.
+#[test]
+fn chosen_outputs_of_power_flow_and_bad_choices() {
+    let t = crate::util::example("fig3_example61.toml");
+    let p = plan(&t, Compute::Power);
+    let np = p.parameters().len();
+    let mut params = Vec::new();
+    for r in 0..300 {
+        params.extend(p.base().iter().enumerate().map(|(c, &v)| {
+            let wave = (r as f64 * 0.37 + c as f64).sin();
+            if p.parameters()[c].starts_with("efficiency.") {
+                v
+            } else {
+                v * (1.0 + 0.1 * wave)
+            }
+        }));
+    }
+    params[7 * np] = f64::NAN;
+    let mut out = vec![0.0; params.len() / np * p.outputs().len()];
+    let errors = p.run(&params, &mut out);
+    assert_eq!(
+        errors.len(),
+        1,
+        "{:?}",
+        errors.first().map(|e| e.error.to_string())
+    );
+    assert_choice_agrees("fig3 power", &p, &params, &out, &errors);
+    let refused = |names: &[&str]| match p.clone().with_outputs(names) {
+        Ok(_) => panic!("{names:?} accepted"),
+        Err(e) => e.to_string(),
+    };
+    let e = refused(&["power.loss", "speed.nowhere"]);
+    assert!(
+        e.contains("outputs") && e.contains("`speed.nowhere`"),
+        "{e}"
+    );
+    let e = refused(&["power.loss", "power.loss"]);
+    assert!(e.contains("`power.loss` chosen twice"), "{e}");
+    let e = refused(&[]);
+    assert!(e.contains("no output column"), "{e}");
+}
+
 /// The lanes of `BatchPlan::run` (rows whose ratios differ, solved eight at
 /// a time) give what a fresh worker gives for each row alone, bit for bit:
 /// every output column, the conditions included, with rows that pivot
@@ -530,6 +623,7 @@ fn lanes_equal_fresh_row_by_row_solves_bit_for_bit() {
         let mut out = vec![0.0; rows * nq];
         let errors = p.run(&params, &mut out);
         assert_columns_agree(name, p, &params, &out, &errors);
+        assert_choice_agrees(name, p, &params, &out, &errors);
         let mut failed = Vec::new();
         let mut one = vec![0.0; nq];
         for r in 0..rows {
@@ -668,6 +762,7 @@ fn condition_bounds_change_only_small_conditions() {
         assert_eq!(show(&errors), show(&errors_bounded), "{name}");
         // Column-major, the program reads and writes whole columns.
         assert_columns_agree(name, &b, &params, &fast, &errors_bounded);
+        assert_choice_agrees(name, &b, &params, &fast, &errors_bounded);
         refused += errors
             .iter()
             .filter(|e| {

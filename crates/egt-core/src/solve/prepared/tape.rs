@@ -610,6 +610,9 @@ impl PreparedTrain {
     /// outputs are the batch's columns: the speeds of `known`; then for
     /// dynamics their accelerations, the multipliers and driving torques,
     /// and the meshing force `x_m / r` of each of `forces`; the conditions.
+    /// Only the columns `chosen` of these are written, in that order, and
+    /// only what they need is computed (the checks of pivots and condition
+    /// bounds always are; only the chosen results are checked finite).
     /// None when the base row is singular or ill-conditioned in a system
     /// the program needs (the lanes then solve every row).
     pub(crate) fn program(
@@ -617,8 +620,8 @@ impl PreparedTrain {
         compute: Compute,
         cols: Columns,
         base: &[f64],
-        known: &[usize],
-        forces: &[(usize, f64)],
+        (known, forces): (&[usize], &[(usize, f64)]),
+        chosen: &[usize],
     ) -> Option<Program> {
         if self.is_sparse() || !matches!(compute, Compute::Kinematics | Compute::Dynamics) {
             return None;
@@ -725,15 +728,19 @@ impl PreparedTrain {
                 outputs.push((f, None));
             }
         }
-        for v in &outputs {
-            if let S::V(v) = v.0 {
-                b.check(Op::Finite(KIN, v));
-            }
-        }
+        let results = outputs.len();
         outputs.push((cond[0], None));
         if compute == Compute::Dynamics {
             outputs.push((cond[1], apart.then_some(1.0)));
             outputs.push((cond[2], None));
+        }
+        let outputs: Vec<(S, Option<f64>)> = (chosen.iter())
+            .map(|&o| outputs.get(o).copied())
+            .collect::<Option<_>>()?;
+        for (&o, v) in chosen.iter().zip(&outputs) {
+            if let (true, S::V(v)) = (o < results, v.0) {
+                b.check(Op::Finite(KIN, v));
+            }
         }
         let statics = outputs
             .iter()
@@ -755,6 +762,11 @@ impl PreparedTrain {
 }
 
 impl Program {
+    /// Operations and checks.
+    pub(crate) fn len(&self) -> usize {
+        self.ops.len()
+    }
+
     /// Drop the operations nothing reads, then give each result a slot that
     /// is reused once its last reader has run (the parameters' and the
     /// results' slots are never reused).
