@@ -41,11 +41,12 @@ fn compute_of(s: &str) -> Result<Compute> {
 /// `[analysis]` choices (accelerated and driving: the inputs); with
 /// `gear_state`, to the transmission's input in that state, whose engaged
 /// elements are added to `engaged`. `condition_bounds`: see
-/// [`BatchPlan::with_condition_bounds`].
+/// [`BatchPlan::with_condition_bounds`]; `outputs`: see
+/// [`BatchPlan::with_outputs`].
 // One argument per Python keyword.
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
-#[pyo3(signature = (core, compute, inputs = None, accelerated = None, driving = None, engaged = Vec::new(), gear_state = None, condition_bounds = false))]
+#[pyo3(signature = (core, compute, inputs = None, accelerated = None, driving = None, engaged = Vec::new(), gear_state = None, condition_bounds = false, outputs = None))]
 pub fn batch_plan(
     core: &TrainCore,
     compute: &str,
@@ -55,6 +56,7 @@ pub fn batch_plan(
     engaged: Vec<String>,
     gear_state: Option<String>,
     condition_bounds: bool,
+    outputs: Option<Vec<String>>,
 ) -> Result<BatchPlanCore> {
     let compute = compute_of(compute)?;
     guard(|| {
@@ -80,9 +82,11 @@ pub fn batch_plan(
         }
         spec.extras
             .extend(engaged.iter().cloned().zip(convert::engaged(t, &engaged)?));
-        Ok(BatchPlanCore {
-            plan: BatchPlan::new(t, &spec)?.with_condition_bounds(condition_bounds),
-        })
+        let mut plan = BatchPlan::new(t, &spec)?.with_condition_bounds(condition_bounds);
+        if let Some(names) = &outputs {
+            plan = plan.with_outputs(names)?;
+        }
+        Ok(BatchPlanCore { plan })
     })
 }
 

@@ -183,6 +183,42 @@ def test_plan_columns_and_base(fig3: egt.Train) -> None:
     assert p.shape == (3, len(plan.parameters)) and not bad
 
 
+@pytest.mark.parametrize("bounds", [False, True])
+def test_chosen_outputs_are_the_full_plans_columns(fig3: egt.Train, bounds: bool) -> None:
+    # Fig. 3 near its lock (refused and warned rows), every row its own train.
+    g2 = np.repeat(np.linspace(-1.5000001, -1.4999999, 21), 8)
+    load = np.tile(np.linspace(-10.0, -50.0, 8), 21)
+    values = {"ratio.G2": g2, "torque.4": load}
+    chosen = ["cond.forces", "driving_torque.2", "speed.4"]
+    full = fig3.batch("dynamics", condition_bounds=bounds).evaluate(values)
+    plan = fig3.batch("dynamics", condition_bounds=bounds, outputs=chosen)
+    assert plan.outputs == tuple(chosen)
+    some = plan.evaluate(values)
+    assert some.outputs == tuple(chosen) and some.values.shape == (len(g2), 3)
+    np.testing.assert_array_equal(full.ok, some.ok)
+    assert (~some.ok).sum() >= 8
+    assert {r: e.message for r, e in full.errors.items()} == {r: e.message for r, e in some.errors.items()}
+    for name in chosen:
+        np.testing.assert_array_equal(full[name], some[name])
+    # The choice travels with the plan (a Dask worker rebuilds it).
+    import pickle
+
+    again = pickle.loads(pickle.dumps(plan))
+    assert again.outputs == tuple(chosen)
+    np.testing.assert_array_equal(again.evaluate(values).values, some.values)
+
+
+def test_a_bad_output_choice_is_refused_by_name(fig3: egt.Train) -> None:
+    with pytest.raises(egt.SpecError, match="`force.nowhere`"):
+        fig3.batch("dynamics", outputs=["speed.4", "force.nowhere"])
+    with pytest.raises(egt.SpecError, match="chosen twice"):
+        fig3.batch("dynamics", outputs=["speed.4", "speed.4"])
+    with pytest.raises(egt.SpecError, match="no output column"):
+        fig3.batch("dynamics", outputs=[])
+    with pytest.raises(TypeError, match="outputs"):
+        fig3.batch("dynamics", outputs="speed.4")
+
+
 def test_condition_bounds_keep_every_refusal_and_number_to_rounding(fig3: egt.Train) -> None:
     # Fig. 3 swept through its lock (tau_2 = 1 / tau_1 = -1.5): the rows next
     # to it are ill-conditioned, the lock itself is refused.

@@ -354,7 +354,8 @@ def _rebuild_plan(train: Any, args: Tuple[Any, ...]) -> "BatchPlan":
     plan = _PLANS.get(key)
     if plan is None:
         plan = train.batch(args[0], inputs=args[1], accelerated=args[2], driving=args[3],
-                           engaged=args[4], gear_state=args[5])
+                           engaged=args[4], gear_state=args[5], condition_bounds=args[6],
+                           outputs=args[7])
         _PLANS[key] = plan
     return plan
 

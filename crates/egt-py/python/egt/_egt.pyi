@@ -127,6 +127,7 @@ def batch_plan(
     engaged: List[str] = ...,
     gear_state: Optional[str] = None,
     condition_bounds: bool = False,
+    outputs: Optional[List[str]] = None,
 ) -> BatchPlanCore: ...
 
 _Curve = Tuple[str, float, float, float]

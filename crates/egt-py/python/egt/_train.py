@@ -125,7 +125,7 @@ def _curves(curves: Sequence[CurveLike]) -> List[Tuple[str, float, float, float]
 
 def _names(values: Sequence[str], what: str) -> List[str]:
     if isinstance(values, str):
-        raise ArgumentTypeError(f"`{what}` must be a sequence of link names, not a single string")
+        raise ArgumentTypeError(f"`{what}` must be a sequence of names, not a single string")
     return [str(v) for v in values]
 
 
@@ -456,6 +456,7 @@ class Train:
         engaged: Sequence[str] = (),
         gear_state: Optional[str] = None,
         condition_bounds: bool = False,
+        outputs: Optional[Sequence[str]] = None,
     ) -> BatchPlan:
         """Prepare the train for many scenarios (``compute``: ``"kinematics"``,
         ``"dynamics"`` or ``"power"``).
@@ -473,7 +474,12 @@ class Train:
         refused, the other outputs differ by rounding only (within 1e-12 of
         the row's largest), and a ``cond.*`` value at most 5e7 may be that
         bound instead of the estimate (about twice as fast when every row has
-        its own ratios). See :class:`egt.BatchPlan`.
+        its own ratios). ``outputs``: the output columns to compute, in that
+        order (default: all; :attr:`egt.BatchPlan.outputs` of a plan made
+        without it lists them); with ``condition_bounds`` the straight-line
+        program then drops every operation they do not need. The rows that
+        fail and the chosen columns' numbers do not change. See
+        :class:`egt.BatchPlan`.
         """
         args = (
             compute,
@@ -483,6 +489,7 @@ class Train:
             _names(engaged, "engaged"),
             None if gear_state is None else str(gear_state),
             bool(condition_bounds),
+            None if outputs is None else _names(outputs, "outputs"),
         )
         core = batch_plan(self._core, *args)
         # The recipe (this train and the arguments) makes the plan pickle, so
