@@ -2006,6 +2006,13 @@ mod columnar_tests {
             "torque.input=0:400:5",
         ];
         let bad = [fig3.as_str(), "--rows", rows.as_str()];
+        let bad_some = [
+            fig3.as_str(),
+            "--rows",
+            rows.as_str(),
+            "--columns",
+            "driving_torque.2",
+        ];
         // Three blocks and a part: blocks are solved in parallel waves and
         // must come out in order.
         let n = 3 * super::BLOCK + 100;
@@ -2030,6 +2037,7 @@ mod columnar_tests {
         for (args, ok) in [
             (&shift[..], true),
             (&bad[..], false),
+            (&bad_some[..], false),
             (&long[..], true),
             (&lock[..], false),
             (&lock_some[..], false),
