@@ -106,6 +106,7 @@ pub struct Args {
     #[arg(short = 'j', long, value_name = "N")]
     pub threads: Option<usize>,
     /// Write only these output columns (comma-separated names; see `--list`). Default: all.
+    /// Only those are computed (and the conditions, for the warnings).
     /// Without a `cond.*` column among them, rows solved eight at a time
     /// estimate a condition only where a bound cannot show it small (the
     /// same warnings and errors, 10 to 30 % faster on ratio sweeps).
