@@ -270,23 +270,28 @@ impl Rows {
 
     /// Apply row `i`'s overrides to `row`; Err for an unreadable line.
     fn apply(&self, i: usize, row: &mut [f64]) -> Result<(), String> {
+        self.set(i, |c, v| row[c] = v)
+    }
+
+    /// Row `i`'s values, `set(column, value)`.
+    fn set(&self, i: usize, mut set: impl FnMut(usize, f64)) -> Result<(), String> {
         match self {
             Rows::Product { zipped, axes, .. } => {
                 let zl = zipped.first().map_or(1, |z| z.1.len());
                 let mut r = i;
                 for (c, vals) in axes.iter().rev() {
-                    row[*c] = vals[r % vals.len()];
+                    set(*c, vals[r % vals.len()]);
                     r /= vals.len();
                 }
                 for (c, vals) in zipped {
-                    row[*c] = vals[r % zl];
+                    set(*c, vals[r % zl]);
                 }
                 Ok(())
             }
             Rows::Listed(v) => match &v[i] {
-                Ok(set) => {
-                    for &(c, x) in set {
-                        row[c] = x;
+                Ok(values) => {
+                    for &(c, x) in values {
+                        set(c, x);
                     }
                     Ok(())
                 }
@@ -598,6 +603,10 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
         .min()
         .unwrap_or(BLOCK);
     let blocks = per_plan.div_ceil(block);
+    // Parquet and Arrow take each block column-major (as the encoders read
+    // it, and as the straight-line program solves it without transposing);
+    // the text formats row-major.
+    let by_columns = encoder.is_some();
     // Block `i` of the whole batch: plan `i / blocks`, its block `i % blocks`.
     let solve = |(buffers, i): (&mut Buffers, usize)| -> anyhow::Result<Done> {
         let (k, b) = (i / blocks, i % blocks);
@@ -618,23 +627,45 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
         let same_columns = matches!(design.rows, Rows::Product { .. });
         if !(same_columns && params.len() == len * np) {
             params.clear();
-            for _ in 0..len {
-                params.extend_from_slice(&base);
+            if by_columns {
+                for &v in &base {
+                    params.extend(std::iter::repeat_n(v, len));
+                }
+            } else {
+                for _ in 0..len {
+                    params.extend_from_slice(&base);
+                }
             }
         }
-        let unreadable: Vec<(usize, String)> = params
-            .par_chunks_mut(np)
-            .enumerate()
-            .filter_map(|(r, row)| {
-                design.rows.apply(start + r, row).err().map(|e| {
-                    row.iter_mut().for_each(|v| *v = f64::NAN);
-                    (r, e)
+        let unreadable: Vec<(usize, String)> = if by_columns {
+            // A few columns set per row: cheaper than a parallel task.
+            let mut bad = Vec::new();
+            for r in 0..len {
+                if let Err(e) = design.rows.set(start + r, |c, v| params[c * len + r] = v) {
+                    (0..np).for_each(|c| params[c * len + r] = f64::NAN);
+                    bad.push((r, e));
+                }
+            }
+            bad
+        } else {
+            params
+                .par_chunks_mut(np)
+                .enumerate()
+                .filter_map(|(r, row)| {
+                    design.rows.apply(start + r, row).err().map(|e| {
+                        row.iter_mut().for_each(|v| *v = f64::NAN);
+                        (r, e)
+                    })
                 })
-            })
-            .collect();
+                .collect()
+        };
         // `run` writes every output of every row (NaN on failed rows).
         results.resize(len * nq, 0.0);
-        let errors = plan.run(params, results);
+        let errors = if by_columns {
+            plan.run_columns(params, results)
+        } else {
+            plan.run(params, results)
+        };
         messages.clear();
         messages.resize(len, None);
         for e in errors {
@@ -775,7 +806,8 @@ fn format_text(
         .collect()
 }
 
-/// A task's row-major parameters, results and row errors of one block.
+/// A task's parameters and results of one block (column-major for Parquet
+/// and Arrow, row-major for text) and its row errors.
 #[derive(Default)]
 struct Buffers {
     params: Vec<f64>,
@@ -808,9 +840,9 @@ struct Block<'a> {
     first_row: usize,
     state: Option<&'a str>,
     varied: &'a [(String, usize)],
-    /// Row-major parameters and their column count.
+    /// Column-major parameters and their column count.
     params: (&'a [f64], usize),
-    /// Row-major results and their column count.
+    /// Column-major results and their column count.
     results: (&'a [f64], usize),
     /// The plan's positions among the output columns, and its selected outputs.
     positions: (&'a [usize], &'a [usize]),
@@ -942,8 +974,12 @@ impl Encoder {
     fn encode(&self, plan: &BatchPlan, b: &Block<'_>) -> anyhow::Result<Encoded> {
         use arrow_array::{ArrayRef, StringArray, UInt64Array};
         use std::sync::Arc;
-        let ((params, np), (results, nq)) = (b.params, b.results);
+        let (params, results) = (b.params.0, b.results.0);
         let len = b.messages.len();
+        // Column `c` of a column-major block.
+        fn column(data: &[f64], len: usize, c: usize) -> &[f64] {
+            &data[c * len..(c + 1) * len]
+        }
         let mut columns: Vec<ArrayRef> = Vec::with_capacity(self.schema.fields().len());
         columns.push(Arc::new(UInt64Array::from_iter_values(
             (b.first_row..b.first_row + len).map(|r| r as u64),
@@ -954,7 +990,8 @@ impl Encoder {
             )));
         }
         for &(_, c) in b.varied {
-            columns.push(doubles(len, |r| params[r * np + c], |_| false));
+            let values = column(params, len, c);
+            columns.push(doubles(len, |r| values[r], |_| false));
         }
         let failed = |r: usize| b.messages[r].is_some();
         // Which of this plan's outputs fills each output column, if any.
@@ -964,7 +1001,10 @@ impl Encoder {
         }
         for src in source {
             columns.push(match src {
-                Some(i) => doubles(len, |r| results[r * nq + i], failed),
+                Some(i) => {
+                    let values = column(results, len, i);
+                    doubles(len, |r| values[r], failed)
+                }
                 None => Arc::new(arrow_array::Float64Array::new_null(len)),
             });
         }
@@ -972,7 +1012,7 @@ impl Encoder {
             if failed(r) {
                 None
             } else {
-                warning(plan, &results[r * nq..(r + 1) * nq]).map(std::borrow::Cow::Owned)
+                warning_at(plan, |c| results[c * len + r]).map(std::borrow::Cow::Owned)
             }
         }));
         columns.push(texts(len, |r| {
@@ -1076,8 +1116,13 @@ struct Row<'a> {
 
 /// The warning of a row whose condition estimate exceeds COND_WARN.
 fn warning(plan: &BatchPlan, o: &[f64]) -> Option<String> {
+    warning_at(plan, |c| o[c])
+}
+
+/// [`warning`] of the row whose output `c` is `output(c)`.
+fn warning_at(plan: &BatchPlan, output: impl Fn(usize) -> f64) -> Option<String> {
     let worst = (plan.condition_columns().iter())
-        .map(|&c| o[c])
+        .map(|&c| output(c))
         .fold(0.0, f64::max);
     (worst > COND_WARN).then(|| {
         format!(
