@@ -651,6 +651,13 @@ impl BatchPlan {
             .all(|r| (0..p).all(|c| !fixed(c) || r[c].to_bits() == row0[c].to_bits()))
     }
 
+    /// Whether parameter column `c` may vary within a block that the linear
+    /// path solves (an input speed, a prescribed acceleration or an
+    /// applied torque; see [`BatchPlan::is_linear_block`]).
+    pub fn is_linear_parameter(&self, c: usize) -> bool {
+        self.compute != Compute::Power && (self.groups.speed..self.groups.inertia).contains(&c)
+    }
+
     /// Whether [`BatchPlan::run`] solves a block of rows (row-major) by the
     /// lanes: kinematics or ideal dynamics of a dense train (below
     /// [`PREPARED_SPARSE_FROM`](crate::solve::prepared::PREPARED_SPARSE_FROM)
@@ -788,8 +795,15 @@ impl BatchPlan {
                         return errors;
                     }
                     // Transposed into rows, solved as `run` does, and back.
+                    // (Column by column, with strided stores: an iterator
+                    // of rows extends a vector element by element.)
                     pin.clear();
-                    pin.extend((0..n).flat_map(|r| (0..p).map(move |k| column(k)[r])));
+                    pin.resize(n * p, 0.0);
+                    for k in 0..p {
+                        for (d, &v) in pin[k..].iter_mut().step_by(p).zip(column(k)) {
+                            *d = v;
+                        }
+                    }
                     pout.clear();
                     pout.resize(n * q, 0.0);
                     w.eval_task(lin, lanes, pin, pout, first, &mut errors);

@@ -603,14 +603,18 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
         .min()
         .unwrap_or(BLOCK);
     let blocks = per_plan.div_ceil(block);
-    // Parquet and Arrow take each block column-major (as the encoders read
-    // it, and as the straight-line program solves it without transposing);
-    // the text formats row-major.
-    let by_columns = encoder.is_some();
     // Block `i` of the whole batch: plan `i / blocks`, its block `i % blocks`.
     let solve = |(buffers, i): (&mut Buffers, usize)| -> anyhow::Result<Done> {
         let (k, b) = (i / blocks, i % blocks);
         let ((state, plan), (cols, sel)) = (&plans[k], (&columns[k], &selected[k]));
+        // Parquet and Arrow take a block column-major when the straight-line
+        // program solves it: it reads and writes whole columns, and the
+        // encoders copy them. Otherwise (a sweep of loads, speeds or
+        // accelerations goes to the linear path) and for text, row-major,
+        // as the other paths solve rows (docs/benchmarks.md has the A/B).
+        let by_columns = encoder.is_some()
+            && plan.has_program()
+            && (design.varied.iter()).any(|&(_, c)| !plan.is_linear_parameter(c));
         let okeys = &okeys[k];
         let start = b * block;
         let len = block.min(per_plan - start);
@@ -683,8 +687,18 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
                     first_row: base_row,
                     state: state.as_deref(),
                     varied: &design.varied,
-                    params: (params, np),
-                    results: (results, nq),
+                    params: Matrix {
+                        data: params,
+                        width: np,
+                        rows: len,
+                        columns: by_columns,
+                    },
+                    results: Matrix {
+                        data: results,
+                        width: nq,
+                        rows: len,
+                        columns: by_columns,
+                    },
                     positions: (&cols.positions, sel),
                     messages,
                 },
@@ -833,6 +847,29 @@ enum Encoded {
     Arrow(arrow_array::RecordBatch),
 }
 
+/// A block's parameters or results, row- or column-major.
+#[derive(Clone, Copy)]
+struct Matrix<'a> {
+    data: &'a [f64],
+    /// Columns and rows.
+    width: usize,
+    rows: usize,
+    /// Column-major.
+    columns: bool,
+}
+
+impl Matrix<'_> {
+    /// Row `r`, column `c`.
+    #[inline]
+    fn at(&self, r: usize, c: usize) -> f64 {
+        if self.columns {
+            self.data[c * self.rows + r]
+        } else {
+            self.data[r * self.width + c]
+        }
+    }
+}
+
 /// One block of solved rows, for the columnar writers.
 struct Block<'a> {
     /// Its place among all blocks (the Parquet row group's index).
@@ -840,10 +877,8 @@ struct Block<'a> {
     first_row: usize,
     state: Option<&'a str>,
     varied: &'a [(String, usize)],
-    /// Column-major parameters and their column count.
-    params: (&'a [f64], usize),
-    /// Column-major results and their column count.
-    results: (&'a [f64], usize),
+    params: Matrix<'a>,
+    results: Matrix<'a>,
     /// The plan's positions among the output columns, and its selected outputs.
     positions: (&'a [usize], &'a [usize]),
     messages: &'a [Option<String>],
@@ -974,12 +1009,8 @@ impl Encoder {
     fn encode(&self, plan: &BatchPlan, b: &Block<'_>) -> anyhow::Result<Encoded> {
         use arrow_array::{ArrayRef, StringArray, UInt64Array};
         use std::sync::Arc;
-        let (params, results) = (b.params.0, b.results.0);
+        let (params, results) = (b.params, b.results);
         let len = b.messages.len();
-        // Column `c` of a column-major block.
-        fn column(data: &[f64], len: usize, c: usize) -> &[f64] {
-            &data[c * len..(c + 1) * len]
-        }
         let mut columns: Vec<ArrayRef> = Vec::with_capacity(self.schema.fields().len());
         columns.push(Arc::new(UInt64Array::from_iter_values(
             (b.first_row..b.first_row + len).map(|r| r as u64),
@@ -990,8 +1021,7 @@ impl Encoder {
             )));
         }
         for &(_, c) in b.varied {
-            let values = column(params, len, c);
-            columns.push(doubles(len, |r| values[r], |_| false));
+            columns.push(doubles(len, |r| params.at(r, c), |_| false));
         }
         let failed = |r: usize| b.messages[r].is_some();
         // Which of this plan's outputs fills each output column, if any.
@@ -1001,10 +1031,7 @@ impl Encoder {
         }
         for src in source {
             columns.push(match src {
-                Some(i) => {
-                    let values = column(results, len, i);
-                    doubles(len, |r| values[r], failed)
-                }
+                Some(i) => doubles(len, |r| results.at(r, i), failed),
                 None => Arc::new(arrow_array::Float64Array::new_null(len)),
             });
         }
@@ -1012,7 +1039,7 @@ impl Encoder {
             if failed(r) {
                 None
             } else {
-                warning_at(plan, |c| results[c * len + r]).map(std::borrow::Cow::Owned)
+                warning_at(plan, |c| results.at(r, c)).map(std::borrow::Cow::Owned)
             }
         }));
         columns.push(texts(len, |r| {
