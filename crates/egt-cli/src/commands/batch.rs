@@ -621,6 +621,7 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
         let (np, nq) = (plan.parameters().len(), plan.outputs().len());
         let Buffers {
             params,
+            params_by_columns,
             results,
             messages,
         } = buffers;
@@ -629,7 +630,10 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
         // earlier block already holds the base everywhere else; a `--rows`
         // file sets other columns line by line, so it refills.
         let same_columns = matches!(design.rows, Rows::Product { .. });
-        if !(same_columns && params.len() == len * np) {
+        // (A buffer filled in the other layout, for a plan without a
+        // program, refills too.)
+        if !(same_columns && params.len() == len * np && *params_by_columns == by_columns) {
+            *params_by_columns = by_columns;
             params.clear();
             if by_columns {
                 for &v in &base {
@@ -825,6 +829,8 @@ fn format_text(
 #[derive(Default)]
 struct Buffers {
     params: Vec<f64>,
+    /// `params` is column-major.
+    params_by_columns: bool,
     results: Vec<f64>,
     messages: Vec<Option<String>>,
 }

@@ -476,6 +476,14 @@ fn lane_rows(p: &BatchPlan) -> Vec<f64> {
     params
 }
 
+/// Row errors as comparable text: the row and the message.
+fn show(errors: &[egt_core::batch::RowError]) -> Vec<String> {
+    errors
+        .iter()
+        .map(|e| format!("{} {}", e.row, e.error))
+        .collect()
+}
+
 /// `BatchPlan::run_columns` on `params` (row-major here, transposed for
 /// it) gives `out` and `errors` of `run` bit for bit.
 fn assert_columns_agree(
@@ -492,11 +500,6 @@ fn assert_columns_agree(
         .collect();
     let mut by_columns = vec![0.0; rows * nq];
     let column_errors = p.run_columns(&columns, &mut by_columns);
-    let show = |e: &[egt_core::batch::RowError]| {
-        e.iter()
-            .map(|e| format!("{} {}", e.row, e.error))
-            .collect::<Vec<_>>()
-    };
     assert_eq!(show(errors), show(&column_errors), "{name}: column-major");
     for r in 0..rows {
         for o in 0..nq {
@@ -540,11 +543,6 @@ fn assert_choice_agrees(
     }
     let mut chosen = vec![0.0; rows * picks.len()];
     let chosen_errors = c.run(params, &mut chosen);
-    let show = |e: &[egt_core::batch::RowError]| {
-        e.iter()
-            .map(|e| format!("{} {}", e.row, e.error))
-            .collect::<Vec<_>>()
-    };
     assert_eq!(show(errors), show(&chosen_errors), "{name}: chosen outputs");
     for r in 0..rows {
         for (k, &o) in picks.iter().enumerate() {
@@ -754,11 +752,6 @@ fn condition_bounds_change_only_small_conditions() {
         let (mut full, mut fast) = (vec![0.0; rows * nq], vec![0.0; rows * nq]);
         let errors = p.run(&params, &mut full);
         let errors_bounded = b.run(&params, &mut fast);
-        let show = |e: &[egt_core::batch::RowError]| {
-            e.iter()
-                .map(|e| format!("{} {}", e.row, e.error))
-                .collect::<Vec<_>>()
-        };
         assert_eq!(show(&errors), show(&errors_bounded), "{name}");
         // Column-major, the program reads and writes whole columns.
         assert_columns_agree(name, &b, &params, &fast, &errors_bounded);
