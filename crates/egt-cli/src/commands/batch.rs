@@ -824,8 +824,9 @@ fn format_text(
         .collect()
 }
 
-/// A task's parameters and results of one block (column-major for Parquet
-/// and Arrow, row-major for text) and its row errors.
+/// A task's parameters and results of one block (column-major where the
+/// program solves a Parquet or Arrow block, else row-major) and its row
+/// errors.
 #[derive(Default)]
 struct Buffers {
     params: Vec<f64>,
