@@ -941,10 +941,17 @@ fn columnar_file(
 ) -> anyhow::Result<(Encoder, Sink)> {
     let schema = std::sync::Arc::new(arrow_schema::Schema::new(fields));
     let (factory, sink) = if kind == BatchOutput::Parquet {
-        // Doubles from a solve rarely repeat: no dictionary pages.
+        // Doubles from a solve rarely repeat: no dictionary pages. The row
+        // numbers count up by one: delta-encoded, they take a few bytes a
+        // page, where Snappy spent more time on them than on any other
+        // column and left half of their bytes (docs/benchmarks.md).
         let props = parquet::file::properties::WriterProperties::builder()
             .set_compression(parquet::basic::Compression::SNAPPY)
             .set_dictionary_enabled(false)
+            .set_column_encoding(
+                parquet::schema::types::ColumnPath::from("row"),
+                parquet::basic::Encoding::DELTA_BINARY_PACKED,
+            )
             .build();
         // The Arrow writer adds the Arrow schema to the file's metadata;
         // its lower half lets row groups be encoded in parallel.
@@ -1920,8 +1927,21 @@ mod columnar_tests {
         let path = dir.join(format!("{}.parquet", bytes.len()));
         std::fs::write(&path, bytes).unwrap_or_else(|e| panic!("{e}"));
         let file = std::fs::File::open(&path).unwrap_or_else(|e| panic!("{e}"));
-        parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder::try_new(file)
-            .and_then(|b| b.build())
+        let builder = parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder::try_new(file)
+            .unwrap_or_else(|e| panic!("{e}"));
+        // The row numbers are delta-encoded in every row group.
+        for g in builder.metadata().row_groups() {
+            let row = g.column(0);
+            assert_eq!(row.column_path().string(), "row");
+            let delta = parquet::basic::Encoding::DELTA_BINARY_PACKED;
+            assert!(
+                row.encodings().any(|e| e == delta),
+                "row encodings {:?}",
+                row.encodings().collect::<Vec<_>>()
+            );
+        }
+        builder
+            .build()
             .unwrap_or_else(|e| panic!("{e}"))
             .collect::<Result<Vec<_>, _>>()
             .unwrap_or_else(|e| panic!("{e}"))
