@@ -718,23 +718,45 @@ impl BatchPlan {
     pub fn run(&self, params: &[f64], out: &mut [f64]) -> Vec<RowError> {
         let (p, q) = (self.parameters.len(), self.names.len());
         self.rows_of(params, out);
-        let mut errors: Vec<RowError> = params
-            .par_chunks(p * ROWS_PER_TASK)
-            .zip(out.par_chunks_mut(q * ROWS_PER_TASK))
-            .enumerate()
-            .map_init(
-                || (self.worker(), Linear::default(), self.lanes()),
-                |(w, lin, lanes), (task, (pin, pout))| {
-                    let mut errors = Vec::new();
-                    w.eval_task(lin, lanes, pin, pout, task * ROWS_PER_TASK, &mut errors);
-                    errors
-                },
-            )
-            .flatten()
+        let tasks: Vec<(&[f64], &mut [f64])> = params
+            .chunks(p * ROWS_PER_TASK)
+            .zip(out.chunks_mut(q * ROWS_PER_TASK))
             .collect();
-        errors.sort_by_key(|e| e.row);
-        errors
+        each_task(
+            tasks,
+            || (self.worker(), Linear::default(), self.lanes()),
+            |(w, lin, lanes), task, (pin, pout)| {
+                let mut errors = Vec::new();
+                w.eval_task(lin, lanes, pin, pout, task * ROWS_PER_TASK, &mut errors);
+                errors
+            },
+        )
     }
+}
+
+/// `f(state, index, task)` for every task, on the current rayon pool with a
+/// state per thread from `init`; the errors in row order. One task, or a
+/// pool of one thread, runs on the calling thread: handing work to a pool
+/// thread and waiting for it (a wake-up each way) cost about 100 µs a call
+/// on the machine of docs/benchmarks.md, as much as 2 500 rows' solves.
+fn each_task<T: Send, S>(
+    tasks: Vec<T>,
+    init: impl Fn() -> S + Sync + Send,
+    f: impl Fn(&mut S, usize, T) -> Vec<RowError> + Sync + Send,
+) -> Vec<RowError> {
+    let mut errors: Vec<RowError> = if tasks.len() <= 1 || rayon::current_num_threads() <= 1 {
+        let mut state = init();
+        (tasks.into_iter().enumerate())
+            .flat_map(|(i, t)| f(&mut state, i, t))
+            .collect()
+    } else {
+        (tasks.into_par_iter().enumerate())
+            .map_init(init, |state, (i, t)| f(state, i, t))
+            .flatten()
+            .collect()
+    };
+    errors.sort_by_key(|e| e.row);
+    errors
 }
 
 impl BatchPlan {
@@ -779,54 +801,47 @@ impl BatchPlan {
                 task.push(part);
             }
         }
-        let mut errors: Vec<RowError> = tasks
-            .into_par_iter()
-            .enumerate()
-            .map_init(
-                || {
-                    (
-                        self.worker(),
-                        Linear::default(),
-                        self.lanes(),
-                        Vec::new(),
-                        Vec::new(),
-                    )
-                },
-                |(w, lin, lanes, pin, pout), (task, mut cols)| {
-                    let mut errors = Vec::new();
-                    let first = task * ROWS_PER_TASK;
-                    let n = cols.first().map_or(0, |c| c.len());
-                    let column = |k: usize| &inputs[k][first..first + n];
-                    if self.program.is_some() && n >= LANES_MIN_ROWS && !self.linear_may(column, n)
-                    {
-                        w.eval_program_columns(lanes, column, &mut cols, first, &mut errors);
-                        return errors;
+        each_task(
+            tasks,
+            || {
+                (
+                    self.worker(),
+                    Linear::default(),
+                    self.lanes(),
+                    Vec::new(),
+                    Vec::new(),
+                )
+            },
+            |(w, lin, lanes, pin, pout), task, mut cols| {
+                let mut errors = Vec::new();
+                let first = task * ROWS_PER_TASK;
+                let n = cols.first().map_or(0, |c| c.len());
+                let column = |k: usize| &inputs[k][first..first + n];
+                if self.program.is_some() && n >= LANES_MIN_ROWS && !self.linear_may(column, n) {
+                    w.eval_program_columns(lanes, column, &mut cols, first, &mut errors);
+                    return errors;
+                }
+                // Transposed into rows, solved as `run` does, and back.
+                // (Column by column, with strided stores: an iterator
+                // of rows extends a vector element by element.)
+                pin.clear();
+                pin.resize(n * p, 0.0);
+                for k in 0..p {
+                    for (d, &v) in pin[k..].iter_mut().step_by(p).zip(column(k)) {
+                        *d = v;
                     }
-                    // Transposed into rows, solved as `run` does, and back.
-                    // (Column by column, with strided stores: an iterator
-                    // of rows extends a vector element by element.)
-                    pin.clear();
-                    pin.resize(n * p, 0.0);
-                    for k in 0..p {
-                        for (d, &v) in pin[k..].iter_mut().step_by(p).zip(column(k)) {
-                            *d = v;
-                        }
+                }
+                pout.clear();
+                pout.resize(n * q, 0.0);
+                w.eval_task(lin, lanes, pin, pout, first, &mut errors);
+                for (o, c) in cols.iter_mut().enumerate() {
+                    for (d, &v) in c.iter_mut().zip(pout[o..].iter().step_by(q)) {
+                        *d = v;
                     }
-                    pout.clear();
-                    pout.resize(n * q, 0.0);
-                    w.eval_task(lin, lanes, pin, pout, first, &mut errors);
-                    for (o, c) in cols.iter_mut().enumerate() {
-                        for (d, &v) in c.iter_mut().zip(pout[o..].iter().step_by(q)) {
-                            *d = v;
-                        }
-                    }
-                    errors
-                },
-            )
-            .flatten()
-            .collect();
-        errors.sort_by_key(|e| e.row);
-        errors
+                }
+                errors
+            },
+        )
     }
 }
 

@@ -210,6 +210,22 @@ fn parallel_run_equals_row_by_row_and_reports_bad_rows() {
     let bad: Vec<usize> = errors.iter().map(|e| e.row).collect();
     assert_eq!(bad, vec![17, 1234, 2999]);
     assert!(errors.iter().all(|e| matches!(e.error, Error::Spec { .. })));
+    // On a pool of one thread the tasks run one after another on the
+    // calling thread: the same numbers and errors, in the same order.
+    let one_thread = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap_or_else(|e| panic!("{e}"));
+    let mut serial = vec![0.0; rows * nq];
+    let serial_errors = one_thread.install(|| p.run(&params, &mut serial));
+    assert_eq!(show(&errors), show(&serial_errors));
+    assert!(
+        out.iter()
+            .zip(&serial)
+            .all(|(a, b)| a.to_bits() == b.to_bits())
+    );
+    one_thread.install(|| assert_columns_agree("one thread", &p, &params, &out, &errors));
+    assert_columns_agree("pool", &p, &params, &out, &errors);
     let mut w = p.worker();
     let mut one = vec![0.0; nq];
     for r in 0..rows {
