@@ -737,7 +737,10 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
     // Blocks are solved and encoded in parallel tasks, a wave of them at a
     // time (as many as there are threads, to bound memory), then written in
     // order on this thread, which only copies bytes. (Writing one wave while
-    // the next is solved measured no faster, to /dev/null or to a file.)
+    // the next is solved measured no faster, to /dev/null or to a file; nor,
+    // on 2026-11-26, did pool tasks started one block at a time and written
+    // in order as they came, with no waves: 0.0503 against 0.0446 s by
+    // median for 10^6 rows of Parquet.)
     let wave = rayon::current_num_threads().max(1);
     // Each task's buffers, kept from wave to wave (allocating them per
     // block costs page faults in every block).
