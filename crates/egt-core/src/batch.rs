@@ -711,7 +711,9 @@ impl BatchPlan {
 
     /// Solve every row of `params` (row-major, `parameters().len()` columns)
     /// into `out` (row-major, `outputs().len()` columns), in parallel on the
-    /// current rayon pool. Failed rows get NaN outputs and are returned, in row order.
+    /// current rayon pool; on the calling thread when the batch is one task
+    /// (256 rows or fewer) or the pool has one thread (`RAYON_NUM_THREADS=1`).
+    /// Failed rows get NaN outputs and are returned, in row order.
     ///
     /// # Panics
     /// When the slice lengths do not match the column counts.
