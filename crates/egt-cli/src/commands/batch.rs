@@ -299,6 +299,56 @@ impl Rows {
             },
         }
     }
+
+    /// Rows `start..start + len` of a grid or zip into `params`, column-major
+    /// (`len` rows a column) or row-major (`width` columns a row), as
+    /// [`Rows::set`] gives them: each varied column is filled in runs of
+    /// equal values, with no division per row (which cost about a tenth of
+    /// a 10^6-row Parquet batch). False for a `--rows` file, which is set
+    /// line by line.
+    fn fill(&self, (start, len): (usize, usize), params: &mut [f64], by: Layout) -> bool {
+        let Rows::Product { zipped, axes, .. } = self else {
+            return false;
+        };
+        let mut fill = |c: usize, vals: &[f64], stride: usize| {
+            if vals.is_empty() || stride == 0 {
+                return;
+            }
+            let mut k = (start / stride) % vals.len();
+            let mut r = 0;
+            let mut run = stride - start % stride;
+            while r < len {
+                let end = len.min(r + run);
+                match by {
+                    Layout::Columns => params[c * len..][r..end].fill(vals[k]),
+                    Layout::Rows(width) => (params[r * width + c..end * width].iter_mut())
+                        .step_by(width)
+                        .for_each(|x| *x = vals[k]),
+                }
+                (r, run) = (end, stride);
+                k = if k + 1 == vals.len() { 0 } else { k + 1 };
+            }
+        };
+        // Row i takes the last axis's value i % L, the one before's
+        // (i / L) % L', and the zipped arrays' (i / all axes) % their length.
+        let mut stride = 1usize;
+        for (c, vals) in axes.iter().rev() {
+            fill(*c, vals, stride);
+            stride = stride.saturating_mul(vals.len());
+        }
+        for (c, vals) in zipped {
+            fill(*c, vals, stride);
+        }
+        true
+    }
+}
+
+/// How a block's parameters are laid out ([`Rows::fill`]).
+#[derive(Clone, Copy)]
+enum Layout {
+    Columns,
+    /// Row-major, this many columns a row.
+    Rows(usize),
 }
 
 fn unknown(plan: &BatchPlan, name: &str, flag: &str) -> Error {
@@ -645,7 +695,14 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
                 }
             }
         }
-        let unreadable: Vec<(usize, String)> = if by_columns {
+        let layout = if by_columns {
+            Layout::Columns
+        } else {
+            Layout::Rows(np)
+        };
+        let unreadable: Vec<(usize, String)> = if design.rows.fill((start, len), params, layout) {
+            Vec::new()
+        } else if by_columns {
             // A few columns set per row: cheaper than a parallel task.
             let mut bad = Vec::new();
             for r in 0..len {
@@ -734,44 +791,32 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
                 .find_map(|(r, m)| m.as_ref().map(|m| format!("row {}: {m}", base_row + r))),
         })
     };
-    // Blocks are solved and encoded in parallel tasks, a wave of them at a
-    // time (as many as there are threads, to bound memory), then written in
-    // order on this thread, which only copies bytes. (Writing one wave while
-    // the next is solved measured no faster, to /dev/null or to a file; nor,
-    // on 2026-11-26, did pool tasks started one block at a time and written
-    // in order as they came, with no waves: 0.0503 against 0.0446 s by
-    // median for 10^6 rows of Parquet.)
-    let wave = rayon::current_num_threads().max(1);
-    // Each task's buffers, kept from wave to wave (allocating them per
-    // block costs page faults in every block).
-    let mut buffers: Vec<Buffers> = (0..wave).map(|_| Buffers::default()).collect();
+    // Blocks are solved and encoded in the pool's tasks, each task taking
+    // the next block as soon as it has finished one, and written in order
+    // on this thread, which only copies bytes (docs/benchmarks.md has the
+    // history: waves of blocks left a thread idle while the other finished
+    // its block and while this one wrote).
     let all = blocks * plans.len();
-    for first in (0..all).step_by(wave) {
-        let done: Vec<anyhow::Result<Done>> = buffers
-            .par_iter_mut()
-            .zip(first..all.min(first + wave))
-            .map(&solve)
-            .collect();
-        for d in done {
-            let d = d?;
-            match d.encoded {
-                Encoded::Text(text) => {
-                    for t in &text {
-                        out.write_all(t.as_bytes())?;
-                    }
+    in_order(all, &solve, |d| {
+        let d = d?;
+        match d.encoded {
+            Encoded::Text(text) => {
+                for t in &text {
+                    out.write_all(t.as_bytes())?;
                 }
-                encoded => match sink.as_mut() {
-                    Some(sink) => sink.append(encoded, out)?,
-                    None => anyhow::bail!("a columnar block without its output"),
-                },
             }
-            failed += d.failed;
-            if first_error.is_none() {
-                first_error = d.first_error;
-            }
-            bar.inc(d.len as u64);
+            encoded => match sink.as_mut() {
+                Some(sink) => sink.append(encoded, out)?,
+                None => anyhow::bail!("a columnar block without its output"),
+            },
         }
-    }
+        failed += d.failed;
+        if first_error.is_none() {
+            first_error = d.first_error;
+        }
+        bar.inc(d.len as u64);
+        Ok(())
+    })?;
     bar.finish_and_clear();
     if let Some(sink) = sink {
         sink.finish(out)?;
@@ -839,6 +884,101 @@ struct Buffers {
     messages: Vec<Option<String>>,
 }
 
+/// Blocks `0..all`: `solve` in the pool's tasks (one a thread, each with its
+/// own buffers, taking the next block as it finishes one) and `write` on
+/// this thread, in order. A task waits while its next block is
+/// [`AHEAD`] times the pool's threads past the last one written, so memory
+/// stays that many blocks whatever the batch. The first error of `write`
+/// stops the tasks (their blocks in progress are dropped) and is returned.
+fn in_order<T: Send>(
+    all: usize,
+    solve: &(impl Fn((&mut Buffers, usize)) -> T + Sync),
+    mut write: impl FnMut(T) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    use std::sync::{Condvar, Mutex, mpsc};
+    let threads = rayon::current_num_threads().max(1);
+    if threads == 1 || all <= 1 {
+        let mut buffers = Buffers::default();
+        return (0..all).try_for_each(|i| write(solve((&mut buffers, i))));
+    }
+    let window = AHEAD * threads;
+    let next = AtomicUsize::new(0);
+    // Blocks written, with the condition the tasks wait on.
+    let written = (Mutex::new(0usize), Condvar::new());
+    let stop = AtomicBool::new(false);
+    // Stops every task when dropped on this thread (at the end, or on an
+    // error), or when a task unwinds (the others would wait forever for its
+    // block); `.2` says which. The flag is set under the lock, so that a
+    // task between its test and its wait cannot miss the wake-up.
+    struct Stop<'a>(&'a AtomicBool, &'a (Mutex<usize>, Condvar), bool);
+    impl Drop for Stop<'_> {
+        fn drop(&mut self) {
+            if self.2 || std::thread::panicking() {
+                let _lock = self.1.0.lock().unwrap_or_else(|e| e.into_inner());
+                self.0.store(true, Ordering::SeqCst);
+                self.1.1.notify_all();
+            }
+        }
+    }
+    // Each task is the one thread of a pool of its own: it may wait for the
+    // writer (in the global pool it could be waiting on top of another
+    // task's stack, which would never resume), and the core's batch calls
+    // and the row filling, finding one thread, run on it with no hand-over.
+    let pools = (0..threads)
+        .map(|_| rayon::ThreadPoolBuilder::new().num_threads(1).build())
+        .collect::<Result<Vec<_>, _>>()?;
+    let (tx, rx) = mpsc::channel::<(usize, T)>();
+    std::thread::scope(|scope| {
+        for pool in &pools {
+            let (tx, next, written, stop) = (tx.clone(), &next, &written, &stop);
+            scope.spawn(move || {
+                pool.install(|| {
+                    let _stop = Stop(stop, written, false);
+                    let mut buffers = Buffers::default();
+                    loop {
+                        let i = next.fetch_add(1, Ordering::SeqCst);
+                        if i >= all {
+                            break;
+                        }
+                        let mut done = written.0.lock().unwrap_or_else(|e| e.into_inner());
+                        while i >= *done + window && !stop.load(Ordering::SeqCst) {
+                            done = written.1.wait(done).unwrap_or_else(|e| e.into_inner());
+                        }
+                        drop(done);
+                        if stop.load(Ordering::SeqCst)
+                            || tx.send((i, solve((&mut buffers, i)))).is_err()
+                        {
+                            break;
+                        }
+                    }
+                })
+            });
+        }
+        drop(tx);
+        let _stop = Stop(&stop, &written, true);
+        // Blocks come in the order they finish; each waits here for those before it.
+        let mut pending: std::collections::BTreeMap<usize, T> = Default::default();
+        let mut at = 0;
+        while at < all {
+            let Ok((i, d)) = rx.recv() else {
+                anyhow::bail!("a batch task stopped before its block {at} was written");
+            };
+            pending.insert(i, d);
+            while let Some(d) = pending.remove(&at) {
+                write(d)?;
+                at += 1;
+                *written.0.lock().unwrap_or_else(|e| e.into_inner()) = at;
+                written.1.notify_all();
+            }
+        }
+        Ok(())
+    })
+}
+
+/// How many blocks a thread may be ahead of the writer ([`in_order`]).
+const AHEAD: usize = 2;
+
 /// One block solved and encoded in a worker task, to be written in order.
 struct Done {
     len: usize,
@@ -876,6 +1016,31 @@ impl Matrix<'_> {
             self.data[c * self.rows + r]
         } else {
             self.data[r * self.width + c]
+        }
+    }
+
+    /// Column `c`, in row order.
+    fn column(&self, c: usize) -> Vec<f64> {
+        if self.columns {
+            self.data[c * self.rows..][..self.rows].to_vec()
+        } else {
+            (self.data[c..].iter().step_by(self.width))
+                .take(self.rows)
+                .copied()
+                .collect()
+        }
+    }
+
+    /// Whether a row's value in column `c` is above `limit`.
+    fn any_above(&self, c: usize, limit: f64) -> bool {
+        if self.columns {
+            self.data[c * self.rows..][..self.rows]
+                .iter()
+                .any(|&x| x > limit)
+        } else {
+            (self.data[c..].iter().step_by(self.width))
+                .take(self.rows)
+                .any(|&x| x > limit)
         }
     }
 }
@@ -983,19 +1148,19 @@ struct Encoder {
     factory: Option<parquet::arrow::arrow_writer::ArrowRowGroupWriterFactory>,
 }
 
-/// A column of doubles: `value(r)`, null where it is not finite or where
-/// `null(r)` (no null buffer when there are none).
-fn doubles(
-    len: usize,
-    value: impl Fn(usize) -> f64,
-    null: impl Fn(usize) -> bool,
-) -> arrow_array::ArrayRef {
-    let values: Vec<f64> = (0..len).map(&value).collect();
-    let missing = |r: usize| null(r) || !values[r].is_finite();
-    let nulls = (0..len).any(missing).then(|| {
-        let valid: Vec<bool> = (0..len).map(|r| !missing(r)).collect();
-        arrow_buffer::NullBuffer::from(valid)
-    });
+/// A column of doubles, null where a value is not finite or its row
+/// `failed` (None when no row of the block did; no null buffer when there
+/// are no nulls).
+fn doubles(values: Vec<f64>, failed: Option<&[Option<String>]>) -> arrow_array::ArrayRef {
+    let missing = |r: usize| failed.is_some_and(|f| f[r].is_some()) || !values[r].is_finite();
+    let nulls = (failed.is_some() || values.iter().any(|v| !v.is_finite()))
+        .then(|| {
+            (0..values.len())
+                .map(|r| !missing(r))
+                .collect::<Vec<bool>>()
+        })
+        .filter(|valid| valid.contains(&false))
+        .map(arrow_buffer::NullBuffer::from);
     let values: Vec<f64> = match &nulls {
         // Null slots hold 0 (never a NaN or an inf a reader might take up).
         Some(n) => values
@@ -1038,9 +1203,10 @@ impl Encoder {
             )));
         }
         for &(_, c) in b.varied {
-            columns.push(doubles(len, |r| params.at(r, c), |_| false));
+            columns.push(doubles(params.column(c), None));
         }
         let failed = |r: usize| b.messages[r].is_some();
+        let any_failed = (b.messages.iter().any(Option::is_some)).then_some(b.messages);
         // Which of this plan's outputs fills each output column, if any.
         let mut source = vec![None; self.outputs];
         for (&pos, &i) in b.positions.0.iter().zip(b.positions.1) {
@@ -1048,17 +1214,24 @@ impl Encoder {
         }
         for src in source {
             columns.push(match src {
-                Some(i) => doubles(len, |r| results.at(r, i), failed),
+                Some(i) => doubles(results.column(i), any_failed),
                 None => Arc::new(arrow_array::Float64Array::new_null(len)),
             });
         }
-        columns.push(texts(len, |r| {
-            if failed(r) {
-                None
-            } else {
-                warning_at(plan, |c| results.at(r, c)).map(std::borrow::Cow::Owned)
-            }
-        }));
+        // Most blocks have no row past the warning's limit: a scan of the
+        // condition columns finds so, with no test row by row.
+        let warned = (plan.condition_columns().iter()).any(|&c| results.any_above(c, COND_WARN));
+        columns.push(if warned {
+            texts(len, |r| {
+                if failed(r) {
+                    None
+                } else {
+                    warning_at(plan, |c| results.at(r, c)).map(std::borrow::Cow::Owned)
+                }
+            })
+        } else {
+            Arc::new(StringArray::new_null(len))
+        });
         columns.push(texts(len, |r| {
             b.messages[r].as_deref().map(std::borrow::Cow::Borrowed)
         }));
@@ -1955,6 +2128,111 @@ mod columnar_tests {
             .unwrap_or_else(|e| panic!("{e}"))
             .collect::<Result<Vec<_>, _>>()
             .unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// A grid's or a zip's columns filled in runs hold what row-by-row
+    /// setting gives, whatever the block's start and length.
+    #[test]
+    fn grids_and_zips_fill_blocks_as_row_by_row() {
+        use super::{Layout, Rows};
+        let grid = |axes: &[usize], zip: usize| Rows::Product {
+            zipped: (0..zip.min(1) * 2)
+                .map(|z| (10 + z, (0..zip).map(|v| (100 * z + v) as f64).collect()))
+                .collect(),
+            axes: (axes.iter().enumerate())
+                .map(|(a, &n)| (2 * a, (0..n).map(|v| (1000 * (a + 1) + v) as f64).collect()))
+                .collect(),
+            count: axes.iter().product::<usize>() * zip.max(1),
+        };
+        for (axes, zip) in [
+            (vec![1000, 1000], 0),
+            (vec![3, 5, 7], 0),
+            (vec![7], 4),
+            (vec![], 9),
+            (vec![2, 1, 3], 5),
+        ] {
+            let rows = grid(&axes, zip);
+            for (start, len) in [(0, 1), (0, 64), (5, 17), (999, 1002), (13, 300)] {
+                let len = len.min(rows.count().saturating_sub(start));
+                let mut by_columns = vec![f64::NAN; 12 * len];
+                let mut by_rows = vec![f64::NAN; 12 * len];
+                assert!(rows.fill((start, len), &mut by_columns, Layout::Columns));
+                assert!(rows.fill((start, len), &mut by_rows, Layout::Rows(12)));
+                for r in 0..len {
+                    let mut want = [f64::NAN; 12];
+                    rows.set(start + r, |c, v| want[c] = v)
+                        .unwrap_or_else(|e| panic!("{e}"));
+                    for (c, w) in want.iter().enumerate() {
+                        for (got, layout) in [
+                            (by_columns[c * len + r], "columns"),
+                            (by_rows[r * 12 + c], "rows"),
+                        ] {
+                            assert!(
+                                got.to_bits() == w.to_bits(),
+                                "{axes:?} zip {zip} by {layout}: row {} column {c}: {got} against {w}",
+                                start + r
+                            );
+                        }
+                    }
+                }
+            }
+        }
+        assert!(!Rows::Listed(Vec::new()).fill((0, 0), &mut [], Layout::Columns));
+    }
+
+    /// Blocks come back in order whatever order they finish in; each task
+    /// solves on a pool of its own thread (the core then runs on it); an
+    /// error of the writer stops the tasks within the window.
+    #[test]
+    fn in_order_writes_blocks_in_order_and_stops_on_an_error() {
+        use super::{AHEAD, Buffers, in_order};
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap_or_else(|e| panic!("{e}"));
+        let all = 40;
+        let solved = AtomicUsize::new(0);
+        let solve = |(b, i): (&mut Buffers, usize)| {
+            assert_eq!(rayon::current_num_threads(), 1);
+            b.params.push(i as f64);
+            // Later blocks finish sooner.
+            std::thread::sleep(std::time::Duration::from_micros(((all - i) * 50) as u64));
+            solved.fetch_add(1, Ordering::SeqCst);
+            i
+        };
+        let mut seen = Vec::new();
+        let mut ahead = 0;
+        pool.install(|| {
+            in_order(all, &solve, |i| {
+                if i == 0 {
+                    // A slow writer: the tasks wait, the window ahead of it.
+                    std::thread::sleep(std::time::Duration::from_millis(30));
+                    ahead = solved.load(Ordering::SeqCst);
+                }
+                seen.push(i);
+                Ok(())
+            })
+        })
+        .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(seen, (0..all).collect::<Vec<_>>());
+        assert!(
+            ahead <= AHEAD * 3,
+            "{ahead} blocks solved before the first was written"
+        );
+        assert_eq!(solved.load(Ordering::SeqCst), all);
+        solved.store(0, Ordering::SeqCst);
+        let failed = pool.install(|| {
+            in_order(all, &solve, |i| {
+                anyhow::ensure!(i < 5, "full disk at block {i}");
+                Ok(())
+            })
+        });
+        let e = failed.err().map(|e| e.to_string());
+        assert_eq!(e.as_deref(), Some("full disk at block 5"));
+        // Block 5 and those before it, and at most the window's past them.
+        let n = solved.load(Ordering::SeqCst);
+        assert!(n > 5 && n <= 6 + AHEAD * 3, "{n} blocks solved");
     }
 
     /// A large train's rows are wide, so its blocks hold fewer rows: at most
