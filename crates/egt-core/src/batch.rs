@@ -718,6 +718,15 @@ impl BatchPlan {
     /// # Panics
     /// When the slice lengths do not match the column counts.
     pub fn run(&self, params: &[f64], out: &mut [f64]) -> Vec<RowError> {
+        self.run_with(Threads::Pool, params, out)
+    }
+
+    /// [`BatchPlan::run`], on the rayon pool or on the calling thread only
+    /// (the same numbers and errors, bit for bit).
+    ///
+    /// # Panics
+    /// When the slice lengths do not match the column counts.
+    pub fn run_with(&self, threads: Threads, params: &[f64], out: &mut [f64]) -> Vec<RowError> {
         let (p, q) = (self.parameters.len(), self.names.len());
         self.rows_of(params, out);
         let tasks: Vec<(&[f64], &mut [f64])> = params
@@ -725,6 +734,7 @@ impl BatchPlan {
             .zip(out.chunks_mut(q * ROWS_PER_TASK))
             .collect();
         each_task(
+            threads,
             tasks,
             || (self.worker(), Linear::default(), self.lanes()),
             |(w, lin, lanes), task, (pin, pout)| {
@@ -736,17 +746,34 @@ impl BatchPlan {
     }
 }
 
+/// Where a batch call ([`BatchPlan::run_with`], [`BatchPlan::run_columns_with`]) runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Threads {
+    /// In parallel on the current rayon pool; on the calling thread when
+    /// the batch is one task (256 rows or fewer) or the pool has one thread.
+    #[default]
+    Pool,
+    /// On the calling thread only. For a caller with threads of its own (a
+    /// process pool, a server's request threads) or with small batches:
+    /// handing work to a pool thread and waiting for it costs a wake-up
+    /// each way, about 100 µs a call on the machine of docs/benchmarks.md.
+    Calling,
+}
+
 /// `f(state, index, task)` for every task, on the current rayon pool with a
-/// state per thread from `init`; the errors in row order. One task, or a
-/// pool of one thread, runs on the calling thread: handing work to a pool
-/// thread and waiting for it (a wake-up each way) cost about 100 µs a call
-/// on the machine of docs/benchmarks.md, as much as 2 500 rows' solves.
+/// state per thread from `init`; the errors in row order. One task, a pool
+/// of one thread, or [`Threads::Calling`] runs on the calling thread:
+/// handing work to a pool thread and waiting for it (a wake-up each way)
+/// cost about 100 µs a call on the machine of docs/benchmarks.md, as much
+/// as 2 500 rows' solves.
 fn each_task<T: Send, S>(
+    threads: Threads,
     tasks: Vec<T>,
     init: impl Fn() -> S + Sync + Send,
     f: impl Fn(&mut S, usize, T) -> Vec<RowError> + Sync + Send,
 ) -> Vec<RowError> {
-    let mut errors: Vec<RowError> = if tasks.len() <= 1 || rayon::current_num_threads() <= 1 {
+    let here = threads == Threads::Calling || tasks.len() <= 1;
+    let mut errors: Vec<RowError> = if here || rayon::current_num_threads() <= 1 {
         let mut state = init();
         (tasks.into_iter().enumerate())
             .flat_map(|(i, t)| f(&mut state, i, t))
@@ -788,6 +815,20 @@ impl BatchPlan {
     /// # Panics
     /// When the slice lengths do not match the column counts.
     pub fn run_columns(&self, params: &[f64], out: &mut [f64]) -> Vec<RowError> {
+        self.run_columns_with(Threads::Pool, params, out)
+    }
+
+    /// [`BatchPlan::run_columns`], on the rayon pool or on the calling
+    /// thread only (the same numbers and errors, bit for bit).
+    ///
+    /// # Panics
+    /// When the slice lengths do not match the column counts.
+    pub fn run_columns_with(
+        &self,
+        threads: Threads,
+        params: &[f64],
+        out: &mut [f64],
+    ) -> Vec<RowError> {
         let (p, q) = (self.parameters.len(), self.names.len());
         let rows = self.rows_of(params, out);
         if rows == 0 {
@@ -804,6 +845,7 @@ impl BatchPlan {
             }
         }
         each_task(
+            threads,
             tasks,
             || {
                 (

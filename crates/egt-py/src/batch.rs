@@ -9,7 +9,7 @@
 //! The one NaN a valid row could carry, `power.efficiency` without input
 //! power, is written as 0.0 too (documented in `egt.BatchResult`).
 
-use egt_core::batch::{BatchPlan, BatchSpec};
+use egt_core::batch::{BatchPlan, BatchSpec, Threads};
 use egt_core::solve::prepared::Compute;
 use numpy::{PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -112,7 +112,8 @@ impl BatchPlanCore {
 
     /// Solve every row of `params` (rows x parameters, float64, C- or
     /// Fortran-contiguous) in parallel with the GIL released; `threads`
-    /// sizes a private pool (default: rayon's global pool). Returns the
+    /// sizes a private pool (default: rayon's global pool), and
+    /// `threads=1` solves on the calling thread with no pool. Returns the
     /// outputs (rows x outputs, in the order of `params`: a Fortran-ordered
     /// input is solved column by column, `BatchPlan::run_columns`, and each
     /// output column comes back contiguous; 0.0 in failed rows) and the
@@ -149,20 +150,23 @@ impl BatchPlanCore {
             // Element (row, output) of `out`.
             let at = |r: usize, o: usize| if columns { o * rows + r } else { r * q + o };
             let errors = py.detach(|| -> Result<_> {
-                let solve = |out: &mut [f64]| {
+                let solve = |threads, out: &mut [f64]| {
                     if columns {
-                        self.plan.run_columns(input, out)
+                        self.plan.run_columns_with(threads, input, out)
                     } else {
-                        self.plan.run(input, out)
+                        self.plan.run_with(threads, input, out)
                     }
                 };
                 let errors = match threads {
+                    // No pool to build and hand the call to (a thread's
+                    // start and a wake-up each way).
+                    Some(1) => solve(Threads::Calling, &mut out),
                     Some(n) => rayon::ThreadPoolBuilder::new()
                         .num_threads(egt_core::batch::worker_threads(Some(n)).0)
                         .build()
                         .map_err(|e| value_error(e.to_string()))?
-                        .install(|| solve(&mut out)),
-                    None => solve(&mut out),
+                        .install(|| solve(Threads::Pool, &mut out)),
+                    None => solve(Threads::Pool, &mut out),
                 };
                 for e in &errors {
                     for o in 0..q {

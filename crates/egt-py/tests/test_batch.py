@@ -330,5 +330,10 @@ def test_fortran_and_c_ordered_params_give_the_same_numbers(fig3: egt.Train, bou
     np.testing.assert_array_equal(by_columns.ok, by_rows.ok)
     assert {r: e.message for r, e in by_columns.errors.items()} == {r: e.message for r, e in by_rows.errors.items()}
     assert (~by_rows.ok).sum() >= 9 and 5 in by_rows.errors
+    # threads=1 solves on the calling thread, with no pool: the same again.
+    for layout in (p, np.ascontiguousarray(p)):
+        here = plan.run(layout, threads=1)
+        assert here.values.view(np.int64).tolist() == by_rows.values.view(np.int64).tolist()
+        assert {r: e.message for r, e in here.errors.items()} == {r: e.message for r, e in by_rows.errors.items()}
     # A column of the result is a view, contiguous.
     assert all(by_columns[o].flags.c_contiguous for o in by_columns.outputs)

@@ -3,7 +3,7 @@
 //! `Train::power_flow` give for a train written with that row's values;
 //! parallel runs equal row-by-row runs; bad rows are reported and the rest go on.
 
-use egt_core::batch::BatchPlan;
+use egt_core::batch::{BatchPlan, Threads};
 use egt_core::solve::prepared::Compute;
 use egt_core::{AnalysisError, Error, LinkId, Train};
 use proptest::prelude::*;
@@ -226,6 +226,15 @@ fn parallel_run_equals_row_by_row_and_reports_bad_rows() {
     );
     one_thread.install(|| assert_columns_agree("one thread", &p, &params, &out, &errors));
     assert_columns_agree("pool", &p, &params, &out, &errors);
+    // On the calling thread only, from outside any pool: the same again.
+    let mut here = vec![0.0; rows * nq];
+    let here_errors = p.run_with(Threads::Calling, &params, &mut here);
+    assert_eq!(show(&errors), show(&here_errors));
+    assert!(
+        out.iter()
+            .zip(&here)
+            .all(|(a, b)| a.to_bits() == b.to_bits())
+    );
     let mut w = p.worker();
     let mut one = vec![0.0; nq];
     for r in 0..rows {
@@ -514,17 +523,23 @@ fn assert_columns_agree(
     let columns: Vec<f64> = (0..np)
         .flat_map(|k| params[k..].iter().step_by(np).copied())
         .collect();
-    let mut by_columns = vec![0.0; rows * nq];
-    let column_errors = p.run_columns(&columns, &mut by_columns);
-    assert_eq!(show(errors), show(&column_errors), "{name}: column-major");
-    for r in 0..rows {
-        for o in 0..nq {
-            let (a, b) = (out[r * nq + o], by_columns[o * rows + r]);
-            assert!(
-                a.to_bits() == b.to_bits(),
-                "{name} row {r} {}: {a} by rows, {b} by columns",
-                p.outputs()[o]
-            );
+    for threads in [Threads::Pool, Threads::Calling] {
+        let mut by_columns = vec![0.0; rows * nq];
+        let column_errors = p.run_columns_with(threads, &columns, &mut by_columns);
+        assert_eq!(
+            show(errors),
+            show(&column_errors),
+            "{name}: column-major, {threads:?}"
+        );
+        for r in 0..rows {
+            for o in 0..nq {
+                let (a, b) = (out[r * nq + o], by_columns[o * rows + r]);
+                assert!(
+                    a.to_bits() == b.to_bits(),
+                    "{name} row {r} {}: {a} by rows, {b} by columns ({threads:?})",
+                    p.outputs()[o]
+                );
+            }
         }
     }
 }
