@@ -326,8 +326,11 @@ class BatchPlan:
         ok = np.ones(values.shape[0], dtype=bool)
         errors = {r: RowError(r, k, m) for r, k, m in raw}
         errors.update(refused)  # rows params() refused (their ratios were placeholders)
-        values[list(refused), :] = 0.0
-        ok[list(errors)] = False
+        # (Indexing with an empty list costs more than a small batch's solve.)
+        if refused:
+            values[list(refused), :] = 0.0
+        if errors:
+            ok[list(errors)] = False
         return BatchResult(self.outputs, values, ok, errors)
 
     def run_distributed(
