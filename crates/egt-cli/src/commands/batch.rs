@@ -797,7 +797,8 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
     // history: waves of blocks left a thread idle while the other finished
     // its block and while this one wrote).
     let all = blocks * plans.len();
-    in_order(all, &solve, |d| {
+    let ahead = if block < BLOCK { 1 } else { AHEAD };
+    in_order(all, ahead, &solve, |d| {
         let d = d?;
         match d.encoded {
             Encoded::Text(text) => {
@@ -886,12 +887,13 @@ struct Buffers {
 
 /// Blocks `0..all`: `solve` in the pool's tasks (one a thread, each with its
 /// own buffers, taking the next block as it finishes one) and `write` on
-/// this thread, in order. A task waits while its next block is
-/// [`AHEAD`] times the pool's threads past the last one written, so memory
-/// stays that many blocks whatever the batch. The first error of `write`
-/// stops the tasks (their blocks in progress are dropped) and is returned.
+/// this thread, in order. A task waits while its next block is `ahead`
+/// times the pool's threads past the last one written, so memory stays
+/// that many blocks whatever the batch. The first error of `write` stops
+/// the tasks (their blocks in progress are dropped) and is returned.
 fn in_order<T: Send>(
     all: usize,
+    ahead: usize,
     solve: &(impl Fn((&mut Buffers, usize)) -> T + Sync),
     mut write: impl FnMut(T) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
@@ -902,7 +904,7 @@ fn in_order<T: Send>(
         let mut buffers = Buffers::default();
         return (0..all).try_for_each(|i| write(solve((&mut buffers, i))));
     }
-    let window = AHEAD * threads;
+    let window = ahead.max(1) * threads;
     let next = AtomicUsize::new(0);
     // Blocks written, with the condition the tasks wait on.
     let written = (Mutex::new(0usize), Condvar::new());
@@ -976,7 +978,10 @@ fn in_order<T: Send>(
     })
 }
 
-/// How many blocks a thread may be ahead of the writer ([`in_order`]).
+/// How many blocks a thread may be ahead of the writer ([`in_order`]), when
+/// blocks are of [`BLOCK`] rows. Blocks cut short by [`BLOCK_BYTES`] (wide
+/// rows, large trains) keep one a thread, as much as the waves before held.
+/// (4 and 8 measured no faster than 2, 2026-11-26.)
 const AHEAD: usize = 2;
 
 /// One block solved and encoded in a worker task, to be written in order.
@@ -2204,7 +2209,7 @@ mod columnar_tests {
         let mut seen = Vec::new();
         let mut ahead = 0;
         pool.install(|| {
-            in_order(all, &solve, |i| {
+            in_order(all, AHEAD, &solve, |i| {
                 if i == 0 {
                     // A slow writer: the tasks wait, the window ahead of it.
                     std::thread::sleep(std::time::Duration::from_millis(30));
@@ -2223,7 +2228,7 @@ mod columnar_tests {
         assert_eq!(solved.load(Ordering::SeqCst), all);
         solved.store(0, Ordering::SeqCst);
         let failed = pool.install(|| {
-            in_order(all, &solve, |i| {
+            in_order(all, AHEAD, &solve, |i| {
                 anyhow::ensure!(i < 5, "full disk at block {i}");
                 Ok(())
             })
