@@ -838,7 +838,9 @@ struct TextBlock<'a> {
     positions: (&'a [usize], &'a [usize]),
 }
 
-/// A block as JSON Lines or CSV, formatted in parallel tasks, in order.
+/// A block as JSON Lines or CSV, in pieces of [`FORMAT_TASK`] rows, in
+/// order: parallel tasks on a pool of several threads; in `egt batch`, whose
+/// blocks run in parallel, on the block's task's one thread.
 fn format_text(
     t: TextBlock<'_>,
     plan: &BatchPlan,
