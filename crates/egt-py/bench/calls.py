@@ -4,7 +4,7 @@ row), with `threads=1` (the calling thread) and the default (the shared
 pool). Prints microseconds a call and nanoseconds a row, best of 5.
 
 Usage (after `make python-dev`, with the chart's train written by `make chart`):
-    .venv/bin/python bench/calls.py target/speed_accuracy/planetary_chain_6.toml
+    .venv/bin/python crates/egt-py/bench/calls.py target/speed_accuracy/planetary_chain_6.toml
 See docs/benchmarks.md, "Python's threads=1 on the calling thread".
 """
 
