@@ -16,8 +16,9 @@
 //! ([`BatchPlan::run_columns`]: each parameter and each output a contiguous
 //! column, as a Fortran-ordered NumPy array or Arrow's columns), so a NumPy
 //! array maps onto it without copying. Both give the same numbers bit for
-//! bit; the straight-line program reads and writes columns without
-//! transposing them, so column-major is the quicker (about 20 % at 6 links).
+//! bit; the straight-line program and the linear path read and write
+//! columns without transposing them, so column-major is the quicker (about
+//! 20 % at 6 links with the program).
 //! A row allocates nothing unless it fails.
 //!
 //! **Chosen outputs.** [`BatchPlan::with_outputs`] keeps only the columns
@@ -805,11 +806,12 @@ impl BatchPlan {
     /// [`BatchPlan::run`] with both matrices column-major: parameter column
     /// `k` is `params[k * rows..(k + 1) * rows]`, output column `o` is
     /// `out[o * rows..(o + 1) * rows]` (a NumPy array in Fortran order, or
-    /// the columns of an Arrow record batch). With condition bounds and a
-    /// straight-line program, blocks are read and written a column at a
-    /// time with no transposition; otherwise (and for a block the linear path
-    /// may take) each task's rows are transposed into the row-major solve
-    /// and back. The numbers and the errors are those of
+    /// the columns of an Arrow record batch). The linear path (a block
+    /// whose ratios, inertias, masses and efficiencies are equal in every
+    /// row) and, with condition bounds, the straight-line program read and
+    /// write blocks a column at a time with no transposition, the linear
+    /// path computing only the chosen outputs; other blocks' rows are
+    /// transposed into the row-major solve and back. The numbers and the errors are those of
     /// [`BatchPlan::run`] on the same rows, bit for bit.
     ///
     /// # Panics
@@ -861,7 +863,12 @@ impl BatchPlan {
                 let first = task * ROWS_PER_TASK;
                 let n = cols.first().map_or(0, |c| c.len());
                 let column = |k: usize| &inputs[k][first..first + n];
-                if self.program.is_some() && n >= LANES_MIN_ROWS && !self.linear_may(column, n) {
+                if self.linear_may(column, n) {
+                    // Column by column, as `eval_linear` would row by row.
+                    if w.eval_linear_columns(lin, column, &mut cols, first, &mut errors) {
+                        return errors;
+                    }
+                } else if self.program.is_some() && n >= LANES_MIN_ROWS {
                     w.eval_program_columns(lanes, column, &mut cols, first, &mut errors);
                     return errors;
                 }
@@ -929,6 +936,28 @@ struct Linear {
     static_base: bool,
     /// A response is held.
     valid: bool,
+    /// A column-major block's first row.
+    first_row: Vec<f64>,
+}
+
+impl Linear {
+    /// Whether the response held is that of the block whose first row is
+    /// `row0` and whose varying columns (among `linear`) are marked in
+    /// `diff`: the same base row (the varying columns at zero) and the same
+    /// varying columns.
+    fn same_base(&self, row0: &[f64], linear: std::ops::Range<usize>) -> bool {
+        self.valid
+            && self.row.len() == row0.len()
+            && (0..row0.len()).all(|c| {
+                let v = if self.diff[c] { 0.0 } else { row0[c] };
+                v.to_bits() == self.row[c].to_bits()
+            })
+            && self
+                .varying
+                .iter()
+                .copied()
+                .eq(linear.filter(|&c| self.diff[c]))
+    }
 }
 
 /// Coordinates up to which a batch with condition bounds runs the
@@ -1296,19 +1325,7 @@ impl Worker<'_> {
         if (0..p).any(|c| fixed(c) && lin.diff[c]) {
             return false;
         }
-        // The base row: the varying columns at zero. The response of the
-        // previous block is kept when its base and varying columns are these.
-        let same = lin.valid
-            && lin.row.len() == p
-            && (0..p).all(|c| {
-                let v = if lin.diff[c] { 0.0 } else { row0[c] };
-                v.to_bits() == lin.row[c].to_bits()
-            })
-            && lin
-                .varying
-                .iter()
-                .copied()
-                .eq((g.speed..g.inertia).filter(|&c| lin.diff[c]));
+        let same = lin.same_base(row0, g.speed..g.inertia);
         if !same && !self.linear_response(lin, row0) {
             return false;
         }
@@ -1339,6 +1356,88 @@ impl Worker<'_> {
             }
             if lin.static_base && lin.accel_varying.iter().any(|&c| row[c] != 0.0) {
                 o[conds..].copy_from_slice(&lin.cond_moving);
+            }
+        }
+        true
+    }
+
+    /// [`Worker::eval_linear`] on a block held column by column (`column(k)`
+    /// is the block's part of parameter column `k`, `out[o]` of chosen output
+    /// column `o`), for a block whose fixed columns are equal in every row
+    /// (`BatchPlan::linear_may`). Each output element takes the operations
+    /// `eval_linear` gives it, in the same order (y0, then `+= p_j R_j` for
+    /// each varying column in order), so the numbers are its numbers bit for
+    /// bit; only the chosen outputs are computed. False when the block must
+    /// be solved otherwise (a base or unit row that fails to solve).
+    fn eval_linear_columns<'c>(
+        &mut self,
+        lin: &mut Linear,
+        column: impl Fn(usize) -> &'c [f64],
+        out: &mut [&mut [f64]],
+        first: usize,
+        errors: &mut Vec<RowError>,
+    ) -> bool {
+        let plan = self.plan;
+        let g = plan.groups;
+        let p = plan.parameters.len();
+        let n = out.first().map_or(0, |c| c.len());
+        if plan.compute == Compute::Power || n < LINEAR_MIN_ROWS {
+            return false;
+        }
+        let mut row0 = std::mem::take(&mut lin.first_row);
+        row0.clear();
+        row0.extend((0..p).map(|k| column(k)[0]));
+        lin.diff.clear();
+        lin.diff.resize(p, false);
+        for (k, d) in lin
+            .diff
+            .iter_mut()
+            .enumerate()
+            .take(g.inertia)
+            .skip(g.speed)
+        {
+            let (c, b) = (column(k), row0[k].to_bits());
+            *d = c.iter().any(|x| x.to_bits() != b);
+        }
+        let same = lin.same_base(&row0, g.speed..g.inertia);
+        let solved = same || self.linear_response(lin, &row0);
+        lin.first_row = row0;
+        if !solved {
+            return false;
+        }
+        let conds = plan.all_conditions().start;
+        let q = plan.all.len();
+        for (o, &k) in out.iter_mut().zip(&plan.chosen) {
+            o.fill(lin.y0[k]);
+            for (j, &c) in lin.varying.iter().enumerate() {
+                let (lo, hi) = lin.spans[j];
+                if (lo..hi).contains(&k) {
+                    let rj = lin.response[j * q + k];
+                    for (y, &pj) in o.iter_mut().zip(column(c)) {
+                        *y += pj * rj;
+                    }
+                }
+            }
+            if lin.static_base && k >= conds {
+                let v = lin.cond_moving[k - conds];
+                for &c in &lin.accel_varying {
+                    for (y, &a) in o.iter_mut().zip(column(c)) {
+                        if a != 0.0 {
+                            *y = v;
+                        }
+                    }
+                }
+            }
+        }
+        // Only the varying columns can be bad (the first in column order,
+        // as `check` would name it); such a row's outputs are NaN.
+        for r in 0..n {
+            if let Some(&c) = lin.varying.iter().find(|&&c| !column(c)[r].is_finite()) {
+                out.iter_mut().for_each(|o| o[r] = f64::NAN);
+                errors.push(RowError {
+                    row: first + r,
+                    error: bad_parameter(plan, c, column(c)[r]),
+                });
             }
         }
         true

@@ -373,6 +373,10 @@ fn linear_blocks_equal_row_by_row_solves() {
                 params.extend(row);
             }
             params[5 * np + linear[0]] = f64::NAN;
+            // Two bad values in a row: the first in column order is named.
+            let last = linear[linear.len() - 1];
+            params[300 * np + last] = f64::INFINITY;
+            params[300 * np + linear[0]] = f64::NEG_INFINITY;
             // The path under test: every block of 256 rows is a linear one.
             for block in params.chunks(256 * np) {
                 assert!(p.is_linear_block(block));
@@ -382,12 +386,21 @@ fn linear_blocks_equal_row_by_row_solves() {
             assert!(!p.is_linear_block(&mixed));
             let mut out = vec![0.0; rows * nq];
             let errors = p.run(&params, &mut out);
-            assert_eq!(errors.iter().map(|e| e.row).collect::<Vec<_>>(), [5]);
+            assert_eq!(errors.iter().map(|e| e.row).collect::<Vec<_>>(), [5, 300]);
+            let first = &p.parameters()[linear[0]];
+            assert!(
+                errors[1].error.to_string().contains(first.as_str()),
+                "{}",
+                errors[1].error
+            );
+            // Column-major, the linear path goes column by column, every
+            // output or only the chosen: the same numbers bit for bit.
+            assert_columns_agree(&format!("linear {compute:?}"), &p, &params, &out, &errors);
             assert_choice_agrees(&format!("linear {compute:?}"), &p, &params, &out, &errors);
             let mut one = vec![0.0; nq];
             for r in 0..rows {
                 let res = p.worker().eval(&params[r * np..(r + 1) * np], &mut one);
-                assert_eq!(res.is_err(), r == 5);
+                assert_eq!(res.is_err(), r == 5 || r == 300);
                 let got = &out[r * nq..(r + 1) * nq];
                 let scale = one
                     .iter()
