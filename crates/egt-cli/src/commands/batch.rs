@@ -1120,7 +1120,13 @@ fn columnar_file(
         // numbers count up by one: delta-encoded, they take a few bytes a
         // page, where Snappy spent more time on them than on any other
         // column and left half of their bytes (docs/benchmarks.md).
+        // Pages of 64 KiB rather than the default 1 MiB: a block's column
+        // is 128 KiB, and the writer's page buffers grow by doubling up to
+        // the page; smaller pages keep those buffers in the allocator's
+        // reused sizes (36.6 -> 28.6 MiB committed, about 5 % faster at
+        // 10^6 rows on 2 threads; docs/benchmarks.md).
         let props = parquet::file::properties::WriterProperties::builder()
+            .set_data_page_size_limit(64 * 1024)
             .set_compression(parquet::basic::Compression::SNAPPY)
             .set_dictionary_enabled(false)
             .set_column_encoding(
