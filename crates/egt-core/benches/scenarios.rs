@@ -463,7 +463,40 @@ mod batch {
         );
     }
 
+    /// The same, column-major (`BatchPlan::run_columns`), as `egt batch`
+    /// holds a Parquet or Arrow block: the in-process rate its end-to-end
+    /// rate is compared with (docs/benchmarks.md).
+    #[divan::bench(sample_count = 10)]
+    fn chain6_inverse_dynamics_new_ratios_bounded_one_column_by_columns(b: Bencher) {
+        let (p, rows) = new_ratio_rows(
+            true,
+            &[
+                "driving_torque.s1",
+                "cond.speeds",
+                "cond.accelerations",
+                "cond.forces",
+            ],
+        );
+        let np = p.parameters().len();
+        let columns: Vec<f64> = (0..np)
+            .flat_map(|k| rows[k..].iter().step_by(np).copied().collect::<Vec<_>>())
+            .collect();
+        let n = rows.len() / np;
+        let mut out = vec![0.0; n * p.outputs().len()];
+        b.counter(ItemsCount::new(n)).bench_local(|| {
+            let errors = p.run_columns(black_box(&columns), &mut out);
+            assert!(errors.is_empty());
+        });
+    }
+
     fn new_ratios(b: Bencher, bounds: bool, chosen: &[&str]) {
+        let (p, rows) = new_ratio_rows(bounds, chosen);
+        run(b, &p, &rows);
+    }
+
+    /// The 6-link chain's plan (condition bounds or not, the outputs
+    /// `chosen` or all) and its rows: a new load and a new ratio every row.
+    fn new_ratio_rows(bounds: bool, chosen: &[&str]) -> (BatchPlan, Vec<f64>) {
         let t = build(&chain(6));
         let mut p = plan(&t, Compute::Dynamics).with_condition_bounds(bounds);
         if !chosen.is_empty() {
@@ -479,7 +512,7 @@ mod batch {
             row[0] *= 1.0 + (r % 997) as f64 * 1e-4;
             rows.extend(row);
         }
-        run(b, &p, &rows);
+        (p, rows)
     }
 
     /// The ZF 8HP70 shift table: rows cycle through the gear states.
