@@ -279,7 +279,9 @@ pub struct RowError {
     pub error: Error,
 }
 
-/// A train prepared for batch evaluation. Immutable and `Sync`.
+/// A train prepared for batch evaluation. `Sync`, and immutable but for
+/// the buffers it keeps from a call on the calling thread for the next
+/// (which change no number).
 #[derive(Debug, Clone)]
 pub struct BatchPlan {
     prepared: PreparedTrain,
@@ -307,6 +309,8 @@ pub struct BatchPlan {
     /// With bounds, the straight-line program of the train (see
     /// `solve/prepared/tape.rs`), when the base row factors.
     program: Option<Program>,
+    /// A call's buffers, kept for the next call on a calling thread.
+    spares: Spares,
 }
 
 impl BatchPlan {
@@ -438,6 +442,7 @@ impl BatchPlan {
             forces,
             bounds: false,
             program: None,
+            spares: Spares::default(),
         };
         plan.choose((0..plan.all.len()).collect());
         Ok(plan)
@@ -489,7 +494,7 @@ impl BatchPlan {
             chosen.push(o);
         }
         self.choose(chosen);
-        self.program = self.program();
+        self.reprogram();
         Ok(self)
     }
 
@@ -567,7 +572,7 @@ impl BatchPlan {
     /// As [`PreparedTrain::with_sparse`].
     pub fn with_sparse(mut self, sparse: bool) -> Result<Self> {
         self.prepared = self.prepared.with_sparse(sparse)?;
-        self.program = self.program();
+        self.reprogram();
         Ok(self)
     }
 
@@ -587,8 +592,15 @@ impl BatchPlan {
     /// only. Off by default.
     pub fn with_condition_bounds(mut self, bounds: bool) -> Self {
         self.bounds = bounds;
-        self.program = self.program();
+        self.reprogram();
         self
+    }
+
+    /// The program for the plan as it now is, and no buffers kept for the
+    /// plan as it was (their sizes follow the program and the prepared train).
+    fn reprogram(&mut self) {
+        self.program = self.program();
+        self.spares = Spares::default();
     }
 
     /// The straight-line program the bounds allow, for a train of at most
@@ -734,16 +746,12 @@ impl BatchPlan {
             .chunks(p * ROWS_PER_TASK)
             .zip(out.chunks_mut(q * ROWS_PER_TASK))
             .collect();
-        each_task(
-            threads,
-            tasks,
-            || (self.worker(), Linear::default(), self.lanes()),
-            |(w, lin, lanes), task, (pin, pout)| {
-                let mut errors = Vec::new();
-                w.eval_task(lin, lanes, pin, pout, task * ROWS_PER_TASK, &mut errors);
-                errors
-            },
-        )
+        each_task(threads, tasks, self, |t, task, (pin, pout)| {
+            let mut errors = Vec::new();
+            let first = task * ROWS_PER_TASK;
+            t.w.eval_task(&mut t.lin, &mut t.lanes, pin, pout, first, &mut errors);
+            errors
+        })
     }
 }
 
@@ -762,26 +770,29 @@ pub enum Threads {
 }
 
 /// `f(state, index, task)` for every task, on the current rayon pool with a
-/// state per thread from `init`; the errors in row order. One task, a pool
-/// of one thread, or [`Threads::Calling`] runs on the calling thread:
-/// handing work to a pool thread and waiting for it (a wake-up each way)
-/// cost about 100 µs a call on the machine of docs/benchmarks.md, as much
-/// as 2 500 rows' solves.
-fn each_task<T: Send, S>(
+/// state per thread; the errors in row order. One task, a pool of one
+/// thread, or [`Threads::Calling`] runs on the calling thread: handing work
+/// to a pool thread and waiting for it (a wake-up each way) cost about 100
+/// µs a call on the machine of docs/benchmarks.md, as much as 2 500 rows'
+/// solves. There the state is one the plan kept from an earlier call
+/// (building it cost more than solving 64 rows), and is kept again after.
+fn each_task<T: Send>(
     threads: Threads,
     tasks: Vec<T>,
-    init: impl Fn() -> S + Sync + Send,
-    f: impl Fn(&mut S, usize, T) -> Vec<RowError> + Sync + Send,
+    plan: &BatchPlan,
+    f: impl Fn(&mut TaskState<'_>, usize, T) -> Vec<RowError> + Sync + Send,
 ) -> Vec<RowError> {
     let here = threads == Threads::Calling || tasks.len() <= 1;
     let mut errors: Vec<RowError> = if here || rayon::current_num_threads() <= 1 {
-        let mut state = init();
-        (tasks.into_iter().enumerate())
+        let mut state = plan.spares.take(plan);
+        let errors = (tasks.into_iter().enumerate())
             .flat_map(|(i, t)| f(&mut state, i, t))
-            .collect()
+            .collect();
+        plan.spares.keep(state);
+        errors
     } else {
         (tasks.into_par_iter().enumerate())
-            .map_init(init, |state, (i, t)| f(state, i, t))
+            .map_init(|| TaskState::new(plan), |state, (i, t)| f(state, i, t))
             .flatten()
             .collect()
     };
@@ -846,64 +857,152 @@ impl BatchPlan {
                 task.push(part);
             }
         }
-        each_task(
-            threads,
-            tasks,
-            || {
-                (
-                    self.worker(),
-                    Linear::default(),
-                    self.lanes(),
-                    Vec::new(),
-                    Vec::new(),
-                )
-            },
-            |(w, lin, lanes, pin, pout), task, mut cols| {
-                let mut errors = Vec::new();
-                let first = task * ROWS_PER_TASK;
-                let n = cols.first().map_or(0, |c| c.len());
-                let column = |k: usize| &inputs[k][first..first + n];
-                if self.linear_may(column, n) {
-                    // Column by column, as `eval_linear` would row by row.
-                    if w.eval_linear_columns(lin, column, &mut cols, first, &mut errors) {
-                        return errors;
-                    }
-                } else if self.program.is_some() && n >= LANES_MIN_ROWS {
-                    w.eval_program_columns(lanes, column, &mut cols, first, &mut errors);
+        each_task(threads, tasks, self, |t, task, mut cols| {
+            let TaskState {
+                w,
+                lin,
+                lanes,
+                pin,
+                pout,
+            } = t;
+            let mut errors = Vec::new();
+            let first = task * ROWS_PER_TASK;
+            let n = cols.first().map_or(0, |c| c.len());
+            let column = |k: usize| &inputs[k][first..first + n];
+            if self.linear_may(column, n) {
+                // Column by column, as `eval_linear` would row by row.
+                if w.eval_linear_columns(lin, column, &mut cols, first, &mut errors) {
                     return errors;
                 }
-                // Transposed into rows, solved as `run` does, and back, a
-                // tile of TILE rows at a time: the tile's rows stay in L1
-                // while every column passes. (Column by column over the
-                // whole task, a row-major buffer larger than L1 was read
-                // again from L2 for every column: 337 ns a row at 10 links
-                // against 46 for the same rows row-major, docs/benchmarks.md.)
-                const TILE: usize = 8;
-                pin.clear();
-                pin.resize(n * p, 0.0);
-                for (t, tile) in pin.chunks_mut(TILE * p).enumerate() {
-                    let at = t * TILE;
-                    for k in 0..p {
-                        let c = &column(k)[at..];
-                        for (d, &v) in tile[k..].iter_mut().step_by(p).zip(c) {
-                            *d = v;
-                        }
+            } else if self.program.is_some() && n >= LANES_MIN_ROWS {
+                w.eval_program_columns(lanes, column, &mut cols, first, &mut errors);
+                return errors;
+            }
+            // Transposed into rows, solved as `run` does, and back, a
+            // tile of TILE rows at a time: the tile's rows stay in L1
+            // while every column passes. (Column by column over the
+            // whole task, a row-major buffer larger than L1 was read
+            // again from L2 for every column: 337 ns a row at 10 links
+            // against 46 for the same rows row-major, docs/benchmarks.md.)
+            const TILE: usize = 8;
+            pin.clear();
+            pin.resize(n * p, 0.0);
+            for (t, tile) in pin.chunks_mut(TILE * p).enumerate() {
+                let at = t * TILE;
+                for k in 0..p {
+                    let c = &column(k)[at..];
+                    for (d, &v) in tile[k..].iter_mut().step_by(p).zip(c) {
+                        *d = v;
                     }
                 }
-                pout.clear();
-                pout.resize(n * q, 0.0);
-                w.eval_task(lin, lanes, pin, pout, first, &mut errors);
-                for (t, tile) in pout.chunks(TILE * q).enumerate() {
-                    let at = t * TILE;
-                    for (o, c) in cols.iter_mut().enumerate() {
-                        for (d, &v) in c[at..].iter_mut().zip(tile[o..].iter().step_by(q)) {
-                            *d = v;
-                        }
+            }
+            pout.clear();
+            pout.resize(n * q, 0.0);
+            w.eval_task(lin, lanes, pin, pout, first, &mut errors);
+            for (t, tile) in pout.chunks(TILE * q).enumerate() {
+                let at = t * TILE;
+                for (o, c) in cols.iter_mut().enumerate() {
+                    for (d, &v) in c[at..].iter_mut().zip(tile[o..].iter().step_by(q)) {
+                        *d = v;
                     }
                 }
-                errors
+            }
+            errors
+        })
+    }
+}
+
+/// What a batch task works with: a worker, the linear path's and the lanes'
+/// buffers, and the transposition's (column-major calls).
+struct TaskState<'a> {
+    w: Worker<'a>,
+    lin: Linear,
+    lanes: Lanes,
+    pin: Vec<f64>,
+    pout: Vec<f64>,
+}
+
+impl<'a> TaskState<'a> {
+    fn new(plan: &'a BatchPlan) -> Self {
+        TaskState {
+            w: plan.worker(),
+            lin: Linear::default(),
+            lanes: plan.lanes(),
+            pin: Vec::new(),
+            pout: Vec::new(),
+        }
+    }
+}
+
+/// A [`TaskState`]'s buffers, without the plan.
+struct Spare {
+    ws: Workspace,
+    all: Vec<f64>,
+    lin: Linear,
+    lanes: Lanes,
+    pin: Vec<f64>,
+    pout: Vec<f64>,
+}
+
+/// Buffers a plan keeps from its calls on a calling thread for the next
+/// ones (at most [`SPARES`], for callers on several threads at once): a
+/// call of 8 rows spent more on building and freeing them than on solving
+/// (docs/benchmarks.md). A clone of the plan starts with none; so does a
+/// plan whose program or prepared train changes (`BatchPlan::reprogram`).
+#[derive(Default)]
+struct Spares(std::sync::Mutex<Vec<Spare>>);
+
+impl std::fmt::Debug for Spares {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let kept = self.0.lock().map_or(0, |v| v.len());
+        write!(f, "Spares({kept} kept)")
+    }
+}
+
+/// Most buffers a plan keeps.
+const SPARES: usize = 4;
+
+impl Clone for Spares {
+    fn clone(&self) -> Self {
+        Spares::default()
+    }
+}
+
+impl Spares {
+    /// A kept state, or a new one.
+    fn take<'a>(&self, plan: &'a BatchPlan) -> TaskState<'a> {
+        let spare = self.0.lock().ok().and_then(|mut v| v.pop());
+        match spare {
+            Some(s) => TaskState {
+                w: Worker {
+                    plan,
+                    ws: s.ws,
+                    all: s.all,
+                },
+                lin: s.lin,
+                lanes: s.lanes,
+                pin: s.pin,
+                pout: s.pout,
             },
-        )
+            None => TaskState::new(plan),
+        }
+    }
+
+    /// Keep `t`'s buffers (dropped when [`SPARES`] are kept already, or
+    /// when another thread panicked holding the lock).
+    fn keep(&self, t: TaskState<'_>) {
+        if let Ok(mut v) = self.0.lock()
+            && v.len() < SPARES
+        {
+            v.push(Spare {
+                ws: t.w.ws,
+                all: t.w.all,
+                lin: t.lin,
+                lanes: t.lanes,
+                pin: t.pin,
+                pout: t.pout,
+            });
+        }
     }
 }
 

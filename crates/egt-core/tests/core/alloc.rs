@@ -135,6 +135,58 @@ fn batch_rows_allocate_nothing() {
     }
 }
 
+/// A small batch call on the calling thread reuses the buffers the plan
+/// kept from the call before: after the first, a call of 64 rows allocates
+/// only its task lists (one vector row-major; the columns and one task's
+/// column list column-major), and gives the first call's numbers bit for
+/// bit, after a call with a bad row too. Every path: the program (bounds),
+/// the lanes, and the linear path (a load sweep); kinematics and dynamics.
+#[test]
+fn small_batch_calls_reuse_the_plans_buffers() {
+    use egt_core::batch::Threads;
+    for (name, t) in one_dof_trains() {
+        for compute in [Compute::Kinematics, Compute::Dynamics] {
+            for bounds in [false, true] {
+                let p = plan(&t, compute).with_condition_bounds(bounds);
+                let (np, nq) = (p.parameters().len(), p.outputs().len());
+                let rows = 64;
+                for sweep in ["ratio.", "torque."] {
+                    let Some(c) = p.parameters().iter().position(|n| n.starts_with(sweep)) else {
+                        continue;
+                    };
+                    let mut params: Vec<f64> = (0..rows).flat_map(|_| p.base().to_vec()).collect();
+                    for r in 0..rows {
+                        params[r * np + c] *= 1.0 + 0.001 * r as f64;
+                    }
+                    let columns: Vec<f64> = (0..np)
+                        .flat_map(|k| params[k..].iter().step_by(np).copied().collect::<Vec<_>>())
+                        .collect();
+                    let mut bad = params.clone();
+                    bad[5 * np + c] = f64::NAN;
+                    let what = format!("{name} {compute:?} bounds {bounds} {sweep}");
+                    let (mut first, mut again) = (vec![0.0; rows * nq], vec![0.0; rows * nq]);
+                    let e = p.run_with(Threads::Calling, &params, &mut first);
+                    assert!(e.is_empty(), "{what}: {e:?}");
+                    p.run_with(Threads::Calling, &bad, &mut again);
+                    let (n, e) = allocations(|| p.run_with(Threads::Calling, &params, &mut again));
+                    assert!(e.is_empty(), "{what}");
+                    assert!(n <= 1, "{what}: {n} allocations row-major");
+                    let same = first
+                        .iter()
+                        .zip(&again)
+                        .all(|(a, b)| a.to_bits() == b.to_bits());
+                    assert!(same, "{what}: the kept buffers changed the numbers");
+                    p.run_columns_with(Threads::Calling, &columns, &mut again);
+                    let (n, e) =
+                        allocations(|| p.run_columns_with(Threads::Calling, &columns, &mut again));
+                    assert!(e.is_empty(), "{what}");
+                    assert!(n <= 3, "{what}: {n} allocations column-major");
+                }
+            }
+        }
+    }
+}
+
 #[test]
 fn prepared_solves_and_mass_fill_allocate_nothing() {
     for (name, t) in one_dof_trains() {
