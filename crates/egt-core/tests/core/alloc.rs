@@ -167,7 +167,8 @@ fn small_batch_calls_reuse_the_plans_buffers() {
                     let (mut first, mut again) = (vec![0.0; rows * nq], vec![0.0; rows * nq]);
                     let e = p.run_with(Threads::Calling, &params, &mut first);
                     assert!(e.is_empty(), "{what}: {e:?}");
-                    p.run_with(Threads::Calling, &bad, &mut again);
+                    let e = p.run_with(Threads::Calling, &bad, &mut again);
+                    assert_eq!(e.iter().map(|e| e.row).collect::<Vec<_>>(), [5], "{what}");
                     let (n, e) = allocations(|| p.run_with(Threads::Calling, &params, &mut again));
                     assert!(e.is_empty(), "{what}");
                     assert!(n <= 1, "{what}: {n} allocations row-major");
@@ -181,6 +182,11 @@ fn small_batch_calls_reuse_the_plans_buffers() {
                         allocations(|| p.run_columns_with(Threads::Calling, &columns, &mut again));
                     assert!(e.is_empty(), "{what}");
                     assert!(n <= 3, "{what}: {n} allocations column-major");
+                    let same = (0..rows).all(|r| {
+                        (0..nq)
+                            .all(|o| first[r * nq + o].to_bits() == again[o * rows + r].to_bits())
+                    });
+                    assert!(same, "{what}: column-major with kept buffers differs");
                 }
             }
         }
