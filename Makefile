@@ -81,8 +81,9 @@ fuzz-seed: ## Seed fuzz/corpus/* from examples/ (specs, adjacency strings, input
 	bash fuzz/seed-corpus.sh
 
 # The CI run: coverage-guided libFuzzer on the pinned stable toolchain
-# (RUSTC_BOOTSTRAP for cargo-fuzz's flags), no sanitizer: egt-core has no
-# unsafe code, and what is looked for is panics, aborts, timeouts and memory.
+# (RUSTC_BOOTSTRAP for cargo-fuzz's flags), no sanitizer: egt-core's one
+# unsafe block runs the compiled batch program (the spec target reaches it),
+# and what is looked for is panics, aborts, timeouts and memory.
 # CI builds the harnesses unoptimised (FUZZ_BUILD=--dev): 2.3 minutes against
 # 9 for -O on 2 cores, with overflow checks and debug assertions on; about 20
 # times fewer runs a second. Long runs use FUZZ_BUILD=-O (docs/fuzzing.md).

@@ -239,9 +239,11 @@ def summary(rust: dict[str, Any], python: dict[str, Any], data: dict[str, list[t
         links = size["links"]
         el = t("egt columns, their outputs", links)
         floor = size["floor_seconds"]
-        ops = next((m.get("operations") for m in size["methods"] if m["method"] == "egt columns, their outputs"), None)
+        like = next((m for m in size["methods"] if m["method"] == "egt columns, their outputs"), {})
+        ops = like.get("operations")
+        how = {True: ", compiled", False: ", interpreted"}.get(like.get("compiled"), "")
         lines.append(
-            f"| {links} | {fmt_time(el)} | {ops if ops is not None else '–'} | {fmt_time(floor)} | {fmt_ratio(el, floor)} "
+            f"| {links} | {fmt_time(el)} | {f'{ops}{how}' if ops is not None else '–'} | {fmt_time(floor)} | {fmt_ratio(el, floor)} "
             f"| {fmt_time(t('numpy-batch', links))} | {fmt_ratio(t('numpy-batch', links), el)} "
             f"| {fmt_time(t('sympy-cse-batch', links))} | {fmt_ratio(t('sympy-cse-batch', links), el)} |"
         )

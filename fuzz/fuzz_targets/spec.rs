@@ -1,6 +1,7 @@
 //! Fuzz target: a whole spec (TOML or JSON, by the first byte) through parsing,
 //! validation and every analysis the spec's `[analysis]` table can drive:
-//! kinematics, inverse dynamics and power (as the batch plan builds them),
+//! kinematics, inverse dynamics and power (as the batch plan builds them,
+//! and with condition bounds, by the straight-line program),
 //! stability and the shift table. Any error is fine; a panic, an abort, or an
 //! accepted spec with a non-finite kinematic result is a bug.
 #![no_main]
@@ -23,6 +24,13 @@ fuzz_target!(|data: &[u8]| {
             if let Ok(plan) = BatchPlan::new(&train, &spec) {
                 let mut out = vec![0.0; plan.outputs().len()];
                 let _ = plan.run(plan.base(), &mut out);
+                // The straight-line program, compiled to machine code where
+                // the machine has AVX-512: a whole block of the base row.
+                let plan = plan.with_condition_bounds(true);
+                let rows: Vec<f64> = (0..64).flat_map(|_| plan.base().iter().copied()).collect();
+                let mut out = vec![0.0; 64 * plan.outputs().len()];
+                let _ = plan.run_columns(&rows, &mut out);
+                let _ = plan.run(&rows, &mut out);
             }
         }
     }

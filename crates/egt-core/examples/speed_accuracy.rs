@@ -242,6 +242,7 @@ fn main() {
                 methods.push(json!({
                     "method": route, "seconds": seconds, "error": max,
                     "operations": plan.program_operations(),
+                    "compiled": plan.program_compiled(),
                     "errors": {"speeds": worst(|e| e.speeds), "accelerations": worst(|e| e.accelerations),
                                "multipliers": worst(|e| e.multipliers), "torques": worst(|e| e.torques)},
                 }));

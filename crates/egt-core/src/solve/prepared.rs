@@ -18,6 +18,7 @@
 
 use std::ops::Range;
 
+mod jit;
 mod lanes;
 mod tape;
 pub(crate) use lanes::LaneWorkspace;

@@ -26,7 +26,15 @@
 //! row-by-row solve's only by rounding (another order of the same
 //! operations; tested within 1e-12 of the largest output, and against exact
 //! rationals in the accuracy harness).
+//!
+//! Where the machine has AVX-512, the program also runs as machine code
+//! compiled for the train (see [`super::jit`]): the same operations in the
+//! same order, with the values kept in registers, giving the same numbers
+//! and the same checks bit for bit. The finiteness checks are sums (one for
+//! the parameters, one for the results): a sum is finite when every term is,
+//! unless it overflows, and such a row is left to the lanes.
 
+use super::jit::{GOOD, MASKS, MOVING, PASSES};
 use super::{Compute, PreparedTrain};
 use crate::model::equations::willis_row;
 use crate::numerics::linalg::COND_WARN;
@@ -50,7 +58,7 @@ enum S {
 /// One operation: its result's slot first. Every operation reads slots
 /// written before it; no result overwrites one of its own operands.
 #[derive(Debug, Clone, Copy)]
-enum Op {
+pub(super) enum Op {
     Neg(u32, u32),
     AddC(u32, u32, f64),
     MulC(u32, u32, f64),
@@ -77,7 +85,7 @@ enum Op {
 
 impl Op {
     /// The result's slot (none for a check).
-    fn dest(&self) -> Option<u32> {
+    pub(super) fn dest(&self) -> Option<u32> {
         let mut op = *self;
         op.dest_mut().map(|d| *d)
     }
@@ -103,7 +111,7 @@ impl Op {
     }
 
     /// The slots read, each passed to `f` (by reference, to rename them).
-    fn operands(&mut self, mut f: impl FnMut(&mut u32)) {
+    pub(super) fn operands(&mut self, mut f: impl FnMut(&mut u32)) {
         match self {
             Op::Neg(_, a)
             | Op::AddC(_, a, _)
@@ -151,6 +159,8 @@ pub(crate) struct Program {
     /// The parameter columns; those before `cols.end` are loaded into slots
     /// `0..cols.end`.
     cols: Columns,
+    /// The operations as machine code, where this machine runs it.
+    code: Option<super::jit::Code>,
 }
 
 /// A block's slots and checks, one per thread.
@@ -160,8 +170,13 @@ pub(crate) struct ProgramWorkspace {
     ok: [[bool; BLOCK]; 3],
     /// Rows of the block that passed every check (and their own parameter check).
     pub valid: [bool; BLOCK],
+    /// Every row of a whole block is valid (set by the compiled code only;
+    /// false says nothing).
+    pub all_valid: bool,
     moving: [bool; BLOCK],
     arch: pulp::Arch,
+    /// The compiled code's pointer table.
+    io: Vec<usize>,
 }
 
 /// The columns of one row's parameters, as the batch lays them out.
@@ -737,10 +752,21 @@ impl PreparedTrain {
         let outputs: Vec<(S, Option<f64>)> = (chosen.iter())
             .map(|&o| outputs.get(o).copied())
             .collect::<Option<_>>()?;
-        for (&o, v) in chosen.iter().zip(&outputs) {
-            if let (true, S::V(v)) = (o < results, v.0) {
-                b.check(Op::Finite(KIN, v));
-            }
+        // The results are finite when their sum is: one check for all. A
+        // sum with an infinite or NaN term is not finite; one of finite
+        // terms is, unless it overflows, and that row is left to the lanes,
+        // which solve it.
+        let mut terms: Vec<S> = (chosen.iter().zip(&outputs))
+            .filter(|(o, v)| **o < results && matches!(v.0, S::V(_)))
+            .map(|(_, v)| v.0)
+            .collect();
+        while terms.len() > 1 {
+            terms = (terms.chunks(2))
+                .map(|t| if let [x, y] = t { b.add(*x, *y) } else { t[0] })
+                .collect();
+        }
+        if let Some(S::V(v)) = terms.first() {
+            b.check(Op::Finite(KIN, *v));
         }
         let statics = outputs
             .iter()
@@ -755,8 +781,10 @@ impl PreparedTrain {
             statics,
             needs,
             cols,
+            code: None,
         };
         program.allocate(b.next as usize);
+        program.compile();
         Some(program)
     }
 }
@@ -765,6 +793,24 @@ impl Program {
     /// Operations and checks.
     pub(crate) fn len(&self) -> usize {
         self.ops.len()
+    }
+
+    /// Whether the operations run as machine code (see [`super::jit`]).
+    pub(crate) fn compiled(&self) -> bool {
+        self.code.is_some()
+    }
+
+    /// The same program, interpreted (to compare the two).
+    #[cfg(test)]
+    pub(crate) fn interpreted(mut self) -> Self {
+        self.code = None;
+        self
+    }
+
+    /// The operations as machine code, where this machine runs it: the
+    /// parameters' and the outputs' slots are the ones read back.
+    fn compile(&mut self) {
+        self.code = super::jit::Code::compile(&self.ops, self.slots, self.cols, &self.outputs);
     }
 
     /// Drop the operations nothing reads, then give each result a slot that
@@ -877,8 +923,10 @@ impl Program {
             vals: vec![[0.0; BLOCK]; self.slots],
             ok: [[true; BLOCK]; 3],
             valid: [false; BLOCK],
+            all_valid: false,
             moving: [false; BLOCK],
             arch: pulp::Arch::new(),
+            io: Vec::new(),
         }
     }
 
@@ -916,9 +964,67 @@ impl Program {
         self.check_and_run(w, count);
     }
 
+    /// [`Program::run_columns`] then [`Program::write_columns`] on rows
+    /// `at..to` of the columns (`column(k)` all of parameter column `k`,
+    /// `out[o]` of output column `o`), at most [`BLOCK`] rows: a whole block
+    /// is read and written in place by the compiled code.
+    pub(crate) fn solve_columns<'c>(
+        &self,
+        w: &mut ProgramWorkspace,
+        column: impl Fn(usize) -> &'c [f64],
+        out: &mut [&mut [f64]],
+        at: usize,
+        to: usize,
+    ) {
+        match &self.code {
+            Some(code) if to - at == BLOCK => {
+                let mut masks = [0u8; MASKS * PASSES];
+                let in_place = super::jit::InPlace {
+                    column: &column,
+                    out,
+                    at,
+                };
+                code.run(&mut w.vals, &mut masks, &mut w.io, Some(in_place));
+                self.finish(w, &masks, BLOCK);
+                self.write_statics(w, out, at, to);
+            }
+            _ => {
+                self.run_columns(w, |k| &column(k)[at..to]);
+                self.write_columns(w, out, at, to);
+            }
+        }
+    }
+
+    /// Each row's validity and motion from the compiled code's masks.
+    fn finish(&self, w: &mut ProgramWorkspace, masks: &[u8; MASKS * PASSES], count: usize) {
+        const { assert!(BLOCK == 64, "a block's rows are the bits of a u64") };
+        let word = |m: usize| {
+            let bytes: [u8; 8] = std::array::from_fn(|p| masks[m * PASSES + p]);
+            u64::from_le_bytes(bytes)
+        };
+        let mut valid = word(GOOD) & u64::MAX.checked_shr(64 - count as u32).unwrap_or(0);
+        for m in [KIN, PSI, FORCE] {
+            if self.needs[m as usize] {
+                valid &= word(m as usize);
+            }
+        }
+        let moving = word(MOVING);
+        for r in 0..BLOCK {
+            w.valid[r] = valid >> r & 1 == 1;
+            w.moving[r] = moving >> r & 1 == 1;
+        }
+        w.all_valid = valid == u64::MAX;
+    }
+
     /// The parameter rules on the loaded columns, the operations, and each
     /// row's validity.
     fn check_and_run(&self, w: &mut ProgramWorkspace, count: usize) {
+        if let Some(code) = &self.code {
+            let mut masks = [0u8; MASKS * PASSES];
+            code.run(&mut w.vals, &mut masks, &mut w.io, None);
+            self.finish(w, &masks, count);
+            return;
+        }
         let arch = w.arch;
         arch.dispatch(Run {
             program: self,
@@ -933,20 +1039,31 @@ impl Program {
     fn check_params(&self, w: &mut ProgramWorkspace, good: &mut [bool; BLOCK]) {
         let c = self.cols;
         w.moving = [false; BLOCK];
+        // Finite when their sum is (in column order, as the compiled code
+        // adds them): a row whose sum overflows is left to the lanes.
+        let mut sum = [0.0; BLOCK];
         for (k, v) in w.vals[..self.cols.end].iter().enumerate() {
+            if k == 0 {
+                sum = *v;
+            } else {
+                sum.iter_mut().zip(v.iter()).for_each(|(s, &x)| *s += x);
+            }
             let column = good.iter_mut().zip(v.iter());
             if k < c.speed {
-                column.for_each(|(g, &x)| *g &= super::ratio_ok(x));
-            } else if k < c.inertia {
-                column.for_each(|(g, &x)| *g &= x.is_finite());
-            } else {
-                column.for_each(|(g, &x)| *g &= super::non_negative(x));
+                column.for_each(|(g, &x)| *g &= x != 0.0);
+            } else if k >= c.inertia {
+                column.for_each(|(g, &x)| *g &= x >= 0.0);
             }
             if (c.accel..c.torque).contains(&k) {
                 for (m, &x) in w.moving.iter_mut().zip(v.iter()) {
                     *m |= x != 0.0;
                 }
             }
+        }
+        if self.cols.end > 0 {
+            good.iter_mut()
+                .zip(sum)
+                .for_each(|(g, s)| *g &= s.is_finite());
         }
     }
 
@@ -1040,7 +1157,9 @@ impl Program {
                     let (a, b) = (s.get(a), s.get(b));
                     for r in 0..BLOCK {
                         // 0 (a - b) is NaN when either is not finite (both are >= 0).
-                        o[r] = a[r].max(b[r]) + 0.0 * (a[r] - b[r]);
+                        // The select is x86's `maxpd` (the compiled code's).
+                        let m = if a[r] > b[r] { a[r] } else { b[r] };
+                        o[r] = m + 0.0 * (a[r] - b[r]);
                     }
                 }
                 Op::NoLarger(m, a, b) => {
@@ -1101,6 +1220,11 @@ impl Program {
         for (d, &k) in out.iter_mut().zip(&self.outputs) {
             d[at..to].copy_from_slice(&w.vals[k as usize][..to - at]);
         }
+        self.write_statics(w, out, at, to);
+    }
+
+    /// What the static rows among `at..to` hold instead (see `statics`).
+    fn write_statics(&self, w: &ProgramWorkspace, out: &mut [&mut [f64]], at: usize, to: usize) {
         for &(o, v) in &self.statics {
             for (d, &m) in out[o][at..to].iter_mut().zip(&w.moving) {
                 if !m {
@@ -1127,6 +1251,7 @@ impl pulp::WithSimd for Run<'_> {
     #[allow(clippy::needless_range_loop)]
     fn with_simd<S: pulp::Simd>(self, _: S) {
         let Run { program, w, count } = self;
+        w.all_valid = false;
         let mut good = [true; BLOCK];
         program.check_params(w, &mut good);
         w.ok = [[true; BLOCK]; 3];
