@@ -199,8 +199,8 @@ def summary(rust: dict[str, Any], python: dict[str, Any], data: dict[str, list[t
         "to a pool thread and back cost about 100 µs here, about 10 ns a row at 6 links, which the runs before "
         "2026-11-26's fourth counted). "
         "A ratio below 1× means the other route is faster than egt (batch against egt batch). egt program is the same "
-        "batch with condition bounds (the `cond.*` columns not wanted): the train's straight-line program, 64 rows per "
-        "operation, its rows within rounding of the worker's (its errors against exact rationals are measured in the run). "
+        "batch with condition bounds (the `cond.*` columns not wanted): the train's straight-line program over blocks of 64 rows, "
+        "compiled to AVX-512 code for the train where the machine has it (the like-for-like table says which), its rows within rounding of the worker's (its errors against exact rationals are measured in the run). "
         "egt columns is the program through `BatchPlan::run_columns`: parameters and outputs column-major, one contiguous "
         "array each, as NumPy's and SymPy's routes hold them (the same numbers bit for bit, checked in the run).",
         "",
