@@ -20,10 +20,11 @@ demo: ## Run egt on a bundled example: topology checks, circuit table, speeds
 
 test: test-rust test-python ## Run every test (Rust and Python)
 
-test-rust: ## Rust unit, integration, CLI and doc tests
+test-rust: ## Rust unit, integration, CLI and doc tests; the core's again as released (optimised, AVX-512 paths)
 	cargo fetch --locked || cargo fetch
 	cargo test --workspace --all-targets
 	cargo test --workspace --doc
+	cargo test --release -p egt-core --lib --test core
 
 $(VENV)/.ready: crates/egt-py/requirements-dev.txt
 	$(PYTHON) -m venv $(VENV)

@@ -110,7 +110,7 @@ impl LaneLu {
                 }
             }
             for l in 0..LANES {
-                anorm[l] = anorm[l].max(s[l]);
+                anorm[l] = larger(anorm[l], s[l]);
             }
         }
         self.anorm = anorm;
@@ -277,7 +277,7 @@ impl LaneLu {
             let mut yj = y[j];
             for l in 0..LANES {
                 yj[l] *= dinv[j][l].abs();
-                umax[l] = umax[l].max(yj[l]);
+                umax[l] = larger(umax[l], yj[l]);
             }
             y[j] = yj;
             for i in j + 1..hi[j] {
@@ -293,7 +293,7 @@ impl LaneLu {
         for k in (0..n).rev() {
             let zk = z[k];
             for l in 0..LANES {
-                lmax[l] = lmax[l].max(zk[l]);
+                lmax[l] = larger(lmax[l], zk[l]);
             }
             for j in lo[k]..k {
                 let m = a[k * n + j];
@@ -377,7 +377,7 @@ impl LaneLu {
                     }
                     let previous = est[l];
                     if now[l] <= previous || same_signs(xs, signs, l) {
-                        est[l] = now[l].max(previous);
+                        est[l] = larger(now[l], previous);
                         going[l] = false;
                     } else {
                         est[l] = now[l];
@@ -390,7 +390,7 @@ impl LaneLu {
         }
         for l in 0..LANES {
             let alt_est = 2.0 * alt_norm[l] / (3.0 * n as f64);
-            let c = self.anorm[l] * est[l].max(alt_est);
+            let c = self.anorm[l] * larger(est[l], alt_est);
             cond[l] = if c.is_finite() { c } else { f64::INFINITY };
             if cond[l] > COND_REFUSE {
                 live[l] = false;
@@ -401,6 +401,17 @@ impl LaneLu {
         self.signs = sign;
         cond
     }
+}
+
+/// `a.max(b)` (the other when one is NaN), spelled as a comparison. In
+/// release builds, `f64::max` over the lanes inside the AVX-512 dispatch
+/// came out wrong: the 1-norm of one lane's 7 x 7 matrix missed its largest
+/// column (4.625 for 4.868; `lanes_equal_fresh_row_by_row_solves_bit_for_bit`
+/// failed in release only, the debug build and the scalar code agreeing).
+/// The comparison gives the scalar code's numbers in both builds.
+#[inline(always)]
+fn larger(a: f64, b: f64) -> f64 {
+    if b > a || a.is_nan() { b } else { a }
 }
 
 #[inline(always)]
