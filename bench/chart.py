@@ -200,7 +200,7 @@ def summary(rust: dict[str, Any], python: dict[str, Any], data: dict[str, list[t
         "2026-11-26's fourth counted). "
         "A ratio below 1× means the other route is faster than egt (batch against egt batch). egt program is the same "
         "batch with condition bounds (the `cond.*` columns not wanted): the train's straight-line program over blocks of 64 rows, "
-        "compiled to AVX-512 code for the train where the machine has it (the like-for-like table says which), its rows within rounding of the worker's (its errors against exact rationals are measured in the run). "
+        "compiled to AVX-512 code for the train where the machine has it, else to AVX2 code (the like-for-like table says which), its rows within rounding of the worker's (its errors against exact rationals are measured in the run). "
         "egt columns is the program through `BatchPlan::run_columns`: parameters and outputs column-major, one contiguous "
         "array each, as NumPy's and SymPy's routes hold them (the same numbers bit for bit, checked in the run).",
         "",
@@ -242,6 +242,8 @@ def summary(rust: dict[str, Any], python: dict[str, Any], data: dict[str, list[t
         like = next((m for m in size["methods"] if m["method"] == "egt columns, their outputs"), {})
         ops = like.get("operations")
         how = {True: ", compiled", False: ", interpreted"}.get(like.get("compiled"), "")
+        if like.get("instructions"):
+            how = f", compiled to {like['instructions']}"
         lines.append(
             f"| {links} | {fmt_time(el)} | {f'{ops}{how}' if ops is not None else '–'} | {fmt_time(floor)} | {fmt_ratio(el, floor)} "
             f"| {fmt_time(t('numpy-batch', links))} | {fmt_ratio(t('numpy-batch', links), el)} "

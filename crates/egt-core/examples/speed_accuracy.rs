@@ -243,6 +243,7 @@ fn main() {
                     "method": route, "seconds": seconds, "error": max,
                     "operations": plan.program_operations(),
                     "compiled": plan.program_compiled(),
+                    "instructions": plan.program_instructions(),
                     "errors": {"speeds": worst(|e| e.speeds), "accelerations": worst(|e| e.accelerations),
                                "multipliers": worst(|e| e.multipliers), "torques": worst(|e| e.torques)},
                 }));

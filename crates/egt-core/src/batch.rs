@@ -636,10 +636,22 @@ impl BatchPlan {
     }
 
     /// Whether the straight-line program runs as machine code compiled for
-    /// this train (x86-64 with AVX-512F and DQ; `EGT_JIT=0` turns it off),
-    /// rather than interpreted. The numbers are the same, bit for bit.
+    /// this train (x86-64 with AVX-512F and DQ, or AVX2 and BMI2;
+    /// `EGT_JIT=0` turns it off), rather than interpreted. The numbers are
+    /// the same, bit for bit.
     pub fn program_compiled(&self) -> bool {
         self.program.as_ref().is_some_and(Program::compiled)
+    }
+
+    /// The vector instructions of the compiled program: `"AVX-512"` or
+    /// `"AVX2"` (`EGT_JIT=avx2` asks for AVX2 where AVX-512 would run), or
+    /// None where the program is interpreted or there is none.
+    pub fn program_instructions(&self) -> Option<&'static str> {
+        use crate::solve::prepared::Isa;
+        self.program.as_ref()?.isa().map(|isa| match isa {
+            Isa::Avx512 => "AVX-512",
+            Isa::Avx2 => "AVX2",
+        })
     }
 
     /// The length of the straight-line program (operations and checks),
@@ -1770,6 +1782,7 @@ fn bad_parameter(plan: &BatchPlan, c: usize, v: f64) -> Error {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::solve::prepared::Isa;
     use crate::{Format, Train};
 
     /// A ratio sweep goes through the lanes: every good row of a smooth
@@ -1875,17 +1888,33 @@ mod tests {
     /// no code, and the test says so by failing only where there should be.
     #[test]
     fn compiled_and_interpreted_programs_agree_bit_for_bit() {
-        let avx512 = {
+        // The instruction sets this machine runs, detected here rather than
+        // asked of the compiler's own choice.
+        let has = |features: &[&str]| {
             #[cfg(target_arch = "x86_64")]
             {
-                std::arch::is_x86_feature_detected!("avx512f")
-                    && std::arch::is_x86_feature_detected!("avx512dq")
-                    && std::env::var("EGT_JIT").map_or(true, |v| v != "0")
+                features.iter().all(|f| match *f {
+                    "avx512f" => std::arch::is_x86_feature_detected!("avx512f"),
+                    "avx512dq" => std::arch::is_x86_feature_detected!("avx512dq"),
+                    "avx2" => std::arch::is_x86_feature_detected!("avx2"),
+                    _ => std::arch::is_x86_feature_detected!("bmi2"),
+                })
             }
             #[cfg(not(target_arch = "x86_64"))]
             {
+                let _ = features;
                 false
             }
+        };
+        let isas = [
+            (Isa::Avx512, has(&["avx512f", "avx512dq"])),
+            (Isa::Avx2, has(&["avx2", "bmi2"])),
+        ];
+        let jit = std::env::var("EGT_JIT").unwrap_or_default();
+        let default = match jit.as_str() {
+            "0" => None,
+            "avx2" => isas[1].1.then_some(Isa::Avx2),
+            _ => isas.iter().find(|i| i.1).map(|i| i.0),
         };
         let example = |text: &str, name: &str| {
             Train::from_str(text, Format::Toml, name).unwrap_or_else(|e| panic!("{e}"))
@@ -1930,13 +1959,33 @@ mod tests {
                 .program
                 .as_ref()
                 .unwrap_or_else(|| panic!("{name}: no program"));
-            assert_eq!(
-                program.compiled(),
-                avx512,
-                "{name}: compiled where AVX-512 is"
-            );
+            assert_eq!(program.isa(), default, "{name}: compiled where it runs");
             let mut interpreted = p.clone();
             interpreted.program = interpreted.program.take().map(Program::interpreted);
+            for &(isa, runs) in &isas {
+                let mut p = p.clone();
+                p.program = p.program.take().map(|q| q.compiled_for(isa));
+                let got = p.program.as_ref().and_then(Program::isa);
+                assert_eq!(
+                    got,
+                    runs.then_some(isa),
+                    "{name}: {isa:?} code where it runs"
+                );
+                if runs {
+                    compare(&format!("{name} {isa:?}"), &p, &interpreted);
+                }
+            }
+        }
+    }
+
+    /// The rows of `plan` on its compiled program, and on `interpreted`: the
+    /// same bits, errors and valid rows.
+    fn compare(name: &str, p: &BatchPlan, interpreted: &BatchPlan) {
+        {
+            let program = p
+                .program
+                .as_ref()
+                .unwrap_or_else(|| panic!("{name}: no program"));
             let (np, nq) = (p.parameters().len(), p.outputs().len());
             let rows = 300;
             let mut params = Vec::new();

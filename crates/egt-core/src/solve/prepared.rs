@@ -19,6 +19,7 @@
 use std::ops::Range;
 
 mod jit;
+pub(crate) use jit::Isa;
 mod lanes;
 mod tape;
 pub(crate) use lanes::LaneWorkspace;

@@ -1,7 +1,8 @@
-//! A [`Program`](super::tape::Program) compiled to AVX-512 machine code
-//! for one train: its operations in order, eight rows to a register, with
-//! the values kept in the 32 vector registers between operations instead of
-//! being stored to and reloaded from the block's slots after each one.
+//! A [`Program`](super::tape::Program) compiled to x86-64 vector machine
+//! code for one train: its operations in order, eight rows to a register
+//! (AVX-512) or four (AVX2), with the values kept in the vector registers
+//! between operations instead of being stored to and reloaded from the
+//! block's slots after each one.
 //!
 //! The interpreter (`Program::run_ops`) reads and writes a slot of
 //! [`BLOCK`] rows for every operation, and picks each operation by an
@@ -9,7 +10,7 @@
 //! registers; a value goes to its slot only when it is an output (written
 //! once, where it is computed) or when the registers run out (the one read
 //! furthest ahead is spilled, as Belady's rule). The code runs the block
-//! as `BLOCK / 8` passes of one loop body. It reads the parameters from
+//! as `BLOCK / lanes` passes of one loop body. It reads the parameters from
 //! their columns and writes the outputs into theirs through a table of
 //! pointers, so a whole block of a column-major batch is not copied in and
 //! out (a part block, or a row-major one, points it at the block's slots).
@@ -20,13 +21,18 @@
 //! no fused multiply-add, divisions as divisions (`1 / a`, `a / c`),
 //! negation and absolute value on the sign bit. So every result is the
 //! interpreter's bit for bit, except the payload of a NaN, which only a row
-//! the checks refuse holds (tested: `jit_and_interpreter_agree_bit_for_bit`).
-//! The checks accumulate in the mask registers `k1` to `k5`, one bit a row,
-//! and are written out as one byte a pass.
+//! the checks refuse holds (tested for both instruction sets:
+//! `compiled_and_interpreted_programs_agree_bit_for_bit`). With AVX-512
+//! the checks accumulate in the mask registers `k1` to `k5`, one bit a row,
+//! written out as one byte a pass; with AVX2 each check's four bits are
+//! moved to a general register (`vmovmskpd`) and gathered, as failures, in
+//! the masks' words in memory.
 //!
-//! Only x86-64 with AVX-512F and DQ (detected at run time) gets code; any
-//! other machine, or a program past [`MAX_OPS`] operations, keeps the
-//! interpreter. `EGT_JIT=0` in the environment turns the compilation off.
+//! x86-64 with AVX-512F and DQ gets AVX-512 code; with AVX2 and BMI2 but
+//! not AVX-512, AVX2 code (both detected at run time). Any other machine,
+//! or a program past [`MAX_OPS`] operations, keeps the interpreter.
+//! `EGT_JIT=0` in the environment turns the compilation off; `EGT_JIT=avx2`
+//! asks for AVX2 code where AVX-512 would be used.
 //!
 //! This is the crate's one `unsafe`: making the code executable is done by
 //! `memmap2`, and calling it is a call through a function pointer to bytes
@@ -40,13 +46,57 @@ use std::sync::Arc;
 /// outgrow the instruction cache: about 20 bytes an operation).
 pub(crate) const MAX_OPS: usize = 4_000;
 
-/// Rows a register holds.
-const LANES: usize = 8;
-/// Passes of the loop body over a block.
-pub(crate) const PASSES: usize = BLOCK / LANES;
+/// Bytes a mask takes: one bit a row of the block (mask `m`'s row `r` is
+/// bit `r % 8` of byte `m * MASK_BYTES + r / 8`).
+pub(crate) const MASK_BYTES: usize = BLOCK / 8;
 
-/// Registers for values; zmm29 to zmm31 are the operations' scratch.
-const ALLOCATABLE: usize = 29;
+/// The vector instructions code is assembled with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Isa {
+    /// AVX-512F and DQ: 8 rows a zmm register, 29 registers for values.
+    Avx512,
+    /// AVX2 and BMI2: 4 rows a ymm register, 13 registers for values.
+    Avx2,
+}
+
+impl Isa {
+    /// Rows a register holds.
+    fn lanes(self) -> usize {
+        match self {
+            Isa::Avx512 => 8,
+            Isa::Avx2 => 4,
+        }
+    }
+
+    /// Registers for values (the rest are the operations' scratch).
+    fn allocatable(self) -> usize {
+        match self {
+            Isa::Avx512 => 29,
+            Isa::Avx2 => 13,
+        }
+    }
+
+    /// Whether this machine runs the code.
+    pub(crate) fn detected(self) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        {
+            match self {
+                Isa::Avx512 => {
+                    std::arch::is_x86_feature_detected!("avx512f")
+                        && std::arch::is_x86_feature_detected!("avx512dq")
+                }
+                Isa::Avx2 => {
+                    std::arch::is_x86_feature_detected!("avx2")
+                        && std::arch::is_x86_feature_detected!("bmi2")
+                }
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            false
+        }
+    }
+}
 
 /// The masks a pass writes: the program's three checks, the parameter
 /// rules, and the rows with an acceleration.
@@ -56,8 +106,8 @@ pub(crate) const GOOD: usize = 3;
 pub(crate) const MOVING: usize = 4;
 
 /// `fn(vals, constants, masks, io)`: the block's slots (slot `s` at `vals +
-/// s * BLOCK`), the constants the code reads, the masks (byte `m * PASSES +
-/// p`: the rows of pass `p` in mask `m`), and the table of the parameter
+/// s * BLOCK`), the constants the code reads, the masks (`MASK_BYTES` a
+/// mask, see [`MASK_BYTES`]), and the table of the parameter
 /// columns' then the output columns' first elements, each `BLOCK` long.
 type Entry = unsafe extern "sysv64" fn(*mut f64, *const f64, *mut u8, *const usize);
 
@@ -69,6 +119,7 @@ pub(crate) struct Code {
 
 struct Inner {
     map: memmap2::Mmap,
+    isa: Isa,
     constants: Vec<f64>,
     /// The slot count the code was assembled for.
     slots: usize,
@@ -80,25 +131,28 @@ struct Inner {
 
 impl std::fmt::Debug for Code {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "Code({} bytes)", self.inner.map.len())
+        write!(
+            f,
+            "Code({:?}, {} bytes)",
+            self.inner.isa,
+            self.inner.map.len()
+        )
     }
 }
 
-/// Whether this machine runs the code, and whether it is wanted.
-fn available() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        static OK: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-        *OK.get_or_init(|| {
-            std::env::var("EGT_JIT").map_or(true, |v| v != "0")
-                && std::arch::is_x86_feature_detected!("avx512f")
-                && std::arch::is_x86_feature_detected!("avx512dq")
-        })
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
+/// The instructions this machine's code is assembled with, if any: AVX-512
+/// where it runs, else AVX2; `EGT_JIT=0` none, `EGT_JIT=avx2` AVX2.
+pub(crate) fn chosen() -> Option<Isa> {
+    static ISA: std::sync::OnceLock<Option<Isa>> = std::sync::OnceLock::new();
+    *ISA.get_or_init(|| {
+        let wanted = std::env::var("EGT_JIT").unwrap_or_default();
+        let order: &[Isa] = match wanted.as_str() {
+            "0" => &[],
+            "avx2" => &[Isa::Avx2],
+            _ => &[Isa::Avx512, Isa::Avx2],
+        };
+        order.iter().copied().find(|isa| isa.detected())
+    })
 }
 
 impl Code {
@@ -110,7 +164,23 @@ impl Code {
         cols: Columns,
         outputs: &[u32],
     ) -> Option<Code> {
-        if !available() || ops.len() > MAX_OPS || cols.end > slots {
+        Code::compile_for(chosen()?, ops, slots, cols, outputs)
+    }
+
+    /// The instructions the code uses.
+    pub(crate) fn isa(&self) -> Isa {
+        self.inner.isa
+    }
+
+    /// [`Code::compile`] with `isa`, if this machine runs it.
+    pub(crate) fn compile_for(
+        isa: Isa,
+        ops: &[Op],
+        slots: usize,
+        cols: Columns,
+        outputs: &[u32],
+    ) -> Option<Code> {
+        if !isa.detected() || ops.len() > MAX_OPS || cols.end > slots {
             return None;
         }
         let mut in_range = outputs.iter().all(|&s| (s as usize) < slots);
@@ -123,13 +193,14 @@ impl Code {
         if !in_range || slots.checked_mul(BLOCK * 8)? > i32::MAX as usize / 2 {
             return None;
         }
-        let (bytes, constants) = assemble(ops, slots, cols, outputs).ok()?;
+        let (bytes, constants) = assemble(isa, ops, slots, cols, outputs).ok()?;
         let mut map = memmap2::MmapMut::map_anon(bytes.len()).ok()?;
         map.copy_from_slice(&bytes);
         let map = map.make_exec().ok()?;
         Some(Code {
             inner: Arc::new(Inner {
                 map,
+                isa,
                 constants,
                 slots,
                 end: cols.end,
@@ -147,7 +218,7 @@ impl Code {
     pub(crate) fn run<'c>(
         &self,
         vals: &mut [[f64; BLOCK]],
-        masks: &mut [u8; MASKS * PASSES],
+        masks: &mut [u8; MASKS * MASK_BYTES],
         io: &mut Vec<usize>,
         columns: Option<InPlace<'_, '_, 'c>>,
     ) {
@@ -181,12 +252,12 @@ impl Code {
         // writes slots below `inner.slots` (checked in `compile`), each
         // `BLOCK` f64 long, within `vals` (asserted above); it reads
         // `constants` at the indices it was assembled with (this vector,
-        // kept with it); it writes `MASKS * PASSES` bytes of `masks`; it
+        // kept with it); it writes `MASKS * MASK_BYTES` bytes of `masks`; it
         // reads the `end + outputs` entries of `io` (built above) and,
         // through each, `BLOCK` f64: slots within `vals`, or columns
         // asserted above to hold a whole block from `at`. The parameters
         // are only read and the outputs only written. It holds no pointer
-        // past its return. AVX-512F and DQ were detected.
+        // past its return. Its instruction set was detected (`compile_for`).
         unsafe {
             let entry: Entry = std::mem::transmute::<*const u8, Entry>(inner.map.as_ptr());
             entry(
@@ -218,8 +289,231 @@ struct Held {
     dirty: bool,
 }
 
+/// The operations' scratch registers (beyond the allocatable ones).
+const T0: usize = 100;
+const T1: usize = 101;
+const T2: usize = 102;
+
+/// A two-operand vector operation.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+enum Bin {
+    Add,
+    Sub,
+    Mul,
+    Div,
+    And,
+    Xor,
+    Max,
+}
+
+/// The second operand of a [`Bin`] or a compare: a register, or a constant
+/// (its index in the constants).
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+enum Src {
+    R(usize),
+    C(usize),
+}
+
+/// An assembler writing one instruction set's forms of the operations
+/// `assemble` needs; registers are numbered `0..isa.allocatable()`, and
+/// [`T0`], [`T1`], [`T2`] are the scratch.
+#[cfg(target_arch = "x86_64")]
+struct Vector {
+    a: iced_x86::code_asm::CodeAssembler,
+    isa: Isa,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Vector {
+    fn zmm(r: usize) -> iced_x86::code_asm::AsmRegisterZmm {
+        use iced_x86::code_asm::*;
+        const ZMM: [AsmRegisterZmm; 29] = [
+            zmm0, zmm1, zmm2, zmm3, zmm4, zmm5, zmm6, zmm7, zmm8, zmm9, zmm10, zmm11, zmm12, zmm13,
+            zmm14, zmm15, zmm16, zmm17, zmm18, zmm19, zmm20, zmm21, zmm22, zmm23, zmm24, zmm25,
+            zmm26, zmm27, zmm28,
+        ];
+        match r {
+            T0 => zmm30,
+            T1 => zmm31,
+            T2 => zmm29,
+            r => ZMM[r],
+        }
+    }
+
+    fn ymm(r: usize) -> iced_x86::code_asm::AsmRegisterYmm {
+        use iced_x86::code_asm::*;
+        const YMM: [AsmRegisterYmm; 13] = [
+            ymm0, ymm1, ymm2, ymm3, ymm4, ymm5, ymm6, ymm7, ymm8, ymm9, ymm10, ymm11, ymm12,
+        ];
+        match r {
+            T0 => ymm15,
+            T1 => ymm14,
+            T2 => ymm13,
+            r => YMM[r],
+        }
+    }
+
+    /// A vector of memory at `m`.
+    fn wide(
+        &self,
+        m: iced_x86::code_asm::AsmMemoryOperand,
+    ) -> iced_x86::code_asm::AsmMemoryOperand {
+        match self.isa {
+            Isa::Avx512 => iced_x86::code_asm::zmmword_ptr(m),
+            Isa::Avx2 => iced_x86::code_asm::ymmword_ptr(m),
+        }
+    }
+
+    /// Constant `i` as an operand: broadcast from its one double (AVX-512),
+    /// or its four copies (AVX2).
+    fn constant(&self, i: usize) -> iced_x86::code_asm::AsmMemoryOperand {
+        use iced_x86::code_asm::*;
+        match self.isa {
+            Isa::Avx512 => qword_bcst(rsi + (i * 8) as i32),
+            Isa::Avx2 => ymmword_ptr(rsi + (i * 32) as i32),
+        }
+    }
+
+    fn load(
+        &mut self,
+        r: usize,
+        m: iced_x86::code_asm::AsmMemoryOperand,
+    ) -> Result<(), iced_x86::IcedError> {
+        let m = self.wide(m);
+        match self.isa {
+            Isa::Avx512 => self.a.vmovupd(Self::zmm(r), m),
+            Isa::Avx2 => self.a.vmovupd(Self::ymm(r), m),
+        }
+    }
+
+    fn store(
+        &mut self,
+        m: iced_x86::code_asm::AsmMemoryOperand,
+        r: usize,
+    ) -> Result<(), iced_x86::IcedError> {
+        let m = self.wide(m);
+        match self.isa {
+            Isa::Avx512 => self.a.vmovupd(m, Self::zmm(r)),
+            Isa::Avx2 => self.a.vmovupd(m, Self::ymm(r)),
+        }
+    }
+
+    fn copy(&mut self, d: usize, x: usize) -> Result<(), iced_x86::IcedError> {
+        match self.isa {
+            Isa::Avx512 => self.a.vmovapd(Self::zmm(d), Self::zmm(x)),
+            Isa::Avx2 => self.a.vmovapd(Self::ymm(d), Self::ymm(x)),
+        }
+    }
+
+    /// Constant `i` in every lane of `d`.
+    fn splat(&mut self, d: usize, i: usize) -> Result<(), iced_x86::IcedError> {
+        use iced_x86::code_asm::*;
+        match self.isa {
+            Isa::Avx512 => self
+                .a
+                .vbroadcastsd(Self::zmm(d), qword_ptr(rsi + (i * 8) as i32)),
+            Isa::Avx2 => self.a.vmovupd(Self::ymm(d), self.constant(i)),
+        }
+    }
+
+    fn bin(&mut self, op: Bin, d: usize, x: usize, y: Src) -> Result<(), iced_x86::IcedError> {
+        macro_rules! emit {
+            ($a:expr, $d:expr, $x:expr, $y:expr) => {
+                match op {
+                    Bin::Add => $a.vaddpd($d, $x, $y),
+                    Bin::Sub => $a.vsubpd($d, $x, $y),
+                    Bin::Mul => $a.vmulpd($d, $x, $y),
+                    Bin::Div => $a.vdivpd($d, $x, $y),
+                    Bin::And => $a.vandpd($d, $x, $y),
+                    Bin::Xor => $a.vxorpd($d, $x, $y),
+                    Bin::Max => $a.vmaxpd($d, $x, $y),
+                }
+            };
+        }
+        match (self.isa, y) {
+            (Isa::Avx512, Src::R(y)) => emit!(self.a, Self::zmm(d), Self::zmm(x), Self::zmm(y)),
+            (Isa::Avx2, Src::R(y)) => emit!(self.a, Self::ymm(d), Self::ymm(x), Self::ymm(y)),
+            (Isa::Avx512, Src::C(i)) => {
+                let m = self.constant(i);
+                emit!(self.a, Self::zmm(d), Self::zmm(x), m)
+            }
+            (Isa::Avx2, Src::C(i)) => {
+                let m = self.constant(i);
+                emit!(self.a, Self::ymm(d), Self::ymm(x), m)
+            }
+        }
+    }
+
+    /// Clears every row of check `m` where `x pred y` is false (`pred` an
+    /// `_CMP_` predicate): in `k1..k4` (AVX-512), or, as a failure, in the
+    /// mask's word (AVX2, which inverts the words at the end).
+    fn check(&mut self, m: usize, x: usize, y: Src, pred: i32) -> Result<(), iced_x86::IcedError> {
+        use iced_x86::code_asm::*;
+        match self.isa {
+            Isa::Avx512 => {
+                let k = match m {
+                    0 => k1.k1(),
+                    1 => k2.k2(),
+                    2 => k3.k3(),
+                    _ => k4.k4(),
+                };
+                match y {
+                    Src::R(y) => self.a.vcmppd(k, Self::zmm(x), Self::zmm(y), pred),
+                    Src::C(i) => {
+                        let c = self.constant(i);
+                        self.a.vcmppd(k, Self::zmm(x), c, pred)
+                    }
+                }
+            }
+            Isa::Avx2 => {
+                match y {
+                    Src::R(y) => self
+                        .a
+                        .vcmppd(Self::ymm(T2), Self::ymm(x), Self::ymm(y), pred)?,
+                    Src::C(i) => {
+                        let c = self.constant(i);
+                        self.a.vcmppd(Self::ymm(T2), Self::ymm(x), c, pred)?
+                    }
+                }
+                self.a.vmovmskpd(eax, Self::ymm(T2))?;
+                self.a.xor(eax, 0xf)?;
+                self.gather(m)
+            }
+        }
+    }
+
+    /// Sets the rows of mask `MOVING` where `x != 0` (`_CMP_NEQ_UQ`: true
+    /// for NaN); constant `zero` is 0.
+    fn mark(&mut self, x: usize, zero: usize) -> Result<(), iced_x86::IcedError> {
+        use iced_x86::code_asm::*;
+        let c = self.constant(zero);
+        match self.isa {
+            Isa::Avx512 => {
+                self.a.vcmppd(k6, Self::zmm(x), c, 0x04)?;
+                self.a.korb(k5, k5, k6)
+            }
+            Isa::Avx2 => {
+                self.a.vcmppd(Self::ymm(T2), Self::ymm(x), c, 0x04)?;
+                self.a.vmovmskpd(eax, Self::ymm(T2))?;
+                self.gather(MOVING)
+            }
+        }
+    }
+
+    /// AVX2: ORs the pass's four bits in `eax` into mask `m`'s word, at the
+    /// pass's rows (`r10` = the pass's first row).
+    fn gather(&mut self, m: usize) -> Result<(), iced_x86::IcedError> {
+        use iced_x86::code_asm::*;
+        self.a.shlx(rax, rax, r10)?;
+        self.a.or(qword_ptr(rdx + (m * MASK_BYTES) as i32), rax)
+    }
+}
+
 #[cfg(target_arch = "x86_64")]
 fn assemble(
+    isa: Isa,
     ops: &[Op],
     slots: usize,
     cols: Columns,
@@ -227,6 +521,7 @@ fn assemble(
 ) -> Result<(Vec<u8>, Vec<f64>), iced_x86::IcedError> {
     use iced_x86::code_asm::*;
     const NONE: usize = usize::MAX;
+    const LIMIT: usize = 29;
     // The next read of each operand, and of each result, after its operation.
     let mut after_operand: Vec<[usize; 3]> = vec![[NONE; 3]; ops.len()];
     let mut after_dest = vec![NONE; ops.len()];
@@ -251,29 +546,15 @@ fn assemble(
         }
     }
 
-    let zmm = [
-        zmm0, zmm1, zmm2, zmm3, zmm4, zmm5, zmm6, zmm7, zmm8, zmm9, zmm10, zmm11, zmm12, zmm13,
-        zmm14, zmm15, zmm16, zmm17, zmm18, zmm19, zmm20, zmm21, zmm22, zmm23, zmm24, zmm25, zmm26,
-        zmm27, zmm28,
-    ];
-    let (t0, t1) = (zmm30, zmm31);
-    // Check `m`'s mask, as the destination of a compare and its write mask.
-    let accumulate = |m: usize| match m {
-        0 => k1.k1(),
-        1 => k2.k2(),
-        2 => k3.k3(),
-        _ => k4.k4(),
-    };
     let mut constants: Vec<f64> = Vec::new();
-    let mut constant = |c: f64| -> i32 {
-        let i = match constants.iter().position(|x| x.to_bits() == c.to_bits()) {
+    let mut constant = |c: f64| -> usize {
+        match constants.iter().position(|x| x.to_bits() == c.to_bits()) {
             Some(i) => i,
             None => {
                 constants.push(c);
                 constants.len() - 1
             }
-        };
-        (i * 8) as i32
+        }
     };
     let sign = constant(-0.0);
     let magnitude = constant(f64::from_bits(!(1u64 << 63)));
@@ -281,47 +562,62 @@ fn assemble(
     let zero = constant(0.0);
     let two = constant(2.0);
     let end = cols.end;
+    let lanes = isa.lanes();
+    let allocatable = isa.allocatable();
     // The slot's memory this pass: its parameter column (through the
     // table, into rax), or its place among the block's slots.
-    let home = |a: &mut CodeAssembler, s: u32| -> Result<AsmMemoryOperand, IcedError> {
+    let home = |v: &mut Vector, s: u32| -> Result<AsmMemoryOperand, IcedError> {
         if (s as usize) < end {
-            a.mov(rax, qword_ptr(rcx + (s as i32) * 8))?;
-            Ok(zmmword_ptr(rax + r9))
+            v.a.mov(rax, qword_ptr(rcx + (s as i32) * 8))?;
+            Ok(rax + r9)
         } else {
-            Ok(zmmword_ptr(rdi + r9 + (s as usize * BLOCK * 8) as i32))
+            Ok(rdi + r9 + (s as usize * BLOCK * 8) as i32)
         }
     };
 
-    let mut a = CodeAssembler::new(64)?;
-    let mut top = a.create_label();
-    a.mov(r8d, PASSES as u32)?;
-    a.xor(r9d, r9d)?;
-    a.set_label(&mut top)?;
-    for k in [k1, k2, k3, k4] {
-        a.kxnorb(k, k, k)?;
+    let mut v = Vector {
+        a: CodeAssembler::new(64)?,
+        isa,
+    };
+    let mut top = v.a.create_label();
+    v.a.mov(r8d, (BLOCK / lanes) as u32)?;
+    v.a.xor(r9d, r9d)?;
+    if isa == Isa::Avx2 {
+        // The masks' words gather failures (inverted at the end), and r10 is
+        // the pass's first row.
+        for m in 0..MASKS {
+            v.a.mov(qword_ptr(rdx + (m * MASK_BYTES) as i32), 0)?;
+        }
+        v.a.xor(r10d, r10d)?;
     }
-    a.kxorb(k5, k5, k5)?;
-    let mut regs: [Option<Held>; ALLOCATABLE] = [None; ALLOCATABLE];
+    v.a.set_label(&mut top)?;
+    if isa == Isa::Avx512 {
+        for k in [k1, k2, k3, k4] {
+            v.a.kxnorb(k, k, k)?;
+        }
+        v.a.kxorb(k5, k5, k5)?;
+    }
+    let mut regs: [Option<Held>; LIMIT] = [None; LIMIT];
     let mut where_: Vec<Option<usize>> = vec![None; slots];
 
     // A free register, spilling the value read furthest ahead if none is
     // (never one of `keep`).
-    let take = |a: &mut CodeAssembler,
-                regs: &mut [Option<Held>; ALLOCATABLE],
+    let take = |v: &mut Vector,
+                regs: &mut [Option<Held>; LIMIT],
                 where_: &mut Vec<Option<usize>>,
                 keep: &[usize]|
      -> Result<usize, IcedError> {
-        if let Some(r) = regs.iter().position(Option::is_none) {
+        if let Some(r) = regs[..allocatable].iter().position(Option::is_none) {
             return Ok(r);
         }
-        let r = (0..ALLOCATABLE)
+        let r = (0..allocatable)
             .filter(|r| !keep.contains(r))
             .max_by_key(|&r| regs[r].map_or(NONE, |h| h.next))
             .unwrap_or_else(|| unreachable!("more registers than operands"));
         if let Some(h) = regs[r].take() {
             if h.dirty && h.next != NONE {
-                let m = home(a, h.slot)?;
-                a.vmovupd(m, zmm[r])?;
+                let m = home(v, h.slot)?;
+                v.store(m, r)?;
             }
             where_[h.slot as usize] = None;
         }
@@ -333,43 +629,41 @@ fn assemble(
     // (as any value, until it is spilled: a parameter is only reloaded).
     for s in 0..end {
         let x = match next[s] {
-            NONE => t0,
+            NONE => T0,
             first => {
-                let r = take(&mut a, &mut regs, &mut where_, &[])?;
+                let r = take(&mut v, &mut regs, &mut where_, &[])?;
                 regs[r] = Some(Held {
                     slot: s as u32,
                     next: first,
                     dirty: false,
                 });
                 where_[s] = Some(r);
-                zmm[r]
+                r
             }
         };
-        let m = home(&mut a, s as u32)?;
-        a.vmovupd(x, m)?;
-        // Their sum, in column order, in t1 (see `Program::check_params`).
+        let m = home(&mut v, s as u32)?;
+        v.load(x, m)?;
+        // Their sum, in column order, in T1 (see `Program::check_params`).
         if s == 0 {
-            a.vmovapd(t1, x)?;
+            v.copy(T1, x)?;
         } else {
-            a.vaddpd(t1, t1, x)?;
+            v.bin(Bin::Add, T1, T1, Src::R(x))?;
         }
         if s < cols.speed {
             // A ratio is not 0 (_CMP_NEQ_UQ, as `!=`).
-            a.vcmppd(accumulate(GOOD), x, qword_bcst(rsi + zero), 0x04)?;
+            v.check(GOOD, x, Src::C(zero), 0x04)?;
         } else if s >= cols.inertia {
             // _CMP_GE_OQ.
-            a.vcmppd(accumulate(GOOD), x, qword_bcst(rsi + zero), 0x1d)?;
+            v.check(GOOD, x, Src::C(zero), 0x1d)?;
         }
         if (cols.accel..cols.torque).contains(&s) {
-            // `x != 0` (_CMP_NEQ_UQ: true for NaN).
-            a.vcmppd(k6, x, qword_bcst(rsi + zero), 0x04)?;
-            a.korb(k5, k5, k6)?;
+            v.mark(x, zero)?;
         }
     }
     if end > 0 {
         // Finite: x - x is 0 (_CMP_EQ_OQ with itself), NaN when not.
-        a.vsubpd(t0, t1, t1)?;
-        a.vcmppd(accumulate(GOOD), t0, t0, 0x00)?;
+        v.bin(Bin::Sub, T0, T1, Src::R(T1))?;
+        v.check(GOOD, T0, Src::R(T0), 0x00)?;
     }
 
     for (i, op) in ops.iter().enumerate() {
@@ -381,9 +675,9 @@ fn assemble(
             r[j] = match where_[s] {
                 Some(x) => x,
                 None => {
-                    let x = take(&mut a, &mut regs, &mut where_, &r[..j])?;
-                    let m = home(&mut a, s as u32)?;
-                    a.vmovupd(zmm[x], m)?;
+                    let x = take(&mut v, &mut regs, &mut where_, &r[..j])?;
+                    let m = home(&mut v, s as u32)?;
+                    v.load(x, m)?;
                     regs[x] = Some(Held {
                         slot: s as u32,
                         next: NONE,
@@ -420,62 +714,59 @@ fn assemble(
                     .copied()
                     .filter(|&x| regs[x].is_some())
                     .collect();
-                take(&mut a, &mut regs, &mut where_, &live)?
+                take(&mut v, &mut regs, &mut where_, &live)?
             }
             None => 0,
         };
-        let z = |j: usize| zmm[r[j]];
-        let out = zmm[d];
-        let bc = |off: i32| qword_bcst(rsi + off);
         match *op {
-            Op::Neg(..) => a.vxorpd(out, z(0), bc(sign))?,
-            Op::Abs(..) => a.vandpd(out, z(0), bc(magnitude))?,
-            Op::AddC(_, _, c) => a.vaddpd(out, z(0), bc(constant(c)))?,
-            Op::MulC(_, _, c) => a.vmulpd(out, z(0), bc(constant(c)))?,
-            Op::DivC(_, _, c) => a.vdivpd(out, z(0), bc(constant(c)))?,
-            Op::Add(..) => a.vaddpd(out, z(0), z(1))?,
-            Op::Sub(..) => a.vsubpd(out, z(0), z(1))?,
-            Op::Mul(..) => a.vmulpd(out, z(0), z(1))?,
+            Op::Neg(..) => v.bin(Bin::Xor, d, r[0], Src::C(sign))?,
+            Op::Abs(..) => v.bin(Bin::And, d, r[0], Src::C(magnitude))?,
+            Op::AddC(_, _, c) => v.bin(Bin::Add, d, r[0], Src::C(constant(c)))?,
+            Op::MulC(_, _, c) => v.bin(Bin::Mul, d, r[0], Src::C(constant(c)))?,
+            Op::DivC(_, _, c) => v.bin(Bin::Div, d, r[0], Src::C(constant(c)))?,
+            Op::Add(..) => v.bin(Bin::Add, d, r[0], Src::R(r[1]))?,
+            Op::Sub(..) => v.bin(Bin::Sub, d, r[0], Src::R(r[1]))?,
+            Op::Mul(..) => v.bin(Bin::Mul, d, r[0], Src::R(r[1]))?,
             Op::SubMul(..) => {
-                a.vmulpd(t0, z(1), z(2))?;
-                a.vsubpd(out, z(0), t0)?;
+                v.bin(Bin::Mul, T0, r[1], Src::R(r[2]))?;
+                v.bin(Bin::Sub, d, r[0], Src::R(T0))?;
             }
             Op::AddMul(..) => {
-                a.vmulpd(t0, z(1), z(2))?;
-                a.vaddpd(out, z(0), t0)?;
+                v.bin(Bin::Mul, T0, r[1], Src::R(r[2]))?;
+                v.bin(Bin::Add, d, r[0], Src::R(T0))?;
             }
             Op::Recip(..) => {
-                a.vbroadcastsd(t0, qword_ptr(rsi + one))?;
-                a.vdivpd(out, t0, z(0))?;
+                v.splat(T0, one)?;
+                v.bin(Bin::Div, d, T0, Src::R(r[0]))?;
             }
-            Op::Const(_, c) => a.vbroadcastsd(out, qword_ptr(rsi + constant(c)))?,
+            Op::Const(_, c) => v.splat(d, constant(c))?,
             Op::Max(..) => {
                 // (a > b ? a : b) + 0 (a - b), as the interpreter.
-                a.vsubpd(t0, z(0), z(1))?;
-                a.vmulpd(t0, t0, bc(zero))?;
-                a.vmaxpd(out, z(0), z(1))?;
-                a.vaddpd(out, out, t0)?;
+                v.bin(Bin::Sub, T0, r[0], Src::R(r[1]))?;
+                v.bin(Bin::Mul, T0, T0, Src::C(zero))?;
+                v.bin(Bin::Max, d, r[0], Src::R(r[1]))?;
+                v.bin(Bin::Add, d, d, Src::R(T0))?;
             }
             Op::NoLarger(m, ..) => {
-                a.vandpd(t0, z(0), bc(magnitude))?;
-                a.vandpd(t1, z(1), bc(magnitude))?;
-                a.vmulpd(t1, t1, bc(two))?;
+                v.bin(Bin::And, T0, r[0], Src::C(magnitude))?;
+                v.bin(Bin::And, T1, r[1], Src::C(magnitude))?;
+                v.bin(Bin::Mul, T1, T1, Src::C(two))?;
                 // _CMP_LE_OQ: false when either is NaN, as `<=`.
-                a.vcmppd(accumulate(m as usize), t0, t1, 0x12)?;
+                v.check(m as usize, T0, Src::R(T1), 0x12)?;
             }
             Op::AtMost(m, _, limit) => {
-                a.vcmppd(accumulate(m as usize), z(0), bc(constant(limit)), 0x12)?;
+                v.check(m as usize, r[0], Src::C(constant(limit)), 0x12)?;
             }
             Op::Finite(m, _) => {
-                a.vsubpd(t0, z(0), z(0))?;
-                a.vcmppd(accumulate(m as usize), t0, t0, 0x00)?;
+                v.bin(Bin::Sub, T0, r[0], Src::R(r[0]))?;
+                v.check(m as usize, T0, Src::R(T0), 0x00)?;
             }
         }
         if let Some(s) = op.dest() {
-            let output = |(_, v): &(usize, &u32)| **v == s && last_def[s as usize] == i;
+            let output = |(_, o): &(usize, &u32)| **o == s && last_def[s as usize] == i;
             for (o, _) in outputs.iter().enumerate().filter(output) {
-                a.mov(rax, qword_ptr(rcx + ((end + o) * 8) as i32))?;
-                a.vmovupd(zmmword_ptr(rax + r9), out)?;
+                v.a.mov(rax, qword_ptr(rcx + ((end + o) * 8) as i32))?;
+                v.store(rax + r9, d)?;
             }
             if after_dest[i] != NONE {
                 regs[d] = Some(Held {
@@ -490,22 +781,39 @@ fn assemble(
     // Outputs no operation computes (a parameter's slot): copied.
     for (o, &s) in outputs.iter().enumerate() {
         if last_def[s as usize] == NONE {
-            let m = home(&mut a, s)?;
-            a.vmovupd(t0, m)?;
-            a.mov(rax, qword_ptr(rcx + ((end + o) * 8) as i32))?;
-            a.vmovupd(zmmword_ptr(rax + r9), t0)?;
+            let m = home(&mut v, s)?;
+            v.load(T0, m)?;
+            v.a.mov(rax, qword_ptr(rcx + ((end + o) * 8) as i32))?;
+            v.store(rax + r9, T0)?;
         }
     }
-    for (m, k) in [k1, k2, k3, k4, k5].into_iter().enumerate() {
-        a.kmovb(byte_ptr(rdx + (m * PASSES) as i32), k)?;
+    match isa {
+        Isa::Avx512 => {
+            for (m, k) in [k1, k2, k3, k4, k5].into_iter().enumerate() {
+                v.a.kmovb(byte_ptr(rdx + (m * MASK_BYTES) as i32), k)?;
+            }
+            v.a.add(rdx, 1)?;
+        }
+        Isa::Avx2 => v.a.add(r10, lanes as i32)?,
     }
-    a.add(r9, (LANES * 8) as i32)?;
-    a.add(rdx, 1)?;
-    a.dec(r8d)?;
-    a.jnz(top)?;
-    a.vzeroupper()?;
-    a.ret()?;
-    let bytes = a.assemble(0)?;
+    v.a.add(r9, (lanes * 8) as i32)?;
+    v.a.dec(r8d)?;
+    v.a.jnz(top)?;
+    if isa == Isa::Avx2 {
+        // The checks' words held failures.
+        for m in 0..MASKS {
+            if m != MOVING {
+                v.a.not(qword_ptr(rdx + (m * MASK_BYTES) as i32))?;
+            }
+        }
+    }
+    v.a.vzeroupper()?;
+    v.a.ret()?;
+    let bytes = v.a.assemble(0)?;
+    let constants = match isa {
+        Isa::Avx512 => constants,
+        Isa::Avx2 => constants.iter().flat_map(|&c| [c; 4]).collect(),
+    };
     Ok((bytes, constants))
 }
 
@@ -522,6 +830,6 @@ fn operands(op: &Op) -> ([u32; 3], usize) {
 }
 
 #[cfg(not(target_arch = "x86_64"))]
-fn assemble(_: &[Op], _: usize, _: Columns, _: &[u32]) -> Result<(Vec<u8>, Vec<f64>), ()> {
+fn assemble(_: Isa, _: &[Op], _: usize, _: Columns, _: &[u32]) -> Result<(Vec<u8>, Vec<f64>), ()> {
     Err(())
 }

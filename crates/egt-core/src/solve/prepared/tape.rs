@@ -27,14 +27,14 @@
 //! operations; tested within 1e-12 of the largest output, and against exact
 //! rationals in the accuracy harness).
 //!
-//! Where the machine has AVX-512, the program also runs as machine code
-//! compiled for the train (see [`super::jit`]): the same operations in the
+//! Where the machine has AVX-512 or AVX2, the program also runs as machine
+//! code compiled for the train (see [`super::jit`]): the same operations in the
 //! same order, with the values kept in registers, giving the same numbers
 //! and the same checks bit for bit. The finiteness checks are sums (one for
 //! the parameters, one for the results): a sum is finite when every term is,
 //! unless it overflows, and such a row is left to the lanes.
 
-use super::jit::{GOOD, MASKS, MOVING, PASSES};
+use super::jit::{GOOD, MASK_BYTES, MASKS, MOVING};
 use super::{Compute, PreparedTrain};
 use crate::model::equations::willis_row;
 use crate::numerics::linalg::COND_WARN;
@@ -807,6 +807,20 @@ impl Program {
         self
     }
 
+    /// The same program compiled with `isa`, or interpreted where this
+    /// machine does not run it (to compare the instruction sets).
+    #[cfg(test)]
+    pub(crate) fn compiled_for(mut self, isa: super::jit::Isa) -> Self {
+        self.code =
+            super::jit::Code::compile_for(isa, &self.ops, self.slots, self.cols, &self.outputs);
+        self
+    }
+
+    /// The instructions the program's code uses, if compiled.
+    pub(crate) fn isa(&self) -> Option<super::jit::Isa> {
+        self.code.as_ref().map(super::jit::Code::isa)
+    }
+
     /// The operations as machine code, where this machine runs it: the
     /// parameters' and the outputs' slots are the ones read back.
     fn compile(&mut self) {
@@ -978,7 +992,7 @@ impl Program {
     ) {
         match &self.code {
             Some(code) if to - at == BLOCK => {
-                let mut masks = [0u8; MASKS * PASSES];
+                let mut masks = [0u8; MASKS * MASK_BYTES];
                 let in_place = super::jit::InPlace {
                     column: &column,
                     out,
@@ -996,10 +1010,10 @@ impl Program {
     }
 
     /// Each row's validity and motion from the compiled code's masks.
-    fn finish(&self, w: &mut ProgramWorkspace, masks: &[u8; MASKS * PASSES], count: usize) {
+    fn finish(&self, w: &mut ProgramWorkspace, masks: &[u8; MASKS * MASK_BYTES], count: usize) {
         const { assert!(BLOCK == 64, "a block's rows are the bits of a u64") };
         let word = |m: usize| {
-            let bytes: [u8; 8] = std::array::from_fn(|p| masks[m * PASSES + p]);
+            let bytes: [u8; 8] = std::array::from_fn(|p| masks[m * MASK_BYTES + p]);
             u64::from_le_bytes(bytes)
         };
         let mut valid = word(GOOD) & u64::MAX.checked_shr(64 - count as u32).unwrap_or(0);
@@ -1020,7 +1034,7 @@ impl Program {
     /// row's validity.
     fn check_and_run(&self, w: &mut ProgramWorkspace, count: usize) {
         if let Some(code) = &self.code {
-            let mut masks = [0u8; MASKS * PASSES];
+            let mut masks = [0u8; MASKS * MASK_BYTES];
             code.run(&mut w.vals, &mut masks, &mut w.io, None);
             self.finish(w, &masks, count);
             return;
