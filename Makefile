@@ -20,7 +20,7 @@ demo: ## Run egt on a bundled example: topology checks, circuit table, speeds
 
 test: test-rust test-python ## Run every test (Rust and Python)
 
-test-rust: ## Rust unit, integration, CLI and doc tests; the core's again as released (optimised, AVX-512 paths)
+test-rust: ## Rust unit, integration, CLI and doc tests; the core's again as released (optimised: the SIMD lanes and the compiled programs as shipped)
 	cargo fetch --locked || cargo fetch
 	cargo test --workspace --all-targets
 	cargo test --workspace --doc

@@ -589,7 +589,8 @@ impl BatchPlan {
     /// dynamics of trains up to [`PROGRAM_MAX_COORDINATES`] coordinates are
     /// then solved by the straight-line program (see the module docs),
     /// whose other outputs differ from the row-by-row solve's by rounding
-    /// only. Off by default.
+    /// only. Off by default ([`BatchPlan::bounds_serve`] says when they
+    /// change nothing a caller asked for).
     pub fn with_condition_bounds(mut self, bounds: bool) -> Self {
         self.bounds = bounds;
         self.reprogram();
@@ -633,6 +634,15 @@ impl BatchPlan {
     /// [`BatchPlan::with_condition_bounds`]).
     pub fn has_program(&self) -> bool {
         self.program.is_some()
+    }
+
+    /// Whether condition bounds ([`BatchPlan::with_condition_bounds`]) serve
+    /// a batch whose chosen outputs are `names` (empty: every output): when
+    /// none is a `cond.*` column, a condition estimate would only decide
+    /// the warnings and refusals, which are the same with bounds. The
+    /// default of `egt batch --columns` and of the Python module's `outputs`.
+    pub fn bounds_serve(names: &[String]) -> bool {
+        !names.is_empty() && !names.iter().any(|n| n.starts_with("cond."))
     }
 
     /// Whether the straight-line program runs as machine code compiled for

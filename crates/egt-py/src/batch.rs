@@ -41,12 +41,13 @@ fn compute_of(s: &str) -> Result<Compute> {
 /// `[analysis]` choices (accelerated and driving: the inputs); with
 /// `gear_state`, to the transmission's input in that state, whose engaged
 /// elements are added to `engaged`. `condition_bounds`: see
-/// [`BatchPlan::with_condition_bounds`]; `outputs`: see
+/// [`BatchPlan::with_condition_bounds`] (None: [`BatchPlan::bounds_serve`]
+/// of `outputs`, as `egt batch --columns`); `outputs`: see
 /// [`BatchPlan::with_outputs`].
 // One argument per Python keyword.
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
-#[pyo3(signature = (core, compute, inputs = None, accelerated = None, driving = None, engaged = Vec::new(), gear_state = None, condition_bounds = false, outputs = None))]
+#[pyo3(signature = (core, compute, inputs = None, accelerated = None, driving = None, engaged = Vec::new(), gear_state = None, condition_bounds = None, outputs = None))]
 pub fn batch_plan(
     core: &TrainCore,
     compute: &str,
@@ -55,7 +56,7 @@ pub fn batch_plan(
     driving: Option<Vec<String>>,
     engaged: Vec<String>,
     gear_state: Option<String>,
-    condition_bounds: bool,
+    condition_bounds: Option<bool>,
     outputs: Option<Vec<String>>,
 ) -> Result<BatchPlanCore> {
     let compute = compute_of(compute)?;
@@ -82,7 +83,9 @@ pub fn batch_plan(
         }
         spec.extras
             .extend(engaged.iter().cloned().zip(convert::engaged(t, &engaged)?));
-        let mut plan = BatchPlan::new(t, &spec)?.with_condition_bounds(condition_bounds);
+        let bounds = condition_bounds
+            .unwrap_or_else(|| outputs.as_deref().is_some_and(BatchPlan::bounds_serve));
+        let mut plan = BatchPlan::new(t, &spec)?.with_condition_bounds(bounds);
         if let Some(names) = &outputs {
             plan = plan.with_outputs(names)?;
         }
@@ -102,6 +105,16 @@ impl BatchPlanCore {
     #[getter]
     fn outputs(&self) -> Vec<String> {
         self.plan.outputs().to_vec()
+    }
+
+    /// How rows are solved: `"AVX-512"` or `"AVX2"` (the straight-line
+    /// program, compiled for the train), `"interpreted"` (the program,
+    /// interpreted), or None (no program: rows in SIMD groups of eight).
+    #[getter]
+    fn program(&self) -> Option<&'static str> {
+        self.plan
+            .has_program()
+            .then(|| self.plan.program_instructions().unwrap_or("interpreted"))
     }
 
     /// The spec's own parameter values (NaN where the spec gives none).

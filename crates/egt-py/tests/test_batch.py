@@ -3,6 +3,7 @@ handling, per-row errors without NaN, threads, the GIL released."""
 
 from __future__ import annotations
 
+import os
 import threading
 
 import numpy as np
@@ -337,3 +338,31 @@ def test_fortran_and_c_ordered_params_give_the_same_numbers(fig3: egt.Train, bou
         assert {r: e.message for r, e in here.errors.items()} == {r: e.message for r, e in by_rows.errors.items()}
     # A column of the result is a view, contiguous.
     assert all(by_columns[o].flags.c_contiguous for o in by_columns.outputs)
+
+
+def test_chosen_outputs_without_a_condition_column_take_the_program(fig3: egt.Train) -> None:
+    # Every row its own train, some near the lock (warned) and at it (refused).
+    g2 = np.repeat(np.linspace(-1.5000001, -1.4999999, 21), 8)
+    g2[::7] = np.linspace(-3.0, -2.0, len(g2[::7]))
+    load = np.tile(np.linspace(-10.0, -50.0, 8), 21)
+    values = {"ratio.G2": g2, "torque.4": load}
+    chosen = ["driving_torque.2", "speed.4"]
+    auto = fig3.batch("dynamics", outputs=chosen)
+    forced = fig3.batch("dynamics", outputs=chosen, condition_bounds=True)
+    estimated = fig3.batch("dynamics", outputs=chosen, condition_bounds=False)
+    # The program runs by default when no cond.* column is chosen...
+    expected = ("interpreted",) if os.environ.get("EGT_JIT") == "0" else ("AVX-512", "AVX2", "interpreted")
+    assert auto.program in expected and forced.program == auto.program
+    # ...and not when one is, nor when every output is wanted, nor when refused.
+    assert fig3.batch("dynamics", outputs=["cond.forces", "speed.4"]).program is None
+    assert fig3.batch("dynamics").program is None
+    assert estimated.program is None
+    a, f, e = (p.evaluate(values) for p in (auto, forced, estimated))
+    np.testing.assert_array_equal(a.values, f.values)
+    # Against condition estimates: the same failed rows and messages, the
+    # same numbers to rounding.
+    np.testing.assert_array_equal(a.ok, e.ok)
+    assert 0 < (~a.ok).sum() < len(g2)
+    assert {r: x.message for r, x in a.errors.items()} == {r: x.message for r, x in e.errors.items()}
+    scale = np.abs(e.values[e.ok]).max(axis=1, keepdims=True)
+    assert (np.abs(a.values[a.ok] - e.values[e.ok]) <= 1e-12 * scale).all()

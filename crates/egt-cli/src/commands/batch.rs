@@ -515,7 +515,7 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
     };
     // No `cond.*` column asked for: estimate a condition only where a bound
     // cannot show it below the warning level (the same warnings and errors).
-    let bounds = !args.columns.is_empty() && !args.columns.iter().any(|c| c.starts_with("cond."));
+    let bounds = BatchPlan::bounds_serve(&args.columns);
     let plans: Vec<(Option<String>, BatchPlan)> = if states.is_empty() {
         let spec = BatchSpec::from_analysis(train, compute)
             .with_context(|| format!("{}: the batch's input links", loaded.source))?;

@@ -219,6 +219,15 @@ class BatchPlan:
         """The spec's own parameter values (NaN where the spec gives none)."""
         return self._core.base
 
+    @property
+    def program(self) -> Optional[str]:
+        """How rows are solved: ``"AVX-512"`` or ``"AVX2"`` (the train's
+        straight-line program compiled to machine code for it),
+        ``"interpreted"`` (the program interpreted: another machine, or
+        ``EGT_JIT=0``), or None (no program: rows in SIMD groups of eight;
+        see ``condition_bounds`` in :meth:`egt.Train.batch`)."""
+        return self._core.program
+
     def __repr__(self) -> str:
         return f"<egt.BatchPlan {self.compute}: {len(self.parameters)} parameters -> {len(self.outputs)} outputs>"
 

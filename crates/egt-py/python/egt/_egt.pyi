@@ -113,6 +113,8 @@ class BatchPlanCore:
     def outputs(self) -> List[str]: ...
     @property
     def base(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def program(self) -> Optional[str]: ...
     def run(
         self, params: npt.NDArray[np.float64], threads: Optional[int] = None
     ) -> Tuple[npt.NDArray[np.float64], List[Tuple[int, str, str]]]: ...
@@ -126,7 +128,7 @@ def batch_plan(
     driving: Optional[List[str]] = None,
     engaged: List[str] = ...,
     gear_state: Optional[str] = None,
-    condition_bounds: bool = False,
+    condition_bounds: Optional[bool] = None,
     outputs: Optional[List[str]] = None,
 ) -> BatchPlanCore: ...
 

@@ -455,7 +455,7 @@ class Train:
         driving: Optional[Sequence[str]] = None,
         engaged: Sequence[str] = (),
         gear_state: Optional[str] = None,
-        condition_bounds: bool = False,
+        condition_bounds: Optional[bool] = None,
         outputs: Optional[Sequence[str]] = None,
     ) -> BatchPlan:
         """Prepare the train for many scenarios (``compute``: ``"kinematics"``,
@@ -474,7 +474,13 @@ class Train:
         refused, the other outputs differ by rounding only (within 1e-12 of
         the row's largest), and a ``cond.*`` value at most 5e7 may be that
         bound instead of the estimate (about twice as fast when every row has
-        its own ratios). ``outputs``: the output columns to compute, in that
+        its own ratios; faster again where the machine has AVX-512 or AVX2,
+        the program then being compiled for the train:
+        :attr:`egt.BatchPlan.program`).
+        By default (None) on exactly when ``outputs`` are chosen and none is
+        a ``cond.*`` column, as ``egt batch --columns``: the bounds then
+        change no warning, refusal or chosen column beyond rounding.
+        ``outputs``: the output columns to compute, in that
         order (default: all; :attr:`egt.BatchPlan.outputs` of a plan made
         without it lists them); with ``condition_bounds`` the straight-line
         program then drops every operation they do not need. The rows that
@@ -488,7 +494,7 @@ class Train:
             None if driving is None else _names(driving, "driving"),
             _names(engaged, "engaged"),
             None if gear_state is None else str(gear_state),
-            bool(condition_bounds),
+            None if condition_bounds is None else bool(condition_bounds),
             None if outputs is None else _names(outputs, "outputs"),
         )
         core = batch_plan(self._core, *args)
