@@ -314,6 +314,17 @@ impl Rows {
             if vals.is_empty() || stride == 0 {
                 return;
             }
+            if let (1, Layout::Columns) = (stride, by) {
+                // The last axis: its values in turn, copied in runs.
+                let column = &mut params[c * len..][..len];
+                let (mut k, mut r) = (start % vals.len(), 0);
+                while r < len {
+                    let n = (vals.len() - k).min(len - r);
+                    column[r..r + n].copy_from_slice(&vals[k..k + n]);
+                    (r, k) = (r + n, 0);
+                }
+                return;
+            }
             let mut k = (start / stride) % vals.len();
             let mut r = 0;
             let mut run = stride - start % stride;
@@ -740,6 +751,17 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
             messages[r] = Some(e);
         }
         let base_row = k * per_plan + start;
+        // Parquet encodes a column-major block's columns where they are: the
+        // buffers are lent to Arrow for the encoding (an Arrow IPC batch
+        // outlives it, and takes copies).
+        let lent = (by_columns && encoder.as_ref().is_some_and(Encoder::parquet)).then(|| {
+            let lend = |v: &mut Vec<f64>| arrow_buffer::Buffer::from_vec(std::mem::take(v));
+            (lend(params), lend(results))
+        });
+        let (pdata, rdata): (&[f64], &[f64]) = match &lent {
+            Some((p, r)) => (p.typed_data(), r.typed_data()),
+            None => (params, results),
+        };
         let encoded = match &encoder {
             Some(c) => c.encode(
                 plan,
@@ -749,13 +771,15 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
                     state: state.as_deref(),
                     varied: &design.varied,
                     params: Matrix {
-                        data: params,
+                        data: pdata,
+                        shared: lent.as_ref().map(|l| &l.0),
                         width: np,
                         rows: len,
                         columns: by_columns,
                     },
                     results: Matrix {
-                        data: results,
+                        data: rdata,
+                        shared: lent.as_ref().map(|l| &l.1),
                         width: nq,
                         rows: len,
                         columns: by_columns,
@@ -781,6 +805,16 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
                 messages,
             )),
         };
+        // The encoded chunks hold bytes, not the arrays: the buffers come
+        // back whole (a copy only if a slice were still held).
+        if let Some((p, r)) = lent {
+            let back = |b: arrow_buffer::Buffer| {
+                b.into_vec::<f64>()
+                    .unwrap_or_else(|b| b.typed_data::<f64>().to_vec())
+            };
+            *params = back(p);
+            *results = back(r);
+        }
         Ok(Done {
             len,
             encoded,
@@ -1008,6 +1042,9 @@ enum Encoded {
 #[derive(Clone, Copy)]
 struct Matrix<'a> {
     data: &'a [f64],
+    /// `data` as an Arrow buffer, when the block lends it: whole columns
+    /// of a column-major block are then slices of it, not copies.
+    shared: Option<&'a arrow_buffer::Buffer>,
     /// Columns and rows.
     width: usize,
     rows: usize,
@@ -1027,14 +1064,15 @@ impl Matrix<'_> {
     }
 
     /// Column `c`, in row order.
-    fn column(&self, c: usize) -> Vec<f64> {
-        if self.columns {
-            self.data[c * self.rows..][..self.rows].to_vec()
-        } else {
-            (self.data[c..].iter().step_by(self.width))
+    fn column(&self, c: usize) -> arrow_buffer::ScalarBuffer<f64> {
+        match (self.columns, self.shared) {
+            (true, Some(b)) => arrow_buffer::ScalarBuffer::new(b.clone(), c * self.rows, self.rows),
+            (true, None) => self.data[c * self.rows..][..self.rows].to_vec().into(),
+            (false, _) => (self.data[c..].iter().step_by(self.width))
                 .take(self.rows)
                 .copied()
-                .collect()
+                .collect::<Vec<f64>>()
+                .into(),
         }
     }
 
@@ -1164,7 +1202,10 @@ struct Encoder {
 /// A column of doubles, null where a value is not finite or its row
 /// `failed` (None when no row of the block did; no null buffer when there
 /// are no nulls).
-fn doubles(values: Vec<f64>, failed: Option<&[Option<String>]>) -> arrow_array::ArrayRef {
+fn doubles(
+    values: arrow_buffer::ScalarBuffer<f64>,
+    failed: Option<&[Option<String>]>,
+) -> arrow_array::ArrayRef {
     let missing = |r: usize| failed.is_some_and(|f| f[r].is_some()) || !values[r].is_finite();
     let nulls = (failed.is_some() || values.iter().any(|v| !v.is_finite()))
         .then(|| {
@@ -1174,16 +1215,17 @@ fn doubles(values: Vec<f64>, failed: Option<&[Option<String>]>) -> arrow_array::
         })
         .filter(|valid| valid.contains(&false))
         .map(arrow_buffer::NullBuffer::from);
-    let values: Vec<f64> = match &nulls {
+    let values = match &nulls {
         // Null slots hold 0 (never a NaN or an inf a reader might take up).
         Some(n) => values
             .iter()
             .enumerate()
             .map(|(r, &v)| if n.is_valid(r) { v } else { 0.0 })
-            .collect(),
+            .collect::<Vec<f64>>()
+            .into(),
         None => values,
     };
-    std::sync::Arc::new(arrow_array::Float64Array::new(values.into(), nulls))
+    std::sync::Arc::new(arrow_array::Float64Array::new(values, nulls))
 }
 
 /// A column of optional texts: all null without building one by one when
@@ -1201,6 +1243,11 @@ fn texts<'a>(
 }
 
 impl Encoder {
+    /// Whether blocks become Parquet column chunks (else Arrow batches).
+    fn parquet(&self) -> bool {
+        self.factory.is_some()
+    }
+
     fn encode(&self, plan: &BatchPlan, b: &Block<'_>) -> anyhow::Result<Encoded> {
         use arrow_array::{ArrayRef, StringArray, UInt64Array};
         use std::sync::Arc;
