@@ -1789,6 +1789,13 @@ fn bad_parameter(plan: &BatchPlan, c: usize, v: f64) -> Error {
     )
 }
 
+// The generated train families the core's other tests share (a file
+// module, so that the path is from this folder).
+#[cfg(test)]
+#[allow(dead_code)]
+#[path = "../lab/families.rs"]
+mod families;
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1938,7 +1945,17 @@ mod tests {
             "fig5",
         );
         let zf = example(include_str!("../../../examples/zf_8hp70.toml"), "8hp");
+        // Chains of 6 and 30 links: more values live than registers, so
+        // values are spilled and reloaded (AVX2 has 13 registers for them).
+        let chain6 = example(&families::planetary_chain(2), "chain 6");
+        let chain30 = example(&families::planetary_chain(14), "chain 30");
         let mut plans: Vec<(String, BatchPlan)> = Vec::new();
+        for (name, t) in [("chain6", &chain6), ("chain30", &chain30)] {
+            let spec =
+                BatchSpec::from_analysis(t, Compute::Dynamics).unwrap_or_else(|e| panic!("{e}"));
+            let p = BatchPlan::new(t, &spec).unwrap_or_else(|e| panic!("{e}"));
+            plans.push((name.to_string(), p.with_condition_bounds(true)));
+        }
         for (name, t) in [("fig3", &fig3), ("fig5", &fig5)] {
             for compute in [Compute::Kinematics, Compute::Dynamics] {
                 let spec = BatchSpec::from_analysis(t, compute).unwrap_or_else(|e| panic!("{e}"));

@@ -83,6 +83,11 @@
 
 #![deny(missing_docs)]
 
+// The unit tests share the generated train families of `lab/`, which name
+// the crate as its users do.
+#[cfg(test)]
+extern crate self as egt_core;
+
 // The layers, bottom to top (a blank line between layers keeps rustfmt from
 // sorting them); no module imports one above it (`scripts/layers.py`).
 pub mod error;
