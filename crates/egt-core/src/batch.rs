@@ -664,6 +664,45 @@ impl BatchPlan {
         })
     }
 
+    /// The same plan with its straight-line program run as `instructions`
+    /// code (`"AVX-512"` or `"AVX2"`, as [`BatchPlan::program_instructions`]
+    /// names them) or, with None, interpreted: to compare or time the codes
+    /// on one machine. Every code gives the same numbers, bit for bit.
+    /// [`BatchPlan::with_outputs`] and [`BatchPlan::with_condition_bounds`]
+    /// rebuild the program with this machine's code: choose after them.
+    ///
+    /// # Errors
+    /// An unknown name, a code this machine does not run, or a plan without
+    /// a program ([`BatchPlan::has_program`]), each naming `instructions`.
+    pub fn with_program_instructions(mut self, instructions: Option<&str>) -> Result<Self> {
+        use crate::solve::prepared::Isa;
+        let invalid = |message: String| Error::invalid("instructions", message);
+        let isa = match instructions {
+            None => None,
+            Some("AVX-512") => Some(Isa::Avx512),
+            Some("AVX2") => Some(Isa::Avx2),
+            Some(other) => {
+                return Err(invalid(format!(
+                    "`{other}` is not an instruction set: \"AVX-512\", \"AVX2\" or none"
+                )));
+            }
+        };
+        let Some(program) = self.program.take() else {
+            return Err(invalid(
+                "the plan has no straight-line program (see with_condition_bounds)".into(),
+            ));
+        };
+        let program = program.with_code(isa);
+        if program.isa() != isa {
+            let name = instructions.unwrap_or_default();
+            return Err(invalid(format!(
+                "{name} code does not run on this machine (or the program is too long for it)"
+            )));
+        }
+        self.program = Some(program);
+        Ok(self)
+    }
+
     /// The length of the straight-line program (operations and checks),
     /// when rows are solved by one: it shrinks with
     /// [`BatchPlan::with_outputs`].
@@ -1988,10 +2027,10 @@ mod tests {
                 .unwrap_or_else(|| panic!("{name}: no program"));
             assert_eq!(program.isa(), default, "{name}: compiled where it runs");
             let mut interpreted = p.clone();
-            interpreted.program = interpreted.program.take().map(Program::interpreted);
+            interpreted.program = interpreted.program.take().map(|q| q.with_code(None));
             for &(isa, runs) in &isas {
                 let mut p = p.clone();
-                p.program = p.program.take().map(|q| q.compiled_for(isa));
+                p.program = p.program.take().map(|q| q.with_code(Some(isa)));
                 let got = p.program.as_ref().and_then(Program::isa);
                 assert_eq!(
                     got,

@@ -855,3 +855,87 @@ fn condition_bounds_change_only_small_conditions() {
         "{bounded} bounds, {warned} warnings, {refused} refusals"
     );
 }
+
+/// The straight-line program runs as any code the machine has, or
+/// interpreted, with the same bits; a code it lacks, an unknown name and a
+/// plan without a program are refused naming `instructions`.
+#[test]
+fn the_program_runs_as_every_code_the_machine_has_with_the_same_bits() {
+    let t = train(&crate::lab::families::planetary_chain(3));
+    let p = plan(&t, Compute::Dynamics).with_condition_bounds(true);
+    let (np, nq) = (p.parameters().len(), p.outputs().len());
+    let ratio = p
+        .parameter("ratio.P1/sun-planet")
+        .unwrap_or_else(|| panic!("{:?}", p.parameters()));
+    let rows = 200;
+    let mut columns: Vec<f64> = (0..np)
+        .flat_map(|c| std::iter::repeat_n(p.base()[c], rows))
+        .collect();
+    for r in 0..rows {
+        columns[ratio * rows + r] = -0.5 - 0.4 * (r as f64 / rows as f64);
+    }
+    columns[ratio * rows + 17] = 0.0;
+    #[cfg(target_arch = "x86_64")]
+    let runs = [
+        (
+            Some("AVX-512"),
+            std::arch::is_x86_feature_detected!("avx512f")
+                && std::arch::is_x86_feature_detected!("avx512dq"),
+        ),
+        (
+            Some("AVX2"),
+            std::arch::is_x86_feature_detected!("avx2")
+                && std::arch::is_x86_feature_detected!("bmi2"),
+        ),
+        (None, true),
+    ];
+    #[cfg(not(target_arch = "x86_64"))]
+    let runs = [
+        (Some("AVX-512"), false),
+        (Some("AVX2"), false),
+        (None, true),
+    ];
+    let mut results: Vec<(Option<&str>, Vec<f64>, Vec<usize>)> = Vec::new();
+    for (code, runs) in runs {
+        match p.clone().with_program_instructions(code) {
+            Ok(q) => {
+                assert!(runs, "{code:?} code where it does not run");
+                assert_eq!(q.program_instructions(), code);
+                let mut out = vec![0.0; rows * nq];
+                let failed = q
+                    .run_columns(&columns, &mut out)
+                    .iter()
+                    .map(|e| e.row)
+                    .collect();
+                results.push((code, out, failed));
+            }
+            Err(e) => {
+                assert!(!runs, "{code:?}: {e}");
+                let text = e.to_string();
+                assert!(
+                    text.contains("instructions") && text.contains("does not run on this machine"),
+                    "{text}"
+                );
+            }
+        }
+    }
+    let (_, first, failed) = &results[0];
+    assert_eq!(failed, &vec![17], "the zero ratio's row refused");
+    for (code, out, f) in &results[1..] {
+        assert_eq!(f, failed, "{code:?}");
+        for (i, (a, b)) in out.iter().zip(first).enumerate() {
+            assert!(
+                a.to_bits() == b.to_bits(),
+                "{code:?} cell {i}: {a} against {b}"
+            );
+        }
+    }
+    let err = |r: Result<BatchPlan, Error>| r.err().map(|e| e.to_string()).unwrap_or_default();
+    let unknown = err(p.clone().with_program_instructions(Some("SSE2")));
+    assert!(
+        unknown.contains("instructions") && unknown.contains("`SSE2` is not an instruction set"),
+        "{unknown}"
+    );
+    let none = err(plan(&t, Compute::Dynamics).with_program_instructions(None));
+    assert!(none.contains("no straight-line program"), "{none}");
+}

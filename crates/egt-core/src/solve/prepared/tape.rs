@@ -800,19 +800,12 @@ impl Program {
         self.code.is_some()
     }
 
-    /// The same program, interpreted (to compare the two).
-    #[cfg(test)]
-    pub(crate) fn interpreted(mut self) -> Self {
-        self.code = None;
-        self
-    }
-
-    /// The same program compiled with `isa`, or interpreted where this
-    /// machine does not run it (to compare the instruction sets).
-    #[cfg(test)]
-    pub(crate) fn compiled_for(mut self, isa: super::jit::Isa) -> Self {
-        self.code =
-            super::jit::Code::compile_for(isa, &self.ops, self.slots, self.cols, &self.outputs);
+    /// The same program compiled with `isa` (interpreted where this machine
+    /// does not run it, or with None).
+    pub(crate) fn with_code(mut self, isa: Option<super::jit::Isa>) -> Self {
+        self.code = isa.and_then(|isa| {
+            super::jit::Code::compile_for(isa, &self.ops, self.slots, self.cols, &self.outputs)
+        });
         self
     }
 
