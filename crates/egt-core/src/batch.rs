@@ -1953,7 +1953,8 @@ mod tests {
                     "avx512f" => std::arch::is_x86_feature_detected!("avx512f"),
                     "avx512dq" => std::arch::is_x86_feature_detected!("avx512dq"),
                     "avx2" => std::arch::is_x86_feature_detected!("avx2"),
-                    _ => std::arch::is_x86_feature_detected!("bmi2"),
+                    "bmi2" => std::arch::is_x86_feature_detected!("bmi2"),
+                    other => panic!("no check for {other}"),
                 })
             }
             #[cfg(not(target_arch = "x86_64"))]
