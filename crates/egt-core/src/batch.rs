@@ -1986,7 +1986,7 @@ mod tests {
         );
         let zf = example(include_str!("../../../examples/zf_8hp70.toml"), "8hp");
         // Chains of 6 and 30 links: more values live than registers, so
-        // values are spilled and reloaded (AVX2 has 13 registers for them).
+        // values are spilled and reloaded (AVX2 has 14 registers for them).
         let chain6 = example(&families::planetary_chain(2), "chain 6");
         let chain30 = example(&families::planetary_chain(14), "chain 30");
         let mut plans: Vec<(String, BatchPlan)> = Vec::new();

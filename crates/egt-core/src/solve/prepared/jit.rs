@@ -53,9 +53,9 @@ pub(crate) const MASK_BYTES: usize = BLOCK / 8;
 /// The vector instructions code is assembled with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Isa {
-    /// AVX-512F and DQ: 8 rows a zmm register, 29 registers for values.
+    /// AVX-512F and DQ: 8 rows a zmm register, 30 registers for values.
     Avx512,
-    /// AVX2 and BMI2: 4 rows a ymm register, 13 registers for values.
+    /// AVX2 and BMI2: 4 rows a ymm register, 14 registers for values.
     Avx2,
 }
 
@@ -71,8 +71,8 @@ impl Isa {
     /// Registers for values (the rest are the operations' scratch).
     fn allocatable(self) -> usize {
         match self {
-            Isa::Avx512 => 29,
-            Isa::Avx2 => 13,
+            Isa::Avx512 => 30,
+            Isa::Avx2 => 14,
         }
     }
 
@@ -292,7 +292,6 @@ struct Held {
 /// The operations' scratch registers (beyond the allocatable ones).
 const T0: usize = 100;
 const T1: usize = 101;
-const T2: usize = 102;
 
 /// A two-operand vector operation.
 #[cfg(target_arch = "x86_64")]
@@ -318,7 +317,7 @@ enum Src {
 
 /// An assembler writing one instruction set's forms of the operations
 /// `assemble` needs; registers are numbered `0..isa.allocatable()`, and
-/// [`T0`], [`T1`], [`T2`] are the scratch.
+/// [`T0`] and [`T1`] are the scratch.
 #[cfg(target_arch = "x86_64")]
 struct Vector {
     a: iced_x86::code_asm::CodeAssembler,
@@ -329,28 +328,26 @@ struct Vector {
 impl Vector {
     fn zmm(r: usize) -> iced_x86::code_asm::AsmRegisterZmm {
         use iced_x86::code_asm::*;
-        const ZMM: [AsmRegisterZmm; 29] = [
+        const ZMM: [AsmRegisterZmm; 30] = [
             zmm0, zmm1, zmm2, zmm3, zmm4, zmm5, zmm6, zmm7, zmm8, zmm9, zmm10, zmm11, zmm12, zmm13,
             zmm14, zmm15, zmm16, zmm17, zmm18, zmm19, zmm20, zmm21, zmm22, zmm23, zmm24, zmm25,
-            zmm26, zmm27, zmm28,
+            zmm26, zmm27, zmm28, zmm29,
         ];
         match r {
             T0 => zmm30,
             T1 => zmm31,
-            T2 => zmm29,
             r => ZMM[r],
         }
     }
 
     fn ymm(r: usize) -> iced_x86::code_asm::AsmRegisterYmm {
         use iced_x86::code_asm::*;
-        const YMM: [AsmRegisterYmm; 13] = [
-            ymm0, ymm1, ymm2, ymm3, ymm4, ymm5, ymm6, ymm7, ymm8, ymm9, ymm10, ymm11, ymm12,
+        const YMM: [AsmRegisterYmm; 14] = [
+            ymm0, ymm1, ymm2, ymm3, ymm4, ymm5, ymm6, ymm7, ymm8, ymm9, ymm10, ymm11, ymm12, ymm13,
         ];
         match r {
             T0 => ymm15,
             T1 => ymm14,
-            T2 => ymm13,
             r => YMM[r],
         }
     }
@@ -448,7 +445,8 @@ impl Vector {
 
     /// Clears every row of check `m` where `x pred y` is false (`pred` an
     /// `_CMP_` predicate): in `k1..k4` (AVX-512), or, as a failure, in the
-    /// mask's word (AVX2, which inverts the words at the end).
+    /// mask's word (AVX2, which inverts the words at the end). With AVX2 the
+    /// compare's result takes [`T0`]: an operand there is read no more.
     fn check(&mut self, m: usize, x: usize, y: Src, pred: i32) -> Result<(), iced_x86::IcedError> {
         use iced_x86::code_asm::*;
         match self.isa {
@@ -471,13 +469,13 @@ impl Vector {
                 match y {
                     Src::R(y) => self
                         .a
-                        .vcmppd(Self::ymm(T2), Self::ymm(x), Self::ymm(y), pred)?,
+                        .vcmppd(Self::ymm(T0), Self::ymm(x), Self::ymm(y), pred)?,
                     Src::C(i) => {
                         let c = self.constant(i);
-                        self.a.vcmppd(Self::ymm(T2), Self::ymm(x), c, pred)?
+                        self.a.vcmppd(Self::ymm(T0), Self::ymm(x), c, pred)?
                     }
                 }
-                self.a.vmovmskpd(eax, Self::ymm(T2))?;
+                self.a.vmovmskpd(eax, Self::ymm(T0))?;
                 self.a.xor(eax, 0xf)?;
                 self.gather(m)
             }
@@ -485,7 +483,8 @@ impl Vector {
     }
 
     /// Sets the rows of mask `MOVING` where `x != 0` (`_CMP_NEQ_UQ`: true
-    /// for NaN); constant `zero` is 0.
+    /// for NaN); constant `zero` is 0. With AVX2 the compare's result takes
+    /// [`T0`], as in [`Vector::check`].
     fn mark(&mut self, x: usize, zero: usize) -> Result<(), iced_x86::IcedError> {
         use iced_x86::code_asm::*;
         let c = self.constant(zero);
@@ -495,8 +494,8 @@ impl Vector {
                 self.a.korb(k5, k5, k6)
             }
             Isa::Avx2 => {
-                self.a.vcmppd(Self::ymm(T2), Self::ymm(x), c, 0x04)?;
-                self.a.vmovmskpd(eax, Self::ymm(T2))?;
+                self.a.vcmppd(Self::ymm(T0), Self::ymm(x), c, 0x04)?;
+                self.a.vmovmskpd(eax, Self::ymm(T0))?;
                 self.gather(MOVING)
             }
         }
@@ -521,7 +520,7 @@ fn assemble(
 ) -> Result<(Vec<u8>, Vec<f64>), iced_x86::IcedError> {
     use iced_x86::code_asm::*;
     const NONE: usize = usize::MAX;
-    const LIMIT: usize = 29;
+    const LIMIT: usize = 30;
     // The next read of each operand, and of each result, after its operation.
     let mut after_operand: Vec<[usize; 3]> = vec![[NONE; 3]; ops.len()];
     let mut after_dest = vec![NONE; ops.len()];
