@@ -107,9 +107,10 @@ impl BatchPlanCore {
         self.plan.outputs().to_vec()
     }
 
-    /// How rows are solved: `"AVX-512"` or `"AVX2"` (the straight-line
-    /// program, compiled for the train), `"interpreted"` (the program,
-    /// interpreted), or None (no program: rows in SIMD groups of eight).
+    /// The plan's straight-line program: `"AVX-512"` or `"AVX2"` (compiled
+    /// for the train), `"interpreted"`, or None (no program: rows are
+    /// solved in SIMD groups of eight). Rows that vary only loads, speeds
+    /// or accelerations share one factorisation instead, whatever this says.
     #[getter]
     fn program(&self) -> Option<&'static str> {
         self.plan

@@ -221,11 +221,12 @@ class BatchPlan:
 
     @property
     def program(self) -> Optional[str]:
-        """How rows are solved: ``"AVX-512"`` or ``"AVX2"`` (the train's
-        straight-line program compiled to machine code for it),
-        ``"interpreted"`` (the program interpreted: another machine, or
-        ``EGT_JIT=0``), or None (no program: rows in SIMD groups of eight;
-        see ``condition_bounds`` in :meth:`egt.Train.batch`)."""
+        """The plan's straight-line program: ``"AVX-512"`` or ``"AVX2"``
+        (compiled to machine code for the train), ``"interpreted"`` (another
+        machine, or ``EGT_JIT=0``), or None (no program: rows are solved in
+        SIMD groups of eight; see ``condition_bounds`` in
+        :meth:`egt.Train.batch`). Rows that vary only loads, speeds or
+        accelerations share one factorisation instead, whatever this says."""
         return self._core.program
 
     def __repr__(self) -> str:
