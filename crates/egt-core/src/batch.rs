@@ -823,6 +823,16 @@ impl BatchPlan {
     }
 }
 
+/// One parameter column of a column-major batch
+/// ([`BatchPlan::run_column_set`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Column<'a> {
+    /// A value for each row.
+    Rows(&'a [f64]),
+    /// One value for every row.
+    Every(f64),
+}
+
 /// Where a batch call ([`BatchPlan::run_with`], [`BatchPlan::run_columns_with`]) runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Threads {
@@ -910,12 +920,61 @@ impl BatchPlan {
         params: &[f64],
         out: &mut [f64],
     ) -> Vec<RowError> {
-        let (p, q) = (self.parameters.len(), self.names.len());
         let rows = self.rows_of(params, out);
         if rows == 0 {
             return Vec::new();
         }
-        let inputs: Vec<&[f64]> = params.chunks(rows).collect();
+        let columns: Vec<Column<'_>> = params.chunks(rows).map(Column::Rows).collect();
+        self.run_column_set(threads, &columns, rows, out)
+    }
+
+    /// [`BatchPlan::run_columns_with`] with each parameter column given
+    /// row by row or as one value for every row ([`Column`]): a sweep of a
+    /// few parameters of a train passes those few columns and the others'
+    /// values, and no column of repeated values is built or read. The
+    /// numbers and errors are those of [`BatchPlan::run_columns`] on the
+    /// same rows with every column written out, bit for bit (the same
+    /// operations read the same values; a fixed column is read from a
+    /// short buffer of its value, at most 256 rows long, that stays in cache).
+    ///
+    /// # Panics
+    /// When `params` does not hold a column for each parameter, a
+    /// [`Column::Rows`] is not `rows` long, or `out` is not `rows` times
+    /// the output columns.
+    pub fn run_column_set(
+        &self,
+        threads: Threads,
+        params: &[Column<'_>],
+        rows: usize,
+        out: &mut [f64],
+    ) -> Vec<RowError> {
+        let (p, q) = (self.parameters.len(), self.names.len());
+        assert_eq!(params.len(), p, "params is not a column for each parameter");
+        assert_eq!(
+            out.len(),
+            rows * q,
+            "out does not have one row per scenario"
+        );
+        if rows == 0 {
+            return Vec::new();
+        }
+        // A fixed column's value, as long as a task: every task reads it there.
+        let fixed: Vec<Vec<f64>> = params
+            .iter()
+            .map(|c| match *c {
+                Column::Rows(v) => {
+                    assert_eq!(v.len(), rows, "a parameter column is not `rows` long");
+                    Vec::new()
+                }
+                Column::Every(v) => vec![v; rows.min(ROWS_PER_TASK)],
+            })
+            .collect();
+        let inputs: Vec<(&[f64], bool)> = (params.iter().zip(&fixed))
+            .map(|(c, f)| match *c {
+                Column::Rows(v) => (v, false),
+                Column::Every(_) => (f.as_slice(), true),
+            })
+            .collect();
         // Each task: its rows of every output column.
         let mut tasks: Vec<Vec<&mut [f64]>> = (0..rows.div_ceil(ROWS_PER_TASK))
             .map(|_| Vec::with_capacity(q))
@@ -936,7 +995,10 @@ impl BatchPlan {
             let mut errors = Vec::new();
             let first = task * ROWS_PER_TASK;
             let n = cols.first().map_or(0, |c| c.len());
-            let column = |k: usize| &inputs[k][first..first + n];
+            let column = |k: usize| match inputs[k] {
+                (c, false) => &c[first..first + n],
+                (c, true) => &c[..n],
+            };
             if self.linear_may(column, n) {
                 // Column by column, as `eval_linear` would row by row.
                 if w.eval_linear_columns(lin, column, &mut cols, first, &mut errors) {

@@ -14,7 +14,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use egt_core::batch::{BatchPlan, BatchSpec};
+use egt_core::batch::{BatchPlan, BatchSpec, Column, Threads};
 use egt_core::numerics::linalg::COND_WARN;
 use egt_core::solve::prepared::Compute;
 use egt_core::{Error, Format, SpecErrorKind, Train};
@@ -306,11 +306,19 @@ impl Rows {
     /// equal values, with no division per row (which cost about a tenth of
     /// a 10^6-row Parquet batch). False for a `--rows` file, which is set
     /// line by line.
-    fn fill(&self, (start, len): (usize, usize), params: &mut [f64], by: Layout) -> bool {
+    fn fill(&self, (start, len): (usize, usize), params: &mut [f64], by: Layout<'_>) -> bool {
         let Rows::Product { zipped, axes, .. } = self else {
             return false;
         };
         let mut fill = |c: usize, vals: &[f64], stride: usize| {
+            // (Every column a product sets is a varied one.)
+            let (c, by) = match by {
+                Layout::Varied(slot) => match slot[c] {
+                    Some(j) => (j, Layout::Columns),
+                    None => return,
+                },
+                by => (c, by),
+            };
             if vals.is_empty() || stride == 0 {
                 return;
             }
@@ -331,7 +339,7 @@ impl Rows {
             while r < len {
                 let end = len.min(r + run);
                 match by {
-                    Layout::Columns => params[c * len..][r..end].fill(vals[k]),
+                    Layout::Columns | Layout::Varied(_) => params[c * len..][r..end].fill(vals[k]),
                     Layout::Rows(width) => (params[r * width + c..end * width].iter_mut())
                         .step_by(width)
                         .for_each(|x| *x = vals[k]),
@@ -356,8 +364,12 @@ impl Rows {
 
 /// How a block's parameters are laid out ([`Rows::fill`]).
 #[derive(Clone, Copy)]
-enum Layout {
+enum Layout<'a> {
+    /// Column-major, a column for each parameter.
     Columns,
+    /// Column-major, a column for each varied parameter only: parameter
+    /// `c`'s is column `slot[c]` (the others are the base row's values).
+    Varied(&'a [Option<usize>]),
     /// Row-major, this many columns a row.
     Rows(usize),
 }
@@ -664,6 +676,11 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
         .min()
         .unwrap_or(BLOCK);
     let blocks = per_plan.div_ceil(block);
+    // Parameter column `c`'s place among the varied ones, if it is one.
+    let mut slot = vec![None; base.len()];
+    for (j, &(_, c)) in design.varied.iter().enumerate() {
+        slot[c] = Some(j);
+    }
     // Block `i` of the whole batch: plan `i / blocks`, its block `i % blocks`.
     let solve = |(buffers, i): (&mut Buffers, usize)| -> anyhow::Result<Done> {
         let (k, b) = (i / blocks, i % blocks);
@@ -691,12 +708,21 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
         // earlier block already holds the base everywhere else; a `--rows`
         // file sets other columns line by line, so it refills.
         let same_columns = matches!(design.rows, Rows::Product { .. });
+        // A column-major block of a grid or zip holds only the varied
+        // columns: the program reads the others' values from the base row
+        // (`Column::Every`), and no column of repeated values is written
+        // or read (at 6 links, 2 columns of 35).
+        let varied_only = by_columns && same_columns;
+        let width = if varied_only { design.varied.len() } else { np };
         // (A buffer filled in the other layout, for a plan without a
         // program, refills too.)
-        if !(same_columns && params.len() == len * np && *params_by_columns == by_columns) {
+        if !(same_columns && params.len() == len * width && *params_by_columns == by_columns) {
             *params_by_columns = by_columns;
             params.clear();
-            if by_columns {
+            if varied_only {
+                // Every row of each column is set below.
+                params.resize(len * width, 0.0);
+            } else if by_columns {
                 for &v in &base {
                     params.extend(std::iter::repeat_n(v, len));
                 }
@@ -706,7 +732,9 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
                 }
             }
         }
-        let layout = if by_columns {
+        let layout = if varied_only {
+            Layout::Varied(&slot)
+        } else if by_columns {
             Layout::Columns
         } else {
             Layout::Rows(np)
@@ -737,7 +765,15 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
         };
         // `run` writes every output of every row (NaN on failed rows).
         results.resize(len * nq, 0.0);
-        let errors = if by_columns {
+        let errors = if varied_only {
+            let columns: Vec<Column<'_>> = (base.iter().zip(&slot))
+                .map(|(&v, j)| match *j {
+                    Some(j) => Column::Rows(&params[j * len..][..len]),
+                    None => Column::Every(v),
+                })
+                .collect();
+            plan.run_column_set(Threads::Pool, &columns, len, results)
+        } else if by_columns {
             plan.run_columns(params, results)
         } else {
             plan.run(params, results)
@@ -770,10 +806,11 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
                     first_row: base_row,
                     state: state.as_deref(),
                     varied: &design.varied,
+                    varied_only,
                     params: Matrix {
                         data: pdata,
                         shared: lent.as_ref().map(|l| &l.0),
-                        width: np,
+                        width,
                         rows: len,
                         columns: by_columns,
                     },
@@ -1097,6 +1134,8 @@ struct Block<'a> {
     first_row: usize,
     state: Option<&'a str>,
     varied: &'a [(String, usize)],
+    /// `params` holds the varied columns only, in `varied`'s order.
+    varied_only: bool,
     params: Matrix<'a>,
     results: Matrix<'a>,
     /// The plan's positions among the output columns, and its selected outputs.
@@ -1262,7 +1301,8 @@ impl Encoder {
                 std::iter::repeat_n(s, len),
             )));
         }
-        for &(_, c) in b.varied {
+        for (j, &(_, c)) in b.varied.iter().enumerate() {
+            let c = if b.varied_only { j } else { c };
             columns.push(doubles(params.column(c), None));
         }
         let failed = |r: usize| b.messages[r].is_some();
@@ -2218,14 +2258,29 @@ mod columnar_tests {
                 let mut by_rows = vec![f64::NAN; 12 * len];
                 assert!(rows.fill((start, len), &mut by_columns, Layout::Columns));
                 assert!(rows.fill((start, len), &mut by_rows, Layout::Rows(12)));
+                // The varied columns only, in reverse order of their index.
+                let Rows::Product { zipped, axes, .. } = &rows else {
+                    unreachable!()
+                };
+                let mut set: Vec<usize> = zipped.iter().chain(axes).map(|z| z.0).collect();
+                set.sort_unstable_by(|a, b| b.cmp(a));
+                let mut slot = [None; 12];
+                for (j, &c) in set.iter().enumerate() {
+                    slot[c] = Some(j);
+                }
+                let mut by_varied = vec![f64::NAN; set.len() * len];
+                assert!(rows.fill((start, len), &mut by_varied, Layout::Varied(&slot)));
                 for r in 0..len {
                     let mut want = [f64::NAN; 12];
                     rows.set(start + r, |c, v| want[c] = v)
                         .unwrap_or_else(|e| panic!("{e}"));
                     for (c, w) in want.iter().enumerate() {
+                        // (A column not varied is NaN in `want` and left out.)
+                        let varied = slot[c].map_or(f64::NAN, |j| by_varied[j * len + r]);
                         for (got, layout) in [
                             (by_columns[c * len + r], "columns"),
                             (by_rows[r * 12 + c], "rows"),
+                            (varied, "varied columns"),
                         ] {
                             assert!(
                                 got.to_bits() == w.to_bits(),
@@ -2430,7 +2485,40 @@ mod columnar_tests {
             "--columns",
             "force.G1,driving_torque.2",
         ];
+        // Column-major blocks of the varied columns only (a program, a
+        // ratio varied): a zip and grid axes, one axis twice, a fixed
+        // value set; and every gear state of the 8HP70.
+        let varied = [
+            fig3.as_str(),
+            "--vary",
+            "ratio.G1=-2.1,-2.2,-2.3",
+            "--grid",
+            "ratio.G2=-1.2:-1.4:4",
+            "--grid",
+            "ratio.G2=-1.3:-1.5:2",
+            "--grid",
+            "torque.4=-10:-20:3",
+            "--set",
+            "inertia.2=0.5",
+            "--columns",
+            "driving_torque.2,speed.3",
+        ];
+        let states = [
+            zf.as_str(),
+            "--state",
+            "all",
+            "--set",
+            "speed.input=200",
+            "--grid",
+            "ratio.P1/sun-planet=-1.9:-2.1:3",
+            "--grid",
+            "torque.input=100:200:2",
+            "--columns",
+            "driving_torque.output",
+        ];
         for (args, ok) in [
+            (&varied[..], true),
+            (&states[..], true),
             (&shift[..], true),
             (&bad[..], false),
             (&bad_some[..], false),

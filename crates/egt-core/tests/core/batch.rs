@@ -939,3 +939,79 @@ fn the_program_runs_as_every_code_the_machine_has_with_the_same_bits() {
     let none = err(plan(&t, Compute::Dynamics).with_program_instructions(None));
     assert!(none.contains("no straight-line program"), "{none}");
 }
+
+/// `BatchPlan::run_column_set` with some columns given as one value for
+/// every row gives `run_columns` on the same columns written out, bit for
+/// bit, with the same errors: on the program (condition bounds), the lanes,
+/// the linear path (only loads vary) and the transposed row-by-row path;
+/// with nothing varied; with a bad value in a fixed column (every row
+/// refused) and in varied ones; on the pool and the calling thread.
+#[test]
+fn fixed_columns_give_the_numbers_of_the_columns_written_out() {
+    use egt_core::batch::Column;
+    for (name, p) in &lane_plans() {
+        for p in [p.clone(), p.clone().with_condition_bounds(true)] {
+            let (np, nq) = (p.parameters().len(), p.outputs().len());
+            let rows = 613;
+            let full = lane_rows(&p);
+            let group = |prefix: &str| -> Vec<usize> {
+                (0..np)
+                    .filter(|&c| p.parameters()[c].starts_with(prefix))
+                    .collect()
+            };
+            let odd: Vec<usize> = (0..np).filter(|c| c % 2 == 1).collect();
+            // A NaN in the last column that is not a ratio (fixed below).
+            let mut bad_fixed = p.base().to_vec();
+            let last = (0..np).rposition(|c| !p.parameters()[c].starts_with("ratio."));
+            bad_fixed[last.unwrap_or_else(|| panic!("{name}: only ratios"))] = f64::NAN;
+            for (what, varied, base) in [
+                ("ratios", group("ratio."), p.base().to_vec()),
+                ("loads", group("torque."), p.base().to_vec()),
+                ("odd columns", odd, p.base().to_vec()),
+                ("nothing", Vec::new(), p.base().to_vec()),
+                ("a NaN fixed", group("ratio."), bad_fixed),
+            ] {
+                let label = format!("{name} {what} (program {})", p.has_program());
+                // The full matrix: varied columns from `lane_rows`, the others `base`.
+                let columns: Vec<f64> = (0..np)
+                    .flat_map(|k| {
+                        let from_rows = varied.contains(&k);
+                        (0..rows).map(move |r| (from_rows, r, k))
+                    })
+                    .map(|(from_rows, r, k)| if from_rows { full[r * np + k] } else { base[k] })
+                    .collect();
+                let mut expected = vec![0.0; rows * nq];
+                let expected_errors = p.run_columns(&columns, &mut expected);
+                let set: Vec<Column<'_>> = (0..np)
+                    .map(|k| {
+                        if varied.contains(&k) {
+                            Column::Rows(&columns[k * rows..(k + 1) * rows])
+                        } else {
+                            Column::Every(base[k])
+                        }
+                    })
+                    .collect();
+                for threads in [Threads::Pool, Threads::Calling] {
+                    let mut out = vec![0.0; rows * nq];
+                    let errors = p.run_column_set(threads, &set, rows, &mut out);
+                    assert_eq!(show(&expected_errors), show(&errors), "{label} {threads:?}");
+                    for (i, (a, b)) in out.iter().zip(&expected).enumerate() {
+                        assert!(
+                            a.to_bits() == b.to_bits(),
+                            "{label} {threads:?} {} row {}: {a} with fixed columns, {b} written out",
+                            p.outputs()[i / rows],
+                            i % rows
+                        );
+                    }
+                }
+                if what == "a NaN fixed" {
+                    assert_eq!(expected_errors.len(), rows, "{label}");
+                } else if what == "nothing" {
+                    // Every row the base row: all solved or all refused.
+                    let n = expected_errors.len();
+                    assert!(n == 0 || n == rows, "{label}: {n} rows refused");
+                }
+            }
+        }
+    }
+}
