@@ -676,6 +676,15 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
         .min()
         .unwrap_or(BLOCK);
     let blocks = per_plan.div_ceil(block);
+    let all = blocks * plans.len();
+    let threads = batch_threads(args.threads);
+    // Blocks run as tasks on one thread each; a lone block on a machine of
+    // several threads is shared out by the core, on rayon's global pool.
+    let within = if all <= 1 && threads > 1 {
+        Threads::Pool
+    } else {
+        Threads::Calling
+    };
     // Parameter column `c`'s place among the varied ones, if it is one.
     let mut slot = vec![None; base.len()];
     for (j, &(_, c)) in design.varied.iter().enumerate() {
@@ -772,11 +781,11 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
                     None => Column::Every(v),
                 })
                 .collect();
-            plan.run_column_set(Threads::Pool, &columns, len, results)
+            plan.run_column_set(within, &columns, len, results)
         } else if by_columns {
-            plan.run_columns(params, results)
+            plan.run_columns_with(within, params, results)
         } else {
-            plan.run(params, results)
+            plan.run_with(within, params, results)
         };
         messages.clear();
         messages.resize(len, None);
@@ -867,9 +876,8 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
     // on this thread, which only copies bytes (docs/benchmarks.md has the
     // history: waves of blocks left a thread idle while the other finished
     // its block and while this one wrote).
-    let all = blocks * plans.len();
     let ahead = if block < BLOCK { 1 } else { AHEAD };
-    in_order(all, ahead, &solve, |d| {
+    in_order(all, ahead, threads, &solve, |d| {
         let d = d?;
         match d.encoded {
             Encoded::Text(text) => {
@@ -967,12 +975,13 @@ struct Buffers {
 fn in_order<T: Send>(
     all: usize,
     ahead: usize,
+    threads: usize,
     solve: &(impl Fn((&mut Buffers, usize)) -> T + Sync),
     mut write: impl FnMut(T) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
     use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
     use std::sync::{Condvar, Mutex, mpsc};
-    let threads = rayon::current_num_threads().max(1);
+    let threads = threads.max(1);
     if threads == 1 || all <= 1 {
         let mut buffers = Buffers::default();
         return (0..all).try_for_each(|i| write(solve((&mut buffers, i))));
@@ -1049,6 +1058,22 @@ fn in_order<T: Send>(
         }
         Ok(())
     })
+}
+
+/// The block tasks of `egt batch` ([`in_order`]): `--threads`, else
+/// rayon's own rule (`RAYON_NUM_THREADS`, else the machine's parallelism).
+/// Found without starting rayon's global pool: the tasks run on pools of
+/// their own, and the global pool's idle threads would spin beside them
+/// (about 3.5 ms of CPU in a 17 ms run of 10^6 rows on 2 cores,
+/// docs/benchmarks.md).
+fn batch_threads(requested: Option<usize>) -> usize {
+    let asked = requested.or_else(|| {
+        std::env::var("RAYON_NUM_THREADS")
+            .ok()
+            .and_then(|n| n.trim().parse::<usize>().ok())
+            .filter(|&n| n > 0)
+    });
+    egt_core::batch::worker_threads(asked).0
 }
 
 /// How many blocks a thread may be ahead of the writer ([`in_order`]), when
@@ -2319,7 +2344,7 @@ mod columnar_tests {
         let mut seen = Vec::new();
         let mut ahead = 0;
         pool.install(|| {
-            in_order(all, AHEAD, &solve, |i| {
+            in_order(all, AHEAD, 3, &solve, |i| {
                 if i == 0 {
                     // A slow writer: the tasks wait, the window ahead of it.
                     std::thread::sleep(std::time::Duration::from_millis(30));
@@ -2338,7 +2363,7 @@ mod columnar_tests {
         assert_eq!(solved.load(Ordering::SeqCst), all);
         solved.store(0, Ordering::SeqCst);
         let failed = pool.install(|| {
-            in_order(all, AHEAD, &solve, |i| {
+            in_order(all, AHEAD, 3, &solve, |i| {
                 anyhow::ensure!(i < 5, "full disk at block {i}");
                 Ok(())
             })
