@@ -176,15 +176,8 @@ fn parse_values(s: &str) -> Result<(String, Vec<f64>), String> {
 /// Reading the spec or files; unknown parameter names or states (exit 2);
 /// I/O; and, after every row is written, a summary error when rows failed (exit 1).
 pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
-    if args.threads.is_some() {
-        let (n, note) = egt_core::batch::worker_threads(args.threads);
-        if let Some(note) = note {
-            eprintln!("note: {note}");
-        }
-        // The global pool is built once per process; a second build only fails.
-        let _ = rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build_global();
+    if let (_, Some(note)) = egt_core::batch::worker_threads(args.threads) {
+        eprintln!("note: {note}");
     }
     let compute = match args.compute {
         ComputeArg::Kinematics => Compute::Kinematics,
@@ -407,6 +400,7 @@ fn design(args: &Args, plan: &BatchPlan) -> anyhow::Result<Design> {
             .filter(|(_, l)| !l.trim().is_empty())
             .collect();
         // Parsed in parallel; the varied columns noted in line order.
+        size_global_pool(args.threads);
         let rows: Vec<Result<Vec<(usize, f64)>, String>> = lines
             .par_iter()
             .map(|&(k, line)| {
@@ -680,6 +674,11 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
     let threads = batch_threads(args.threads);
     // Blocks run as tasks on one thread each; a lone block on a machine of
     // several threads is shared out by the core, on rayon's global pool.
+    // (On one thread, blocks run on this one, and text is formatted and
+    // `--rows` lines applied on the global pool.)
+    if all <= 1 || threads == 1 {
+        size_global_pool(args.threads);
+    }
     let within = if all <= 1 && threads > 1 {
         Threads::Pool
     } else {
@@ -711,6 +710,7 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
             params_by_columns,
             results,
             messages,
+            failed_rows,
         } = buffers;
         // Every row starts from the base row. A grid or zip sets the same
         // columns in every row, so a buffer of the same length from an
@@ -787,14 +787,28 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
         } else {
             plan.run_with(within, params, results)
         };
-        messages.clear();
-        messages.resize(len, None);
+        // Most blocks have no failed row: a buffer of the same length is
+        // cleared only where the last block set it (a block's 16 384
+        // messages are 384 KiB to write).
+        if messages.len() == len {
+            for r in failed_rows.drain(..) {
+                messages[r] = None;
+            }
+        } else {
+            messages.clear();
+            messages.resize(len, None);
+            failed_rows.clear();
+        }
         for e in errors {
             messages[e.row] = Some(e.error.to_string());
+            failed_rows.push(e.row);
         }
         for (r, e) in unreadable {
             messages[r] = Some(e);
+            failed_rows.push(r);
         }
+        failed_rows.sort_unstable();
+        failed_rows.dedup();
         let base_row = k * per_plan + start;
         // Parquet encodes a column-major block's columns where they are: the
         // buffers are lent to Arrow for the encoding (an Arrow IPC batch
@@ -832,6 +846,7 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
                     },
                     positions: (&cols.positions, sel),
                     messages,
+                    any_failed: !failed_rows.is_empty(),
                 },
             )?,
             None => Encoded::Text(format_text(
@@ -864,11 +879,9 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
         Ok(Done {
             len,
             encoded,
-            failed: messages.iter().flatten().count(),
-            first_error: messages
-                .iter()
-                .enumerate()
-                .find_map(|(r, m)| m.as_ref().map(|m| format!("row {}: {m}", base_row + r))),
+            failed: failed_rows.len(),
+            first_error: (failed_rows.first())
+                .and_then(|&r| Some(format!("row {}: {}", base_row + r, messages[r].as_ref()?))),
         })
     };
     // Blocks are solved and encoded in the pool's tasks, each task taking
@@ -964,6 +977,8 @@ struct Buffers {
     params_by_columns: bool,
     results: Vec<f64>,
     messages: Vec<Option<String>>,
+    /// The rows of `messages` that are set, in order.
+    failed_rows: Vec<usize>,
 }
 
 /// Blocks `0..all`: `solve` in the pool's tasks (one a thread, each with its
@@ -1076,6 +1091,18 @@ fn batch_threads(requested: Option<usize>) -> usize {
     egt_core::batch::worker_threads(asked).0
 }
 
+/// Size rayon's global pool to `--threads`, where the global pool is about
+/// to work (parsing `--rows`, a lone block, `--specs` lines) rather than at
+/// the start: built, its idle threads would spin beside the block tasks.
+/// (The pool is built once a process; a second build only fails.)
+fn size_global_pool(requested: Option<usize>) {
+    if requested.is_some() {
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads(batch_threads(requested))
+            .build_global();
+    }
+}
+
 /// How many blocks a thread may be ahead of the writer ([`in_order`]), when
 /// blocks are of [`BLOCK`] rows. Blocks cut short by [`BLOCK_BYTES`] (wide
 /// rows, large trains) keep one a thread, as much as the waves before held.
@@ -1166,6 +1193,8 @@ struct Block<'a> {
     /// The plan's positions among the output columns, and its selected outputs.
     positions: (&'a [usize], &'a [usize]),
     messages: &'a [Option<String>],
+    /// Some of `messages` are set.
+    any_failed: bool,
 }
 
 /// Parquet or Arrow IPC output: the CSV's columns, typed (row as an
@@ -1331,7 +1360,7 @@ impl Encoder {
             columns.push(doubles(params.column(c), None));
         }
         let failed = |r: usize| b.messages[r].is_some();
-        let any_failed = (b.messages.iter().any(Option::is_some)).then_some(b.messages);
+        let any_failed = b.any_failed.then_some(b.messages);
         // Which of this plan's outputs fills each output column, if any.
         let mut source = vec![None; self.outputs];
         for (&pos, &i) in b.positions.0.iter().zip(b.positions.1) {
@@ -1357,9 +1386,13 @@ impl Encoder {
         } else {
             Arc::new(StringArray::new_null(len))
         });
-        columns.push(texts(len, |r| {
-            b.messages[r].as_deref().map(std::borrow::Cow::Borrowed)
-        }));
+        columns.push(if b.any_failed {
+            texts(len, |r| {
+                b.messages[r].as_deref().map(std::borrow::Cow::Borrowed)
+            })
+        } else {
+            Arc::new(StringArray::new_null(len))
+        });
         self.record_batch(columns, b.index)
     }
 
@@ -1631,6 +1664,7 @@ fn run_specs(
     compute: Compute,
     out: &mut dyn Write,
 ) -> anyhow::Result<Outcome> {
+    size_global_pool(args.threads);
     let reader: Box<dyn std::io::BufRead> = if path.as_os_str() == "-" {
         Box::new(std::io::stdin().lock())
     } else {
@@ -2577,6 +2611,47 @@ mod columnar_tests {
             assert_same_as_csv(&p, &csv);
             let a = arrow_batches(with("arrow"));
             assert_same_as_csv(&a, &csv);
+        }
+    }
+
+    /// A failed row's message stays in its row: a task's buffers reused
+    /// after a block with a failure hold none in the later blocks (one
+    /// thread, and two), as CSV and as Parquet.
+    #[test]
+    fn a_failed_row_leaves_no_message_in_later_blocks() {
+        let fig3 = example("fig3_example61.toml");
+        let n = 4 * super::BLOCK + 100;
+        // Row 0 is Fig. 3's lock (tau_2 = -1.5), the others far from it.
+        let grid = format!("ratio.G2=-1.5:-1.9:{n}");
+        for threads in ["1", "2"] {
+            let with = |fmt: &str| {
+                let a = [
+                    fig3.as_str(),
+                    "--grid",
+                    grid.as_str(),
+                    "--columns",
+                    "driving_torque.2",
+                    "--threads",
+                    threads,
+                    "--output",
+                    fmt,
+                ];
+                let (bytes, r) = batch(&a);
+                let e = r.err().map(|e| e.to_string()).unwrap_or_default();
+                assert!(
+                    e.starts_with(&format!("1 of {n} scenarios failed")),
+                    "{threads} threads, {fmt}: {e}"
+                );
+                bytes
+            };
+            let csv = String::from_utf8(with("csv")).unwrap_or_else(|e| panic!("{e}"));
+            let failed: Vec<String> = (csv.lines().skip(1))
+                .map(cells)
+                .filter(|c| c.last().is_some_and(|e| !e.is_empty()))
+                .map(|c| c[0].clone())
+                .collect();
+            assert_eq!(failed, ["0"], "{threads} threads");
+            assert_same_as_csv(&parquet_batches(with("parquet")), &csv);
         }
     }
 
