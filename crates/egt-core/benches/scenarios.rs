@@ -489,6 +489,36 @@ mod batch {
         });
     }
 
+    /// `egt batch`'s own job in process: the input torque alone chosen
+    /// (`--columns driving_torque.s1`), the load and the ratio given row by
+    /// row and every other parameter as one value (`run_column_set`, as
+    /// `egt batch` holds a grid's Parquet block; docs/benchmarks.md).
+    #[divan::bench(sample_count = 10)]
+    fn chain6_inverse_dynamics_new_ratios_bounded_driving_torque_column_set(b: Bencher) {
+        use egt_core::batch::{Column, Threads};
+        let (p, rows) = new_ratio_rows(true, &["driving_torque.s1"]);
+        let np = p.parameters().len();
+        let n = rows.len() / np;
+        let load = p
+            .parameter("torque.c2")
+            .unwrap_or_else(|| panic!("no load column"));
+        let varied: Vec<Vec<f64>> = [0, load]
+            .iter()
+            .map(|&k| rows[k..].iter().step_by(np).copied().collect())
+            .collect();
+        let columns: Vec<Column<'_>> = (0..np)
+            .map(|k| match [0, load].iter().position(|&v| v == k) {
+                Some(j) => Column::Rows(&varied[j]),
+                None => Column::Every(p.base()[k]),
+            })
+            .collect();
+        let mut out = vec![0.0; n * p.outputs().len()];
+        b.counter(ItemsCount::new(n)).bench_local(|| {
+            let errors = p.run_column_set(Threads::Pool, black_box(&columns), n, &mut out);
+            assert!(errors.is_empty());
+        });
+    }
+
     fn new_ratios(b: Bencher, bounds: bool, chosen: &[&str]) {
         let (p, rows) = new_ratio_rows(bounds, chosen);
         run(b, &p, &rows);
