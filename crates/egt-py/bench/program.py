@@ -1,7 +1,8 @@
 """Time of the batch's straight-line program from Python, by rows and layout:
 `BatchPlan.run(params, threads=1)` on the 6-link chain (dynamics with
 condition bounds), a new sun-planet ratio in every row, the matrix C- or
-Fortran-ordered. Prints how rows are solved (`plan.program`: "AVX-512",
+Fortran-ordered, or no matrix: `plan.run({"ratio.P1/sun-planet": r})`, the
+other columns at the base row's values. Prints how rows are solved (`plan.program`: "AVX-512",
 "AVX2" or "interpreted"), microseconds a call and nanoseconds a row, best
 of 5. Run it with `EGT_JIT=avx2` or `EGT_JIT=0` in the environment to time
 the AVX2 code or the interpreter on the same machine.
@@ -26,10 +27,14 @@ def main(path: str) -> None:
     rng = np.random.default_rng(1)
     ratio = plan.column("ratio.P1/sun-planet")
     for rows in (1024, 10_000, 100_000):
-        for order in ("C", "F"):
-            params = np.tile(plan.base, (rows, 1))
-            params[:, ratio] = rng.uniform(-0.9, -0.5, rows)
-            params = np.asarray(params, order=order)
+        column = rng.uniform(-0.9, -0.5, rows)
+        for order in ("C", "F", "mapping"):
+            if order == "mapping":
+                params = {"ratio.P1/sun-planet": column}
+            else:
+                params = np.tile(plan.base, (rows, 1))
+                params[:, ratio] = column
+                params = np.asarray(params, order=order)
             plan.run(params, threads=1)
             calls = max(5, 200_000 // rows)
             best = float("inf")
@@ -39,7 +44,8 @@ def main(path: str) -> None:
                     plan.run(params, threads=1)
                 best = min(best, (time.perf_counter() - start) / calls)
             print(
-                f"{plan.program or 'no program'}: {rows:6d} rows, {order}-ordered: "
+                f"{plan.program or 'no program'}: {rows:6d} rows, "
+                f"{order + '-ordered' if order != 'mapping' else 'a mapping'}: "
                 f"{best * 1e6:9.1f} us a call, {best / rows * 1e9:6.1f} ns a row"
             )
 

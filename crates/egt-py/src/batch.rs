@@ -9,9 +9,9 @@
 //! The one NaN a valid row could carry, `power.efficiency` without input
 //! power, is written as 0.0 too (documented in `egt.BatchResult`).
 
-use egt_core::batch::{BatchPlan, BatchSpec, Threads};
+use egt_core::batch::{BatchPlan, BatchSpec, Column, Threads};
 use egt_core::solve::prepared::Compute;
-use numpy::{PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -143,7 +143,7 @@ impl BatchPlanCore {
         Bound<'py, PyArray2<f64>>,
         Vec<(usize, &'static str, String)>,
     )> {
-        let (p, q) = (self.plan.parameters().len(), self.plan.outputs().len());
+        let p = self.plan.parameters().len();
         let shape = params.shape();
         if shape[1] != p {
             return Err(value_error(format!(
@@ -158,19 +158,99 @@ impl BatchPlanCore {
         let input = params
             .as_slice()
             .map_err(|_| value_error("params must be C- or Fortran-contiguous"))?;
+        self.solve(py, rows, columns, threads, |threads, out| {
+            if columns {
+                self.plan.run_columns_with(threads, input, out)
+            } else {
+                self.plan.run_with(threads, input, out)
+            }
+        })
+    }
+
+    /// Solve `rows` scenarios from the base row `base` with the parameter
+    /// columns `varied` given row by row ((column, values), each `rows`
+    /// long; the later of two for one column wins) and every other column
+    /// at its `base` value, which no matrix holds
+    /// (`BatchPlan::run_column_set`). Returns what `run` returns for a
+    /// Fortran-ordered input.
+    #[pyo3(signature = (base, varied, rows, threads = None))]
+    #[allow(clippy::type_complexity)]
+    fn run_set<'py>(
+        &self,
+        py: Python<'py>,
+        base: PyReadonlyArray1<'py, f64>,
+        varied: Vec<(usize, PyReadonlyArray1<'py, f64>)>,
+        rows: usize,
+        threads: Option<usize>,
+    ) -> Result<(
+        Bound<'py, PyArray2<f64>>,
+        Vec<(usize, &'static str, String)>,
+    )> {
+        let p = self.plan.parameters().len();
+        let base = base
+            .as_slice()
+            .map_err(|_| value_error("base must be contiguous"))?;
+        if base.len() != p {
+            return Err(value_error(format!(
+                "base has {} values, the plan has {p} parameters",
+                base.len()
+            )));
+        }
+        let mut set: Vec<Column<'_>> = base.iter().map(|&v| Column::Every(v)).collect();
+        for (k, values) in &varied {
+            let name = self.plan.parameters().get(*k).ok_or_else(|| {
+                value_error(format!("no parameter column {k} (the plan has {p})"))
+            })?;
+            let v = values
+                .as_slice()
+                .map_err(|_| value_error(format!("the values of {name} must be contiguous")))?;
+            if v.len() != rows {
+                return Err(value_error(format!(
+                    "{name} has {} values for {rows} rows",
+                    v.len()
+                )));
+            }
+            set[*k] = Column::Rows(v);
+        }
+        self.solve(py, rows, true, threads, |threads, out| {
+            self.plan.run_column_set(threads, &set, rows, out)
+        })
+    }
+
+    /// The plan's columns and base row as a dict (for repr and debugging).
+    fn describe<'py>(&self, py: Python<'py>) -> Result<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item("parameters", self.parameters())?;
+        d.set_item("outputs", self.outputs())?;
+        d.set_item("base", self.base(py))?;
+        Ok(d)
+    }
+}
+
+impl BatchPlanCore {
+    /// `solve(threads, out)` for `rows` rows with the GIL released, on the
+    /// pool `threads` asks for; the outputs (rows x outputs, Fortran-ordered
+    /// when `columns`; 0.0 in failed rows and for an undefined efficiency)
+    /// and the failed rows as (row, kind, message).
+    #[allow(clippy::type_complexity)]
+    fn solve<'py>(
+        &self,
+        py: Python<'py>,
+        rows: usize,
+        columns: bool,
+        threads: Option<usize>,
+        solve: impl Fn(Threads, &mut [f64]) -> Vec<egt_core::batch::RowError> + Send + Sync,
+    ) -> Result<(
+        Bound<'py, PyArray2<f64>>,
+        Vec<(usize, &'static str, String)>,
+    )> {
+        let q = self.plan.outputs().len();
         let efficiency = self.plan.output("power.efficiency");
         guard(|| {
             let mut out = vec![0.0; rows * q];
             // Element (row, output) of `out`.
             let at = |r: usize, o: usize| if columns { o * rows + r } else { r * q + o };
             let errors = py.detach(|| -> Result<_> {
-                let solve = |threads, out: &mut [f64]| {
-                    if columns {
-                        self.plan.run_columns_with(threads, input, out)
-                    } else {
-                        self.plan.run_with(threads, input, out)
-                    }
-                };
                 let errors = match threads {
                     // No pool to build and hand the call to (a thread's
                     // start and a wake-up each way).
@@ -203,15 +283,6 @@ impl BatchPlanCore {
             let values = convert::mat2_ordered(py, rows, q, out, columns)?;
             Ok((values, errors))
         })
-    }
-
-    /// The plan's columns and base row as a dict (for repr and debugging).
-    fn describe<'py>(&self, py: Python<'py>) -> Result<Bound<'py, PyDict>> {
-        let d = PyDict::new(py);
-        d.set_item("parameters", self.parameters())?;
-        d.set_item("outputs", self.outputs())?;
-        d.set_item("base", self.base(py))?;
-        Ok(d)
     }
 }
 

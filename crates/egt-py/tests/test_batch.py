@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import threading
+from typing import List, Optional
 
 import numpy as np
 import pytest
@@ -338,6 +339,49 @@ def test_fortran_and_c_ordered_params_give_the_same_numbers(fig3: egt.Train, bou
         assert {r: e.message for r, e in here.errors.items()} == {r: e.message for r, e in by_rows.errors.items()}
     # A column of the result is a view, contiguous.
     assert all(by_columns[o].flags.c_contiguous for o in by_columns.outputs)
+
+
+@pytest.mark.parametrize("outputs", [None, ["driving_torque.2", "speed.4"]])
+def test_a_mapping_of_columns_gives_the_matrix_numbers_without_building_it(
+    fig3: egt.Train, outputs: Optional[List[str]]
+) -> None:
+    # Through the lock, as above (program rows, left rows, refused rows),
+    # a load per row, a fixed inertia, and a NaN row.
+    plan = fig3.batch("dynamics", outputs=outputs)
+    g2 = np.repeat(np.linspace(-1.5000001, -1.4999999, 21), 40)
+    g2[5] = np.nan
+    load = np.tile(np.linspace(-10.0, -50.0, 40), 21)
+    inertia = [n for n in plan.parameters if n.startswith("inertia.")][0]
+    values = {"ratio.G2": g2, "torque.4": load, inertia: 0.5}
+    p, _ = plan.params(values)
+    for threads in (None, 1):
+        matrix = plan.run(p, threads=threads)
+        mapped = plan.run(values, threads=threads)
+        evaluated = plan.evaluate(values, threads=threads)
+        for r in (mapped, evaluated):
+            assert r.values.flags.f_contiguous
+            assert r.values.view(np.int64).tolist() == matrix.values.view(np.int64).tolist()
+            np.testing.assert_array_equal(r.ok, matrix.ok)
+            assert {k: e.message for k, e in r.errors.items()} == {k: e.message for k, e in matrix.errors.items()}
+    assert 5 in matrix.errors and (~matrix.ok).sum() >= 9
+    # The fixed inertia is used (not the spec's): another value moves the torque.
+    other = plan.run({**values, inertia: 5.0})
+    torque = plan.outputs.index("driving_torque.2")
+    assert (other.values[matrix.ok, torque] != matrix.values[matrix.ok, torque]).any()
+    # Scalars only: one row (or `rows` of them), the base row's numbers.
+    one = plan.run({"torque.4": -20.0})
+    assert one.values.shape == (1, len(plan.outputs))
+    three = plan.evaluate({"torque.4": -20.0}, rows=3)
+    assert three.values.view(np.int64).tolist() == np.repeat(one.values, 3, axis=0).view(np.int64).tolist()
+    # Bad mappings are refused, naming what is wrong.
+    with pytest.raises(KeyError, match="no parameter column 'torque.99'"):
+        plan.run({"torque.99": [1.0, 2.0]})
+    with pytest.raises(ValueError, match="has 2 rows but"):
+        plan.run({"torque.4": [1.0, 2.0, 3.0], "ratio.G2": [-1.2, -1.3]})
+    with pytest.raises(ValueError, match="rows=2 disagrees"):
+        plan.evaluate({"torque.4": [1.0, 2.0, 3.0]}, rows=2)
+    with pytest.raises(ValueError, match="dimension"):
+        plan.run({"torque.4": [[1.0, 2.0]]})
 
 
 def test_chosen_outputs_without_a_condition_column_take_the_program(fig3: egt.Train) -> None:

@@ -271,6 +271,7 @@ class BatchPlan:
             per_row.append(("teeth", t_arr, 2))
         n_rows = common_rows(per_row)
         if rows is not None:
+            rows = count(rows, "rows", 2**48)
             if any(_rows_of(a, nd) not in (None, rows) for _, a, nd in per_row):
                 raise ArgumentError(f"rows={rows} disagrees with the per-row arrays")
             n_rows = rows
@@ -294,13 +295,22 @@ class BatchPlan:
 
     def run(
         self,
-        params: Union[ArrayLike, Tuple[np.ndarray, Dict[int, RowError]]],
+        params: Union[ArrayLike, Tuple[np.ndarray, Dict[int, RowError]], Mapping[str, ArrayLike]],
         *,
         threads: Optional[int] = None,
     ) -> BatchResult:
         """Solve every row of ``params`` ((rows, parameters) or one row), or of
         what :meth:`params` returned (the matrix and its refused rows, which
         are then reported failed): ``plan.run(plan.params({...}))``.
+
+        ``params`` may also be a mapping of the columns you vary, name ->
+        one value per row or one value for every row, the others keeping
+        the base row's values: ``plan.run({"ratio.P1/sun-planet": r,
+        "torque.c2": -40.0})``. No parameter matrix is built: only the
+        columns given row by row are read, so a sweep of two parameters of
+        a 35-parameter plan holds and reads 2 columns, not 35. The numbers
+        are those of the matrix written out, bit for bit; the values come
+        back in Fortran order.
 
         A Fortran-ordered matrix (as :meth:`params` builds) is solved column
         by column and the values come back in Fortran order, each output
@@ -315,6 +325,9 @@ class BatchPlan:
         refused: Dict[int, RowError] = {}
         if isinstance(params, tuple) and len(params) == 2 and isinstance(params[1], dict):
             params, refused = params
+        threads = self._threads(threads)
+        if isinstance(params, Mapping):
+            return self._run_set(params, threads)
         a = _numeric(params, "params")
         if a.ndim == 1:
             a = a.reshape(1, -1)
@@ -322,17 +335,51 @@ class BatchPlan:
             raise ArgumentError(
                 f"params must have shape (rows, {len(self.parameters)}), got {a.shape}"
             )
-        if threads is not None:
-            # More threads than cores are capped by the native side.
-            threads = count(threads, "threads", 2**32)
-            if threads < 1:
-                raise ArgumentError(f"threads must be a positive integer, got {threads}")
         a = np.asarray(a, dtype=np.float64)
         if not a.flags.f_contiguous or a.flags.c_contiguous:
             a = np.ascontiguousarray(a)
         # A Fortran-ordered matrix (as :meth:`params` builds) is solved
         # column by column and its outputs come back in Fortran order too.
-        values, raw = self._core.run(a, None if threads is None else int(threads))
+        values, raw = self._core.run(a, threads)
+        return self._result(values, raw, refused)
+
+    @staticmethod
+    def _threads(threads: Optional[int]) -> Optional[int]:
+        if threads is None:
+            return None
+        # More threads than cores are capped by the native side.
+        n = count(threads, "threads", 2**32)
+        if n < 1:
+            raise ArgumentError(f"threads must be a positive integer, got {threads}")
+        return int(n)
+
+    def _run_set(
+        self, values: Mapping[str, ArrayLike], threads: Optional[int], rows: Optional[int] = None
+    ) -> BatchResult:
+        """:meth:`run` of the columns in ``values``, the others at the base row's values."""
+        names, cols = columns(values, "params")
+        per_row = [(f"params[{n!r}]", c, 0) for n, c in zip(names, cols)]
+        n_rows = common_rows(per_row)
+        if rows is not None:
+            rows = count(rows, "rows", 2**48)
+            if any(_rows_of(a, nd) not in (None, rows) for _, a, nd in per_row):
+                raise ArgumentError(f"rows={rows} disagrees with the per-row arrays")
+            n_rows = rows
+        base = np.array(self.base, dtype=np.float64)
+        varied: Dict[int, np.ndarray] = {}
+        for n, c in zip(names, cols):
+            k = self.column(n)
+            if c.ndim == 0:
+                base[k] = float(c)
+                varied.pop(k, None)
+            else:
+                varied[k] = np.ascontiguousarray(c, dtype=np.float64)
+        vals, raw = self._core.run_set(base, list(varied.items()), n_rows, threads)
+        return self._result(vals, raw, {})
+
+    def _result(
+        self, values: np.ndarray, raw: List[Tuple[int, str, str]], refused: Dict[int, RowError]
+    ) -> BatchResult:
         ok = np.ones(values.shape[0], dtype=bool)
         errors = {r: RowError(r, k, m) for r, k, m in raw}
         errors.update(refused)  # rows params() refused (their ratios were placeholders)
@@ -363,7 +410,12 @@ class BatchPlan:
         rows: Optional[int] = None,
         threads: Optional[int] = None,
     ) -> BatchResult:
-        """:meth:`params` then :meth:`run`; rows with invalid teeth are failed rows."""
+        """:meth:`params` then :meth:`run`; rows with invalid teeth are failed rows.
+
+        With ``values`` alone (no ``ratios`` or ``teeth``) no matrix is built:
+        the columns go to :meth:`run` as a mapping, the same numbers bit for bit."""
+        if ratios is None and teeth is None:
+            return self._run_set(values or {}, self._threads(threads), rows)
         return self.run(self.params(values, ratios=ratios, teeth=teeth, rows=rows), threads=threads)
 
 

@@ -118,6 +118,13 @@ class BatchPlanCore:
     def run(
         self, params: npt.NDArray[np.float64], threads: Optional[int] = None
     ) -> Tuple[npt.NDArray[np.float64], List[Tuple[int, str, str]]]: ...
+    def run_set(
+        self,
+        base: npt.NDArray[np.float64],
+        varied: List[Tuple[int, npt.NDArray[np.float64]]],
+        rows: int,
+        threads: Optional[int] = None,
+    ) -> Tuple[npt.NDArray[np.float64], List[Tuple[int, str, str]]]: ...
     def describe(self) -> Dict[str, Any]: ...
 
 def batch_plan(
