@@ -176,7 +176,11 @@ fn parse_values(s: &str) -> Result<(String, Vec<f64>), String> {
 /// Reading the spec or files; unknown parameter names or states (exit 2);
 /// I/O; and, after every row is written, a summary error when rows failed (exit 1).
 pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
-    if let (_, Some(note)) = egt_core::batch::worker_threads(args.threads) {
+    // (The machine's parallelism is read from cgroup files, so only when
+    // there is a request to compare with it.)
+    if args.threads.is_some()
+        && let (_, Some(note)) = egt_core::batch::worker_threads(args.threads)
+    {
         eprintln!("note: {note}");
     }
     let compute = match args.compute {
