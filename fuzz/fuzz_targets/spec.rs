@@ -2,12 +2,14 @@
 //! validation and every analysis the spec's `[analysis]` table can drive:
 //! kinematics, inverse dynamics and power (as the batch plan builds them,
 //! and with condition bounds, by the straight-line program, each code the
-//! machine has against the interpreter, bit for bit),
-//! stability and the shift table. Any error is fine; a panic, an abort, or
-//! compiled code that disagrees with the interpreter is a bug.
+//! machine has against the interpreter, bit for bit, and with every other
+//! parameter column given as one value against the matrix written out),
+//! stability and the shift table. Any error is fine; a panic, an abort,
+//! compiled code that disagrees with the interpreter, or fixed columns that
+//! change a number are bugs.
 #![no_main]
 
-use egt_core::batch::{BatchPlan, BatchSpec};
+use egt_core::batch::{BatchPlan, BatchSpec, Column, Threads};
 use egt_core::solve::prepared::Compute;
 use egt_core::{Format, Train};
 use libfuzzer_sys::fuzz_target;
@@ -58,6 +60,40 @@ fuzz_target!(|data: &[u8]| {
                             }
                         }
                     }
+                }
+                // Every even column as one value (its first row's): the
+                // numbers and refused rows of the matrix written out.
+                let np = plan.parameters().len();
+                let fixed: Vec<f64> = (0..np)
+                    .flat_map(|k| {
+                        let c = &rows[k * 64..(k + 1) * 64];
+                        (0..64).map(move |r| if k % 2 == 0 { c[0] } else { c[r] })
+                    })
+                    .collect();
+                let set: Vec<Column<'_>> = (0..np)
+                    .map(|k| match k % 2 {
+                        0 => Column::Every(fixed[k * 64]),
+                        _ => Column::Rows(&fixed[k * 64..(k + 1) * 64]),
+                    })
+                    .collect();
+                let q = plan.outputs().len();
+                let (mut a, mut b) = (vec![0.0; 64 * q], vec![0.0; 64 * q]);
+                let rows_a: Vec<usize> = plan
+                    .run_columns(&fixed, &mut a)
+                    .iter()
+                    .map(|e| e.row)
+                    .collect();
+                let rows_b: Vec<usize> = (plan
+                    .run_column_set(Threads::Calling, &set, 64, &mut b)
+                    .iter())
+                .map(|e| e.row)
+                .collect();
+                assert_eq!(rows_a, rows_b, "fixed columns: other rows refused");
+                for (i, (x, y)) in a.iter().zip(&b).enumerate() {
+                    assert!(
+                        x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan()),
+                        "fixed columns, cell {i}: {y} against {x} written out"
+                    );
                 }
             }
         }
