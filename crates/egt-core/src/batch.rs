@@ -927,8 +927,8 @@ impl BatchPlan {
         if rows == 0 {
             return Vec::new();
         }
-        let columns: Vec<Column<'_>> = params.chunks(rows).map(Column::Rows).collect();
-        self.run_column_set(threads, &columns, rows, out)
+        let inputs = params.chunks(rows).map(|c| (c, false)).collect();
+        self.run_inputs(threads, inputs, rows, out)
     }
 
     /// [`BatchPlan::run_columns_with`] with each parameter column given
@@ -961,23 +961,43 @@ impl BatchPlan {
         if rows == 0 {
             return Vec::new();
         }
-        // A fixed column's value, as long as a task: every task reads it there.
-        let fixed: Vec<Vec<f64>> = params
-            .iter()
-            .map(|c| match *c {
+        // Each fixed column's value, as long as a task, in one buffer: every
+        // task reads it there. Each is 64 bytes longer than that, so that
+        // they do not all start at one offset modulo 4 KiB (`crowded`).
+        let n = rows.min(ROWS_PER_TASK);
+        let stride = n + 8;
+        let mut fixed = Vec::new();
+        for c in params {
+            match *c {
                 Column::Rows(v) => {
                     assert_eq!(v.len(), rows, "a parameter column is not `rows` long");
-                    Vec::new()
                 }
-                Column::Every(v) => vec![v; rows.min(ROWS_PER_TASK)],
-            })
-            .collect();
-        let inputs: Vec<(&[f64], bool)> = (params.iter().zip(&fixed))
-            .map(|(c, f)| match *c {
+                Column::Every(v) => fixed.extend(std::iter::repeat_n(v, stride)),
+            }
+        }
+        let mut at = 0;
+        let inputs = (params.iter())
+            .map(|c| match *c {
                 Column::Rows(v) => (v, false),
-                Column::Every(_) => (f.as_slice(), true),
+                Column::Every(_) => {
+                    at += stride;
+                    (&fixed[at - stride..at - 8], true)
+                }
             })
             .collect();
+        self.run_inputs(threads, inputs, rows, out)
+    }
+
+    /// [`BatchPlan::run_column_set`] of `inputs`: each parameter column
+    /// whole (`(column, false)`) or, fixed, as long as a task (`true`).
+    fn run_inputs(
+        &self,
+        threads: Threads,
+        inputs: Vec<(&[f64], bool)>,
+        rows: usize,
+        out: &mut [f64],
+    ) -> Vec<RowError> {
+        let (p, q) = (self.parameters.len(), self.names.len());
         // Each task: its rows of every output column.
         let mut tasks: Vec<Vec<&mut [f64]>> = (0..rows.div_ceil(ROWS_PER_TASK))
             .map(|_| Vec::with_capacity(q))
@@ -1474,9 +1494,12 @@ impl Worker<'_> {
         let (program, pw) = program_of(plan, &mut lanes.program);
         lanes.left.clear();
         lanes.left_rows.clear();
+        // Outputs written in place, unless their columns crowd the cache's
+        // sets (a matrix of 512 x 2^k rows): then through the block's slots.
+        let crowded = crate::solve::prepared::crowded(out.iter().map(|c| c.as_ptr() as usize));
         for at in (0..n).step_by(PROGRAM_BLOCK) {
             let to = n.min(at + PROGRAM_BLOCK);
-            program.solve_columns(pw, &column, out, at, to);
+            program.solve_columns(pw, &column, out, (at, to), crowded);
             if pw.all_valid {
                 continue;
             }
@@ -2113,13 +2136,14 @@ mod tests {
     /// The rows of `plan` on its compiled program, and on `interpreted`: the
     /// same bits, errors and valid rows.
     fn compare(name: &str, p: &BatchPlan, interpreted: &BatchPlan) {
-        {
+        // 512 rows: the output columns start at one offset modulo 4 KiB, so
+        // a plan of more than 12 outputs writes them through the slots.
+        for rows in [300, 512] {
             let program = p
                 .program
                 .as_ref()
                 .unwrap_or_else(|| panic!("{name}: no program"));
             let (np, nq) = (p.parameters().len(), p.outputs().len());
-            let rows = 300;
             let mut params = Vec::new();
             for r in 0..rows {
                 params.extend(p.base().iter().enumerate().map(|(c, &v)| {

@@ -24,7 +24,7 @@ mod lanes;
 mod tape;
 pub(crate) use lanes::LaneWorkspace;
 pub(crate) use tape::{
-    BLOCK as PROGRAM_BLOCK, Columns as ProgramColumns, Program, ProgramWorkspace,
+    BLOCK as PROGRAM_BLOCK, Columns as ProgramColumns, Program, ProgramWorkspace, crowded,
 };
 
 use crate::solve::rows::{Extra, Rows, dof_with, link_columns};

@@ -213,8 +213,9 @@ impl Code {
     /// masks' bytes (see [`Entry`]), `io` a buffer for the pointer table.
     /// With `columns` ([`InPlace`]), the parameters are read from
     /// `column(k)[at..at + BLOCK]` and the outputs written to
-    /// `out[o][at..at + BLOCK]`; without, both are the block's slots (the
-    /// parameters loaded there, the outputs read from there).
+    /// `out[o][at..at + BLOCK]` (to their slots when `out` is None);
+    /// without, both are the block's slots (the parameters loaded there,
+    /// the outputs read from there).
     pub(crate) fn run<'c>(
         &self,
         vals: &mut [[f64; BLOCK]],
@@ -238,11 +239,19 @@ impl Code {
                     assert!(c.len() >= BLOCK, "a whole block of parameter column {k}");
                     io.push(c.as_ptr() as usize);
                 }
-                assert_eq!(out.len(), inner.outputs.len(), "an output column each");
-                for c in out.iter_mut() {
-                    let c = &mut c[at..];
-                    assert!(c.len() >= BLOCK, "a whole block of each output column");
-                    io.push(c.as_mut_ptr() as usize);
+                match out {
+                    Some(out) => {
+                        assert_eq!(out.len(), inner.outputs.len(), "an output column each");
+                        for c in out.iter_mut() {
+                            let c = &mut c[at..];
+                            assert!(c.len() >= BLOCK, "a whole block of each output column");
+                            io.push(c.as_mut_ptr() as usize);
+                        }
+                    }
+                    // Into their slots.
+                    None => io.extend(
+                        (inner.outputs.iter()).map(|&s| base.wrapping_add(s as usize) as usize),
+                    ),
                 }
             }
         }
@@ -272,10 +281,10 @@ impl Code {
 
 /// A whole block of a column-major batch, read and written in place: rows
 /// `at..at + BLOCK` of `column(k)` (parameter column `k`) and of `out[o]`
-/// (output column `o`).
+/// (output column `o`; None: the outputs go to their slots).
 pub(crate) struct InPlace<'a, 'b, 'c> {
     pub column: &'a dyn Fn(usize) -> &'c [f64],
-    pub out: &'a mut [&'b mut [f64]],
+    pub out: Option<&'a mut [&'b mut [f64]]>,
     pub at: usize,
 }
 

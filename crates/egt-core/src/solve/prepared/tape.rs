@@ -974,26 +974,32 @@ impl Program {
     /// [`Program::run_columns`] then [`Program::write_columns`] on rows
     /// `at..to` of the columns (`column(k)` all of parameter column `k`,
     /// `out[o]` of output column `o`), at most [`BLOCK`] rows: a whole block
-    /// is read and written in place by the compiled code.
+    /// is read in place by the compiled code, and its outputs written in
+    /// place unless `crowded` (the output columns crowd the cache's sets,
+    /// [`crowded`]: then into the block's slots and copied).
     pub(crate) fn solve_columns<'c>(
         &self,
         w: &mut ProgramWorkspace,
         column: impl Fn(usize) -> &'c [f64],
         out: &mut [&mut [f64]],
-        at: usize,
-        to: usize,
+        (at, to): (usize, usize),
+        crowded: bool,
     ) {
         match &self.code {
             Some(code) if to - at == BLOCK => {
                 let mut masks = [0u8; MASKS * MASK_BYTES];
                 let in_place = super::jit::InPlace {
                     column: &column,
-                    out,
+                    out: (!crowded).then_some(&mut *out),
                     at,
                 };
                 code.run(&mut w.vals, &mut masks, &mut w.io, Some(in_place));
                 self.finish(w, &masks, BLOCK);
-                self.write_statics(w, out, at, to);
+                if crowded {
+                    self.write_columns(w, out, at, to);
+                } else {
+                    self.write_statics(w, out, at, to);
+                }
             }
             _ => {
                 self.run_columns(w, |k| &column(k)[at..to]);
@@ -1242,6 +1248,30 @@ impl Program {
     }
 }
 
+/// Whether columns starting at `starts` (byte addresses) crowd the L1
+/// cache's sets: some set is under the first [`BLOCK`] rows of more than
+/// 12 of them (a block of a column is 8 lines; the set is the address
+/// modulo 4 KiB, the way x86 cores with 48 KiB, 12-way L1 caches index it).
+/// The columns of a column-major matrix of 512 x 2^k rows all start at one
+/// offset modulo 4 KiB. Writing its output columns in place a block at a
+/// time, the program ran 3 times slower than with 4 000 rows (19.4 against
+/// 6.5 ns a row at 6 links, 4 096 rows); through the block's slots and
+/// copied, 9.8 ns (reading the parameters through the slots as well did
+/// not help: 10.6; docs/benchmarks.md).
+pub(crate) fn crowded(starts: impl IntoIterator<Item = usize>) -> bool {
+    const LINE: usize = 64;
+    const SETS: usize = 4096 / LINE;
+    const LINES: usize = BLOCK * 8 / LINE;
+    let mut under = [0u16; SETS];
+    for a in starts {
+        let s = (a % 4096) / LINE;
+        for d in 0..LINES {
+            under[(s + d) % SETS] += 1;
+        }
+    }
+    under.iter().any(|&n| n > 12)
+}
+
 /// One block's run as a [`pulp::WithSimd`], compiled for the detected
 /// instruction set (as the lanes' `Group`): the parameter rules, the
 /// operations, and each row's validity.
@@ -1268,5 +1298,25 @@ impl pulp::WithSimd for Run<'_> {
             let ok = |m: u8| !needs[m as usize] || w.ok[m as usize][r];
             w.valid[r] = r < count && good[r] && ok(KIN) && ok(PSI) && ok(FORCE);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::crowded;
+
+    /// The columns of a column-major matrix of 512 x 2^k rows start at one
+    /// offset modulo 4 KiB: more than 12 of them crowd the cache's sets;
+    /// other row counts spread them.
+    #[test]
+    fn columns_of_512_times_2k_rows_crowd_the_cache() {
+        let starts = |rows: usize, cols: usize| (0..cols).map(move |c| 0x1_0000 + c * rows * 8);
+        assert!(crowded(starts(4096, 22)));
+        assert!(crowded(starts(512, 13)));
+        assert!(crowded(starts(1 << 20, 13)));
+        assert!(!crowded(starts(512, 12)));
+        assert!(!crowded(starts(4000, 22)));
+        assert!(!crowded(starts(10_000, 60)));
+        assert!(!crowded(starts(1000, 60)));
     }
 }
