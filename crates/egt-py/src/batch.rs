@@ -19,6 +19,13 @@ use crate::convert::{self, mat2};
 use crate::errors::{Result, guard, kind, value_error};
 use crate::train::TrainCore;
 
+/// A batch's outputs (rows x outputs) and its failed rows as (row, kind,
+/// message).
+type Solved<'py> = (
+    Bound<'py, PyArray2<f64>>,
+    Vec<(usize, &'static str, String)>,
+);
+
 /// A prepared batch (see `egt.BatchPlan`).
 #[pyclass(frozen, module = "egt._egt", name = "BatchPlanCore")]
 #[derive(Debug)]
@@ -133,16 +140,12 @@ impl BatchPlanCore {
     /// output column comes back contiguous; 0.0 in failed rows) and the
     /// failed rows as (row, kind, message).
     #[pyo3(signature = (params, threads = None))]
-    #[allow(clippy::type_complexity)]
     fn run<'py>(
         &self,
         py: Python<'py>,
         params: PyReadonlyArray2<'py, f64>,
         threads: Option<usize>,
-    ) -> Result<(
-        Bound<'py, PyArray2<f64>>,
-        Vec<(usize, &'static str, String)>,
-    )> {
+    ) -> Result<Solved<'py>> {
         let p = self.plan.parameters().len();
         let shape = params.shape();
         if shape[1] != p {
@@ -174,7 +177,6 @@ impl BatchPlanCore {
     /// (`BatchPlan::run_column_set`). Returns what `run` returns for a
     /// Fortran-ordered input.
     #[pyo3(signature = (base, varied, rows, threads = None))]
-    #[allow(clippy::type_complexity)]
     fn run_set<'py>(
         &self,
         py: Python<'py>,
@@ -182,10 +184,7 @@ impl BatchPlanCore {
         varied: Vec<(usize, PyReadonlyArray1<'py, f64>)>,
         rows: usize,
         threads: Option<usize>,
-    ) -> Result<(
-        Bound<'py, PyArray2<f64>>,
-        Vec<(usize, &'static str, String)>,
-    )> {
+    ) -> Result<Solved<'py>> {
         let p = self.plan.parameters().len();
         let base = base
             .as_slice()
@@ -232,7 +231,6 @@ impl BatchPlanCore {
     /// pool `threads` asks for; the outputs (rows x outputs, Fortran-ordered
     /// when `columns`; 0.0 in failed rows and for an undefined efficiency)
     /// and the failed rows as (row, kind, message).
-    #[allow(clippy::type_complexity)]
     fn solve<'py>(
         &self,
         py: Python<'py>,
@@ -240,10 +238,7 @@ impl BatchPlanCore {
         columns: bool,
         threads: Option<usize>,
         solve: impl Fn(Threads, &mut [f64]) -> Vec<egt_core::batch::RowError> + Send + Sync,
-    ) -> Result<(
-        Bound<'py, PyArray2<f64>>,
-        Vec<(usize, &'static str, String)>,
-    )> {
+    ) -> Result<Solved<'py>> {
         let q = self.plan.outputs().len();
         let efficiency = self.plan.output("power.efficiency");
         guard(|| {

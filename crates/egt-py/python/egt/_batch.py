@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import TYPE_CHECKING, Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -45,8 +45,10 @@ def _rows_of(a: np.ndarray, per_row_ndim: int) -> Optional[int]:
     return None
 
 
-def common_rows(arrays: Iterable[Tuple[str, np.ndarray, int]]) -> int:
-    """The common row count of the per-row arrays; 1 when everything broadcasts."""
+def common_rows(arrays: Sequence[Tuple[str, np.ndarray, int]], given: Optional[int] = None) -> int:
+    """The common row count of the per-row arrays; 1 when everything
+    broadcasts; ``given`` (a ``rows=`` argument) if not None, which every
+    per-row array must agree with."""
     rows: Optional[int] = None
     first = ""
     for what, a, nd in arrays:
@@ -65,6 +67,11 @@ def common_rows(arrays: Iterable[Tuple[str, np.ndarray, int]]) -> int:
                 f"`{what}` has {r} rows but `{first}` has {rows}: every per-row array "
                 "must have one row per scenario"
             )
+    if given is not None:
+        given = count(given, "rows", 2**48)
+        if rows not in (None, given):
+            raise ArgumentError(f"rows={given} disagrees with the per-row arrays")
+        return given
     return 1 if rows is None else rows
 
 
@@ -269,12 +276,7 @@ class BatchPlan:
             per_row.append(("ratios", r_arr, 1))
         if t_arr is not None:
             per_row.append(("teeth", t_arr, 2))
-        n_rows = common_rows(per_row)
-        if rows is not None:
-            rows = count(rows, "rows", 2**48)
-            if any(_rows_of(a, nd) not in (None, rows) for _, a, nd in per_row):
-                raise ArgumentError(f"rows={rows} disagrees with the per-row arrays")
-            n_rows = rows
+        n_rows = common_rows(per_row, rows)
         # Fortran order: each column contiguous, as the native side solves
         # it (no transposition either way; :meth:`run` keeps the order).
         p = np.empty((n_rows, len(self.parameters)), dtype=np.float64, order="F")
@@ -359,12 +361,7 @@ class BatchPlan:
         """:meth:`run` of the columns in ``values``, the others at the base row's values."""
         names, cols = columns(values, "params")
         per_row = [(f"params[{n!r}]", c, 0) for n, c in zip(names, cols)]
-        n_rows = common_rows(per_row)
-        if rows is not None:
-            rows = count(rows, "rows", 2**48)
-            if any(_rows_of(a, nd) not in (None, rows) for _, a, nd in per_row):
-                raise ArgumentError(f"rows={rows} disagrees with the per-row arrays")
-            n_rows = rows
+        n_rows = common_rows(per_row, rows)
         base = np.array(self.base, dtype=np.float64)
         varied: Dict[int, np.ndarray] = {}
         for n, c in zip(names, cols):
