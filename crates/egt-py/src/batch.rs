@@ -242,7 +242,16 @@ impl BatchPlanCore {
         let q = self.plan.outputs().len();
         let efficiency = self.plan.output("power.efficiency");
         guard(|| {
-            let mut out = vec![0.0; rows * q];
+            // Refused, not aborted, when the outputs cannot be held (a
+            // mapping of scalars with a large `rows` builds no input first).
+            let cells = rows.saturating_mul(q);
+            let mut out: Vec<f64> = Vec::new();
+            out.try_reserve_exact(cells).map_err(|_| {
+                pyo3::exceptions::PyMemoryError::new_err(format!(
+                    "the outputs of {rows} rows ({q} columns of 8-byte numbers) do not fit in memory"
+                ))
+            })?;
+            out.resize(cells, 0.0);
             // Element (row, output) of `out`.
             let at = |r: usize, o: usize| if columns { o * rows + r } else { r * q + o };
             let errors = py.detach(|| -> Result<_> {

@@ -382,6 +382,9 @@ def test_a_mapping_of_columns_gives_the_matrix_numbers_without_building_it(
         plan.evaluate({"torque.4": [1.0, 2.0, 3.0]}, rows=2)
     with pytest.raises(ValueError, match="dimension"):
         plan.run({"torque.4": [[1.0, 2.0]]})
+    # Rows past the memory: refused, as NumPy refuses the matrix, not aborted.
+    with pytest.raises(MemoryError, match=f"the outputs of {2**40} rows"):
+        plan.evaluate({"torque.4": -20.0}, rows=2**40)
 
 
 def test_chosen_outputs_without_a_condition_column_take_the_program(fig3: egt.Train) -> None:
