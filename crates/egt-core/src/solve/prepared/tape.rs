@@ -1262,7 +1262,7 @@ pub(crate) fn crowded(starts: impl IntoIterator<Item = usize>) -> bool {
     const LINE: usize = 64;
     const SETS: usize = 4096 / LINE;
     const LINES: usize = BLOCK * 8 / LINE;
-    let mut under = [0u16; SETS];
+    let mut under = [0usize; SETS];
     for a in starts {
         let s = (a % 4096) / LINE;
         for d in 0..LINES {
@@ -1318,5 +1318,7 @@ mod tests {
         assert!(!crowded(starts(4000, 22)));
         assert!(!crowded(starts(10_000, 60)));
         assert!(!crowded(starts(1000, 60)));
+        // More columns than a u16 counts (a train of 10^5 links' outputs).
+        assert!(crowded(starts(4096, 70_000)));
     }
 }
