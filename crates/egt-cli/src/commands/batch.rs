@@ -517,6 +517,10 @@ struct Columns {
 type Outcome = (usize, usize, Option<String>);
 
 fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::Result<Outcome> {
+    let threads = batch_threads(args.threads);
+    if threads > 1 && !args.list {
+        wake_cores(threads - 1);
+    }
     let spec = SpecArgs {
         spec: args.spec.clone().unwrap_or_else(|| PathBuf::from("-")),
         spec_format: args.spec_format,
@@ -675,11 +679,10 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
         .unwrap_or(BLOCK);
     let blocks = per_plan.div_ceil(block);
     let all = blocks * plans.len();
-    let threads = batch_threads(args.threads);
-    // Blocks run as tasks on one thread each; a lone block on a machine of
-    // several threads is shared out by the core, on rayon's global pool.
-    // (On one thread, blocks run on this one, and text is formatted and
-    // `--rows` lines applied on the global pool.)
+    // Blocks run as tasks on one thread each ([`in_order`]), which solves,
+    // formats text and applies `--rows` lines itself; a lone block on a
+    // machine of several threads is shared out on rayon's global pool.
+    // (On one thread, `--rows` lines are still parsed on the global pool.)
     if all <= 1 || threads == 1 {
         size_global_pool(args.threads);
     }
@@ -765,16 +768,24 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
             }
             bad
         } else {
-            params
-                .par_chunks_mut(np)
-                .enumerate()
-                .filter_map(|(r, row)| {
-                    design.rows.apply(start + r, row).err().map(|e| {
-                        row.iter_mut().for_each(|v| *v = f64::NAN);
-                        (r, e)
-                    })
+            let apply = |(r, row): (usize, &mut [f64])| {
+                design.rows.apply(start + r, row).err().map(|e| {
+                    row.iter_mut().for_each(|v| *v = f64::NAN);
+                    (r, e)
                 })
-                .collect()
+            };
+            match within {
+                Threads::Pool => params
+                    .par_chunks_mut(np)
+                    .enumerate()
+                    .filter_map(apply)
+                    .collect(),
+                Threads::Calling => params
+                    .chunks_mut(np)
+                    .enumerate()
+                    .filter_map(apply)
+                    .collect(),
+            }
         };
         // `run` writes every output of every row (NaN on failed rows).
         results.resize(len * nq, 0.0);
@@ -868,6 +879,7 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
                 (params, np),
                 (results, nq),
                 messages,
+                within,
             )),
         };
         // The encoded chunks hold bytes, not the arrays: the buffers come
@@ -935,40 +947,49 @@ struct TextBlock<'a> {
 }
 
 /// A block as JSON Lines or CSV, in pieces of [`FORMAT_TASK`] rows, in
-/// order: parallel tasks on a pool of several threads; in `egt batch`, whose
-/// blocks run in parallel, on the block's task's one thread.
+/// order: parallel tasks on rayon's global pool (`within` a pool: a lone
+/// block), or on this thread (blocks run in parallel, or one thread).
 fn format_text(
     t: TextBlock<'_>,
     plan: &BatchPlan,
     (params, np): (&[f64], usize),
     (results, nq): (&[f64], usize),
     messages: &[Option<String>],
+    within: Threads,
 ) -> Vec<String> {
     let sel = t.positions.1;
-    results
-        .par_chunks(nq * FORMAT_TASK)
-        .zip(params.par_chunks(np * FORMAT_TASK))
-        .zip(messages.par_chunks(FORMAT_TASK))
-        .enumerate()
-        .map(|(k, ((res, par), msgs))| {
-            let mut buf = String::with_capacity(res.len() * 24);
-            for (r, ((o, p), m)) in res.chunks(nq).zip(par.chunks(np)).zip(msgs).enumerate() {
-                let fmt = Row {
-                    row: t.base_row + k * FORMAT_TASK + r,
-                    state: t.state,
-                    varied: &t.design.varied,
-                    keys: t.keys,
-                    params: p,
-                };
-                if t.json {
-                    fmt.json(&mut buf, t.okeys, sel, plan, o, m.as_deref());
-                } else {
-                    fmt.csv(&mut buf, t.header_len, t.positions, plan, o, m.as_deref());
-                }
+    let piece = |k: usize, res: &[f64], par: &[f64], msgs: &[Option<String>]| {
+        let mut buf = String::with_capacity(res.len() * 24);
+        for (r, ((o, p), m)) in res.chunks(nq).zip(par.chunks(np)).zip(msgs).enumerate() {
+            let fmt = Row {
+                row: t.base_row + k * FORMAT_TASK + r,
+                state: t.state,
+                varied: &t.design.varied,
+                keys: t.keys,
+                params: p,
+            };
+            if t.json {
+                fmt.json(&mut buf, t.okeys, sel, plan, o, m.as_deref());
+            } else {
+                fmt.csv(&mut buf, t.header_len, t.positions, plan, o, m.as_deref());
             }
-            buf
-        })
-        .collect()
+        }
+        buf
+    };
+    match within {
+        Threads::Pool => (results.par_chunks(nq * FORMAT_TASK))
+            .zip(params.par_chunks(np * FORMAT_TASK))
+            .zip(messages.par_chunks(FORMAT_TASK))
+            .enumerate()
+            .map(|(k, ((res, par), msgs))| piece(k, res, par, msgs))
+            .collect(),
+        Threads::Calling => (results.chunks(nq * FORMAT_TASK))
+            .zip(params.chunks(np * FORMAT_TASK))
+            .zip(messages.chunks(FORMAT_TASK))
+            .enumerate()
+            .map(|(k, ((res, par), msgs))| piece(k, res, par, msgs))
+            .collect(),
+    }
 }
 
 /// A task's parameters and results of one block (column-major where the
@@ -985,12 +1006,19 @@ struct Buffers {
     failed_rows: Vec<usize>,
 }
 
-/// Blocks `0..all`: `solve` in the pool's tasks (one a thread, each with its
-/// own buffers, taking the next block as it finishes one) and `write` on
-/// this thread, in order. A task waits while its next block is `ahead`
-/// times the pool's threads past the last one written, so memory stays
-/// that many blocks whatever the batch. The first error of `write` stops
-/// the tasks (their blocks in progress are dropped) and is returned.
+/// Blocks `0..all`: `solve` on this thread and on `threads - 1` helper
+/// threads (each with its own buffers, taking the next block as it finishes
+/// one), and `write` on this thread, in order. A thread takes no block
+/// `ahead` times `threads` past the last one written, so memory stays that
+/// many blocks whatever the batch. The first error of `write` stops the
+/// helpers (their blocks in progress are dropped) and is returned.
+///
+/// This thread writes the blocks that are ready between its own solves, and
+/// waits only when the window is full. So a batch on `threads` cores runs
+/// `threads` threads, not one more that wakes for every block: on a 2-core
+/// KVM guest, a thread woken on a core in use waited up to a scheduler
+/// slice (about 3 ms), and a helper woken on an idle one about 1.8 ms
+/// (docs/benchmarks.md, "The writer solves too").
 fn in_order<T: Send>(
     all: usize,
     ahead: usize,
@@ -1001,19 +1029,19 @@ fn in_order<T: Send>(
     use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
     use std::sync::{Condvar, Mutex, mpsc};
     let threads = threads.max(1);
+    let mut buffers = Buffers::default();
     if threads == 1 || all <= 1 {
-        let mut buffers = Buffers::default();
         return (0..all).try_for_each(|i| write(solve((&mut buffers, i))));
     }
     let window = ahead.max(1) * threads;
     let next = AtomicUsize::new(0);
-    // Blocks written, with the condition the tasks wait on.
+    // Blocks written, with the condition the helpers wait on.
     let written = (Mutex::new(0usize), Condvar::new());
     let stop = AtomicBool::new(false);
-    // Stops every task when dropped on this thread (at the end, or on an
-    // error), or when a task unwinds (the others would wait forever for its
-    // block); `.2` says which. The flag is set under the lock, so that a
-    // task between its test and its wait cannot miss the wake-up.
+    // Stops every helper when dropped on this thread (at the end, or on an
+    // error), or when a helper unwinds (this thread would wait forever for
+    // its block); `.2` says which. The flag is set under the lock, so that
+    // a helper between its test and its wait cannot miss the wake-up.
     struct Stop<'a>(&'a AtomicBool, &'a (Mutex<usize>, Condvar), bool);
     impl Drop for Stop<'_> {
         fn drop(&mut self) {
@@ -1024,38 +1052,29 @@ fn in_order<T: Send>(
             }
         }
     }
-    // Each task is the one thread of a pool of its own: it may wait for the
-    // writer (in the global pool it could be waiting on top of another
-    // task's stack, which would never resume), and the core's batch calls
-    // and the row filling, finding one thread, run on it with no hand-over.
-    let pools = (0..threads)
-        .map(|_| rayon::ThreadPoolBuilder::new().num_threads(1).build())
-        .collect::<Result<Vec<_>, _>>()?;
     let (tx, rx) = mpsc::channel::<(usize, T)>();
     std::thread::scope(|scope| {
-        for pool in &pools {
+        for _ in 1..threads {
             let (tx, next, written, stop) = (tx.clone(), &next, &written, &stop);
             scope.spawn(move || {
-                pool.install(|| {
-                    let _stop = Stop(stop, written, false);
-                    let mut buffers = Buffers::default();
-                    loop {
-                        let i = next.fetch_add(1, Ordering::SeqCst);
-                        if i >= all {
-                            break;
-                        }
-                        let mut done = written.0.lock().unwrap_or_else(|e| e.into_inner());
-                        while i >= *done + window && !stop.load(Ordering::SeqCst) {
-                            done = written.1.wait(done).unwrap_or_else(|e| e.into_inner());
-                        }
-                        drop(done);
-                        if stop.load(Ordering::SeqCst)
-                            || tx.send((i, solve((&mut buffers, i)))).is_err()
-                        {
-                            break;
-                        }
+                let _stop = Stop(stop, written, false);
+                let mut buffers = Buffers::default();
+                loop {
+                    let i = next.fetch_add(1, Ordering::SeqCst);
+                    if i >= all {
+                        break;
                     }
-                })
+                    let mut done = written.0.lock().unwrap_or_else(|e| e.into_inner());
+                    while i >= *done + window && !stop.load(Ordering::SeqCst) {
+                        done = written.1.wait(done).unwrap_or_else(|e| e.into_inner());
+                    }
+                    drop(done);
+                    if stop.load(Ordering::SeqCst)
+                        || tx.send((i, solve((&mut buffers, i)))).is_err()
+                    {
+                        break;
+                    }
+                }
             });
         }
         drop(tx);
@@ -1064,13 +1083,33 @@ fn in_order<T: Send>(
         let mut pending: std::collections::BTreeMap<usize, T> = Default::default();
         let mut at = 0;
         while at < all {
-            let Ok((i, d)) = rx.recv() else {
-                anyhow::bail!("a batch task stopped before its block {at} was written");
-            };
-            pending.insert(i, d);
+            // The next block, if it is within the window: this thread's to
+            // solve. (A helper that took a block past the window waits.)
+            let mine = next
+                .fetch_update(Ordering::SeqCst, Ordering::SeqCst, |i| {
+                    (i < all && i < at + window).then_some(i + 1)
+                })
+                .ok();
+            match mine {
+                Some(i) => {
+                    pending.insert(i, solve((&mut buffers, i)));
+                    pending.extend(rx.try_iter());
+                }
+                None => match rx.recv() {
+                    Ok((i, d)) => {
+                        pending.insert(i, d);
+                    }
+                    Err(_) => {
+                        anyhow::bail!("a batch task stopped before its block {at} was written")
+                    }
+                },
+            }
+            let before = at;
             while let Some(d) = pending.remove(&at) {
                 write(d)?;
                 at += 1;
+            }
+            if at > before {
                 *written.0.lock().unwrap_or_else(|e| e.into_inner()) = at;
                 written.1.notify_all();
             }
@@ -1093,6 +1132,19 @@ fn batch_threads(requested: Option<usize>) -> usize {
             .filter(|&n| n > 0)
     });
     egt_core::batch::worker_threads(asked).0
+}
+
+/// Start `n` threads that end at once, so that the cores a batch's helper
+/// threads are about to run on are awake when they start: done before the
+/// spec is read and its program compiled (about 0.7 ms), it costs tens of
+/// microseconds. On the 2-core KVM guest of docs/benchmarks.md ("The writer
+/// solves too"), a thread started on a core idle for a while ran only 1 to
+/// 4 ms later; after such a start, most helpers ran within 0.1 ms.
+fn wake_cores(n: usize) {
+    for _ in 0..n {
+        // A thread that cannot be started wakes nothing, and costs nothing.
+        let _ = std::thread::Builder::new().spawn(|| {});
+    }
 }
 
 /// Size rayon's global pool to `--threads`, where the global pool is about
@@ -2358,39 +2410,35 @@ mod columnar_tests {
         assert!(!Rows::Listed(Vec::new()).fill((0, 0), &mut [], Layout::Columns));
     }
 
-    /// Blocks come back in order whatever order they finish in; each task
-    /// solves on a pool of its own thread (the core then runs on it); an
-    /// error of the writer stops the tasks within the window.
+    /// Blocks come back in order whatever order they finish in; the writer
+    /// solves blocks too, between its writes; an error of the writer stops
+    /// the helpers within the window.
     #[test]
     fn in_order_writes_blocks_in_order_and_stops_on_an_error() {
         use super::{AHEAD, Buffers, in_order};
         use std::sync::atomic::{AtomicUsize, Ordering};
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(3)
-            .build()
-            .unwrap_or_else(|e| panic!("{e}"));
         let all = 40;
         let solved = AtomicUsize::new(0);
+        let solvers = std::sync::Mutex::new(std::collections::HashMap::new());
         let solve = |(b, i): (&mut Buffers, usize)| {
-            assert_eq!(rayon::current_num_threads(), 1);
             b.params.push(i as f64);
             // Later blocks finish sooner.
             std::thread::sleep(std::time::Duration::from_micros(((all - i) * 50) as u64));
             solved.fetch_add(1, Ordering::SeqCst);
+            let mut by = solvers.lock().unwrap_or_else(|e| e.into_inner());
+            *by.entry(std::thread::current().id()).or_insert(0) += 1;
             i
         };
         let mut seen = Vec::new();
         let mut ahead = 0;
-        pool.install(|| {
-            in_order(all, AHEAD, 3, &solve, |i| {
-                if i == 0 {
-                    // A slow writer: the tasks wait, the window ahead of it.
-                    std::thread::sleep(std::time::Duration::from_millis(30));
-                    ahead = solved.load(Ordering::SeqCst);
-                }
-                seen.push(i);
-                Ok(())
-            })
+        in_order(all, AHEAD, 3, &solve, |i| {
+            if i == 0 {
+                // A slow writer: the helpers wait, the window ahead of it.
+                std::thread::sleep(std::time::Duration::from_millis(30));
+                ahead = solved.load(Ordering::SeqCst);
+            }
+            seen.push(i);
+            Ok(())
         })
         .unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(seen, (0..all).collect::<Vec<_>>());
@@ -2399,12 +2447,17 @@ mod columnar_tests {
             "{ahead} blocks solved before the first was written"
         );
         assert_eq!(solved.load(Ordering::SeqCst), all);
+        // Three threads solved, the writer one of them (no thread only waits).
+        let by = std::mem::take(&mut *solvers.lock().unwrap_or_else(|e| e.into_inner()));
+        assert!(by.len() <= 3, "{} threads solved", by.len());
+        assert!(
+            by.get(&std::thread::current().id()).is_some_and(|&n| n > 0),
+            "the writer solved no block: {by:?}"
+        );
         solved.store(0, Ordering::SeqCst);
-        let failed = pool.install(|| {
-            in_order(all, AHEAD, 3, &solve, |i| {
-                anyhow::ensure!(i < 5, "full disk at block {i}");
-                Ok(())
-            })
+        let failed = in_order(all, AHEAD, 3, &solve, |i| {
+            anyhow::ensure!(i < 5, "full disk at block {i}");
+            Ok(())
         });
         let e = failed.err().map(|e| e.to_string());
         assert_eq!(e.as_deref(), Some("full disk at block 5"));
