@@ -538,23 +538,16 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
     } else {
         args.state.clone()
     };
-    // No `cond.*` column asked for: estimate a condition only where a bound
-    // cannot show it below the warning level (the same warnings and errors).
-    let bounds = BatchPlan::bounds_serve(&args.columns);
     let plans: Vec<(Option<String>, BatchPlan)> = if states.is_empty() {
         let spec = BatchSpec::from_analysis(train, compute)
             .with_context(|| format!("{}: the batch's input links", loaded.source))?;
-        vec![(
-            None,
-            BatchPlan::new(train, &spec)?.with_condition_bounds(bounds),
-        )]
+        vec![(None, BatchPlan::new(train, &spec)?)]
     } else {
         states
             .iter()
             .map(|s| {
                 let spec = BatchSpec::for_gear_state(train, s, compute)?;
-                let plan = BatchPlan::new(train, &spec)?.with_condition_bounds(bounds);
-                Ok((Some(s.clone()), plan))
+                Ok((Some(s.clone()), BatchPlan::new(train, &spec)?))
             })
             .collect::<anyhow::Result<_>>()?
     };
@@ -588,12 +581,17 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
         }
     }
     // Each plan computes only the columns asked for (that it has), and the
-    // conditions, which give the warnings.
-    let plans = if args.columns.is_empty() {
-        plans
-    } else {
-        (plans.into_iter())
-            .map(|(state, plan)| {
+    // conditions, which give the warnings. No `cond.*` column asked for:
+    // estimate a condition only where a bound cannot show it below the
+    // warning level (the same warnings and errors). The straight-line
+    // program is compiled once, for the columns chosen (`--list` compiles
+    // none).
+    let bounds = BatchPlan::bounds_serve(&args.columns);
+    let plans: Vec<(Option<String>, BatchPlan)> = (plans.into_iter())
+        .map(|(state, plan)| {
+            let plan = if args.columns.is_empty() {
+                plan
+            } else {
                 let chosen: Vec<String> = (args.columns.iter())
                     .filter(|c| plan.output(c).is_some())
                     .chain(
@@ -602,10 +600,11 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
                     )
                     .cloned()
                     .collect();
-                Ok((state, plan.with_outputs(&chosen)?))
-            })
-            .collect::<anyhow::Result<_>>()?
-    };
+                plan.with_outputs(&chosen)?
+            };
+            Ok((state, plan.with_condition_bounds(bounds)))
+        })
+        .collect::<anyhow::Result<_>>()?;
     let first = &plans[0].1;
     // The output columns written, per plan.
     let selected: Vec<Vec<usize>> = plans
