@@ -151,9 +151,13 @@ use crate::solve::rows::Extra;
 /// The worker threads for a batch: the request, capped at the machine's
 /// parallelism (more threads than cores only add switching, and a huge
 /// request would exhaust the machine), with a note when the cap applied.
-/// `None` or 0 asks for all cores.
+/// `None` or 0 asks for all cores. (The machine's parallelism is read once
+/// a process: Linux's reading opens cgroup files, about 50 µs.)
 pub fn worker_threads(requested: Option<usize>) -> (usize, Option<String>) {
-    let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
+    static CORES: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+    let cores = *CORES.get_or_init(|| {
+        std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
+    });
     match requested {
         None | Some(0) => (cores, None),
         Some(n) if n > cores => (
