@@ -50,11 +50,13 @@ fn compute_of(s: &str) -> Result<Compute> {
 /// elements are added to `engaged`. `condition_bounds`: see
 /// [`BatchPlan::with_condition_bounds`] (None: [`BatchPlan::bounds_serve`]
 /// of `outputs`, as `egt batch --columns`); `outputs`: see
-/// [`BatchPlan::with_outputs`].
+/// [`BatchPlan::with_outputs`]; `program`: the straight-line program's code,
+/// `"AVX-512"`, `"AVX2"` or `"interpreted"` (None: the machine's best; see
+/// [`BatchPlan::with_program_instructions`]).
 // One argument per Python keyword.
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
-#[pyo3(signature = (core, compute, inputs = None, accelerated = None, driving = None, engaged = Vec::new(), gear_state = None, condition_bounds = None, outputs = None))]
+#[pyo3(signature = (core, compute, inputs = None, accelerated = None, driving = None, engaged = Vec::new(), gear_state = None, condition_bounds = None, outputs = None, program = None))]
 pub fn batch_plan(
     core: &TrainCore,
     compute: &str,
@@ -65,8 +67,19 @@ pub fn batch_plan(
     gear_state: Option<String>,
     condition_bounds: Option<bool>,
     outputs: Option<Vec<String>>,
+    program: Option<String>,
 ) -> Result<BatchPlanCore> {
     let compute = compute_of(compute)?;
+    let instructions = match program.as_deref() {
+        None => None,
+        Some("interpreted") => Some(None),
+        Some(code @ ("AVX-512" | "AVX2")) => Some(Some(code)),
+        Some(other) => {
+            return Err(value_error(format!(
+                "program must be \"AVX-512\", \"AVX2\" or \"interpreted\", got {other:?}"
+            )));
+        }
+    };
     guard(|| {
         let t = &core.train;
         let mut spec = match (&gear_state, &inputs) {
@@ -92,9 +105,20 @@ pub fn batch_plan(
             .extend(engaged.iter().cloned().zip(convert::engaged(t, &engaged)?));
         let bounds = condition_bounds
             .unwrap_or_else(|| outputs.as_deref().is_some_and(BatchPlan::bounds_serve));
-        let mut plan = BatchPlan::new(t, &spec)?.with_condition_bounds(bounds);
+        // The outputs first: the program is then compiled once, for them.
+        let mut plan = BatchPlan::new(t, &spec)?;
         if let Some(names) = &outputs {
             plan = plan.with_outputs(names)?;
+        }
+        let mut plan = plan.with_condition_bounds(bounds);
+        if let Some(code) = instructions {
+            // The core names its argument `instructions`; Python's is `program`.
+            plan = plan
+                .with_program_instructions(code)
+                .map_err(|e| match e {
+                    egt_core::Error::Spec { kind, .. } => egt_core::Error::spec("program", kind),
+                    other => other,
+                })?;
         }
         Ok(BatchPlanCore { plan })
     })

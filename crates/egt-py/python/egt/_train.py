@@ -457,6 +457,7 @@ class Train:
         gear_state: Optional[str] = None,
         condition_bounds: Optional[bool] = None,
         outputs: Optional[Sequence[str]] = None,
+        program: Optional[str] = None,
     ) -> BatchPlan:
         """Prepare the train for many scenarios (``compute``: ``"kinematics"``,
         ``"dynamics"`` or ``"power"``).
@@ -484,8 +485,13 @@ class Train:
         order (default: all; :attr:`egt.BatchPlan.outputs` of a plan made
         without it lists them); with ``condition_bounds`` the straight-line
         program then drops every operation they do not need. The rows that
-        fail and the chosen columns' numbers do not change. See
-        :class:`egt.BatchPlan`.
+        fail and the chosen columns' numbers do not change.
+        ``program``: the code the straight-line program runs as,
+        ``"AVX-512"``, ``"AVX2"`` or ``"interpreted"``, to compare or time
+        the codes on one machine (every code gives the same numbers, bit for
+        bit); default (None): the machine's best. A code the machine does not
+        run, or a plan without a program, raises :class:`egt.SpecError` at
+        ``program``. See :class:`egt.BatchPlan`.
         """
         args = (
             compute,
@@ -496,6 +502,7 @@ class Train:
             None if gear_state is None else str(gear_state),
             None if condition_bounds is None else bool(condition_bounds),
             None if outputs is None else _names(outputs, "outputs"),
+            None if program is None else str(program),
         )
         core = batch_plan(self._core, *args)
         # The recipe (this train and the arguments) makes the plan pickle, so
