@@ -113,12 +113,10 @@ pub fn batch_plan(
         let mut plan = plan.with_condition_bounds(bounds);
         if let Some(code) = instructions {
             // The core names its argument `instructions`; Python's is `program`.
-            plan = plan
-                .with_program_instructions(code)
-                .map_err(|e| match e {
-                    egt_core::Error::Spec { kind, .. } => egt_core::Error::spec("program", kind),
-                    other => other,
-                })?;
+            plan = plan.with_program_instructions(code).map_err(|e| match e {
+                egt_core::Error::Spec { kind, .. } => egt_core::Error::spec("program", kind),
+                other => other,
+            })?;
         }
         Ok(BatchPlanCore { plan })
     })
