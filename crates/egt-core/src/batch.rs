@@ -653,7 +653,7 @@ impl BatchPlan {
     }
 
     /// Whether the straight-line program runs as machine code compiled for
-    /// this train (x86-64 with AVX-512F and DQ, or AVX2 and BMI2;
+    /// this train (x86-64 with AVX-512F and DQ, or AVX2, BMI2 and FMA;
     /// `EGT_JIT=0` turns it off), rather than interpreted. The numbers are
     /// the same, bit for bit.
     pub fn program_compiled(&self) -> bool {
@@ -2046,6 +2046,7 @@ mod tests {
                     "avx512dq" => std::arch::is_x86_feature_detected!("avx512dq"),
                     "avx2" => std::arch::is_x86_feature_detected!("avx2"),
                     "bmi2" => std::arch::is_x86_feature_detected!("bmi2"),
+                    "fma" => std::arch::is_x86_feature_detected!("fma"),
                     other => panic!("no check for {other}"),
                 })
             }
@@ -2057,7 +2058,7 @@ mod tests {
         };
         let isas = [
             (Isa::Avx512, has(&["avx512f", "avx512dq"])),
-            (Isa::Avx2, has(&["avx2", "bmi2"])),
+            (Isa::Avx2, has(&["avx2", "bmi2", "fma"])),
         ];
         let jit = std::env::var("EGT_JIT").unwrap_or_default();
         let default = match jit.as_str() {
