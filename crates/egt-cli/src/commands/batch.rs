@@ -1015,8 +1015,8 @@ struct Buffers {
 /// This thread writes the blocks that are ready between its own solves, and
 /// waits only when the window is full. So a batch on `threads` cores runs
 /// `threads` threads, not one more that wakes for every block: on a 2-core
-/// KVM guest, a thread woken on a core in use waited up to a scheduler
-/// slice (about 3 ms), and a helper woken on an idle one about 1.8 ms
+/// KVM guest, a thread woken while both cores were busy waited up to a
+/// 4 ms scheduler tick, and one started on an idle core ran 1 to 4 ms later
 /// (docs/benchmarks.md, "The writer solves too").
 fn in_order<T: Send>(
     all: usize,
