@@ -1053,7 +1053,8 @@ fn in_order<T: Send>(
     }
     let (tx, rx) = mpsc::channel::<(usize, T)>();
     std::thread::scope(|scope| {
-        for _ in 1..threads {
+        // No more helpers than blocks for them.
+        for _ in 1..threads.min(all) {
             let (tx, next, written, stop) = (tx.clone(), &next, &written, &stop);
             scope.spawn(move || {
                 let _stop = Stop(stop, written, false);
@@ -1139,10 +1140,17 @@ fn batch_threads(requested: Option<usize>) -> usize {
 /// microseconds. On the 2-core KVM guest of docs/benchmarks.md ("The writer
 /// solves too"), a thread started on a core idle for a while ran only 1 to
 /// 4 ms later; after such a start, most helpers ran within 0.1 ms.
+///
+/// This thread starts one; that one starts the others, so that a machine of
+/// many cores does not spend this thread's time on them. (A thread that
+/// cannot be started wakes nothing, and costs nothing.)
 fn wake_cores(n: usize) {
-    for _ in 0..n {
-        // A thread that cannot be started wakes nothing, and costs nothing.
-        let _ = std::thread::Builder::new().spawn(|| {});
+    if n > 0 {
+        let _ = std::thread::Builder::new().spawn(move || {
+            for _ in 1..n {
+                let _ = std::thread::Builder::new().spawn(|| {});
+            }
+        });
     }
 }
 
