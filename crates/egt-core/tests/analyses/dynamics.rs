@@ -87,12 +87,16 @@ proptest! {
         let mass = t.mass_matrix().unwrap();
         let (l2, l3, l4) = (id(&t, "2"), id(&t, "3"), id(&t, "4"));
         let p = t1 * t2;
+        // Near the lock t1 t2 = 1 both egt and the closed forms lose digits
+        // as 1 / |p - 1| (the regression case: p - 1 = 2.9e-4, egt 7e-13
+        // from the exact value, the closed form in floats 4e-13).
+        let near = 1.0 + 1.0 / (p - 1.0).abs();
 
         // Q = {T_d, 0, T_r}: the applied load on 4 is T_r.
         let req = DynamicsRequest { torques: vec![(l4, tr)], accelerations: vec![(l4, alpha)], driving: vec![l2], extras: vec![] };
         let r = t.inverse_dynamics(&req, Some(&mass)).unwrap();
-        prop_assert!(close(r.acceleration[l2.index()], p / (p - 1.0) * alpha, 1e-12));
-        prop_assert!(close(r.acceleration[l3.index()], (t1 - 1.0) * t2 / (p - 1.0) * alpha, 1e-12));
+        prop_assert!(close(r.acceleration[l2.index()], p / (p - 1.0) * alpha, 1e-13 * near));
+        prop_assert!(close(r.acceleration[l3.index()], (t1 - 1.0) * t2 / (p - 1.0) * alpha, 1e-13 * near));
         let inertial = alpha * ((i2 + m3 * d * d * n) * p / (p - 1.0) + i3 * n * t2 * (t1 - 1.0).powi(2) / (t1 * (p - 1.0)) + i4 * (1.0 - 1.0 / p));
         let td = r.driving_torques[0].1;
         prop_assert!(close(td, -tr * (1.0 - 1.0 / p) + inertial, 1e-10), "physics T_d");
