@@ -1389,13 +1389,15 @@ struct Encoder {
 
 /// A column of doubles, null where a value is not finite or its row
 /// `failed` (None when no row of the block did; no null buffer when there
-/// are no nulls).
+/// are no nulls), and its min and max when it has no nulls and the pass
+/// that looked for them found those (Parquet's statistics, [`stats`]).
 fn doubles(
     values: arrow_buffer::ScalarBuffer<f64>,
     failed: Option<&[Option<String>]>,
-) -> arrow_array::ArrayRef {
+) -> (arrow_array::ArrayRef, Option<(f64, f64)>) {
     let missing = |r: usize| failed.is_some_and(|f| f[r].is_some()) || !values[r].is_finite();
-    let nulls = (failed.is_some() || values.iter().any(|v| !v.is_finite()))
+    let scan = stats::scan(&values);
+    let nulls = (failed.is_some() || !scan.finite)
         .then(|| {
             (0..values.len())
                 .map(|r| !missing(r))
@@ -1413,7 +1415,9 @@ fn doubles(
             .into(),
         None => values,
     };
-    std::sync::Arc::new(arrow_array::Float64Array::new(values, nulls))
+    let known = scan.bounds.filter(|_| nulls.is_none());
+    let array = arrow_array::Float64Array::new(values, nulls);
+    (std::sync::Arc::new(array), known)
 }
 
 /// A column of optional texts: all null without building one by one when
@@ -1450,9 +1454,13 @@ impl Encoder {
                 std::iter::repeat_n(s, len),
             )));
         }
+        // The doubles' bounds found while building them, by column.
+        let mut known = vec![None; columns.len()];
         for (j, &(_, c)) in b.varied.iter().enumerate() {
             let c = if b.varied_only { j } else { c };
-            columns.push(doubles(params.column(c), None));
+            let (column, bounds) = doubles(params.column(c), None);
+            columns.push(column);
+            known.push(bounds);
         }
         let failed = |r: usize| b.messages[r].is_some();
         let any_failed = b.any_failed.then_some(b.messages);
@@ -1462,10 +1470,15 @@ impl Encoder {
             source[pos] = Some(i);
         }
         for src in source {
-            columns.push(match src {
+            let (column, bounds) = match src {
                 Some(i) => doubles(results.column(i), any_failed),
-                None => Arc::new(arrow_array::Float64Array::new_null(len)),
-            });
+                None => (
+                    Arc::new(arrow_array::Float64Array::new_null(len)) as ArrayRef,
+                    None,
+                ),
+            };
+            columns.push(column);
+            known.push(bounds);
         }
         // Most blocks have no row past the warning's limit: a scan of the
         // condition columns finds so, with no test row by row.
@@ -1488,14 +1501,17 @@ impl Encoder {
         } else {
             Arc::new(StringArray::new_null(len))
         });
-        self.record_batch(columns, b.index)
+        self.record_batch(columns, &known, b.index)
     }
 
     /// Columns in the schema's order as one Arrow record batch, or as the
     /// Parquet column chunks of row group `index`.
+    /// `known`: by column, the min and max of a double column without
+    /// nulls, where already found ([`doubles`]).
     fn record_batch(
         &self,
         columns: Vec<arrow_array::ArrayRef>,
+        known: &[Option<(f64, f64)>],
         index: usize,
     ) -> anyhow::Result<Encoded> {
         let batch = arrow_array::RecordBatch::try_new(self.schema.clone(), columns)?;
@@ -1522,9 +1538,10 @@ impl Encoder {
                 chunks.len() == batch.num_columns(),
                 "a nested Parquet column"
             );
-            for (chunk, column) in chunks.iter_mut().zip(batch.columns()) {
+            for (c, (chunk, column)) in chunks.iter_mut().zip(batch.columns()).enumerate() {
                 if let Some(doubles) = column.as_any().downcast_ref::<arrow_array::Float64Array>() {
-                    stats::set_double_statistics(chunk, doubles)?;
+                    let known = known.get(c).copied().flatten();
+                    stats::set_double_statistics(chunk, doubles, known)?;
                 }
             }
         }
@@ -1944,7 +1961,7 @@ fn long_block(
         Arc::new(Float64Array::from(value)),
         Arc::new(StringArray::from(error)),
     ];
-    encoder.record_batch(columns, b)
+    encoder.record_batch(columns, &[], b)
 }
 
 /// Parse, validate, prepare and solve one spec line.

@@ -21,17 +21,33 @@ use parquet::file::statistics::{Statistics, ValueStatistics};
 /// the three accumulators stay in registers.
 const LANES: usize = 4;
 
+/// What one pass over a column's values found.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Scan {
+    /// Every value is finite.
+    pub finite: bool,
+    /// The least and greatest value, when a float compare gives them as
+    /// total order does: every value finite, no zero at either end, at least
+    /// one value.
+    pub bounds: Option<(f64, f64)>,
+}
+
 /// Sets the row-group statistics of `chunk`, written with statistics off,
 /// to those parquet-rs computes for `array` at `EnabledStatistics::Chunk`:
 /// min, max, null and NaN counts, and the definition levels' histogram.
+/// `known`: the [`Scan`] bounds of `array`'s values, if it has no nulls and
+/// they were scanned already.
 pub(super) fn set_double_statistics(
     chunk: &mut ArrowColumnChunk,
     array: &Float64Array,
+    known: Option<(f64, f64)>,
 ) -> parquet::errors::Result<()> {
     let nulls = array.null_count();
-    let bounds = match array.nulls() {
-        None => fast_bounds(array.values()).or_else(|| total_order_bounds(array.iter())),
-        Some(_) => total_order_bounds(array.iter()),
+    let bounds = match (array.nulls(), known) {
+        (None, Some((min, max))) => Some((min, max, 0)),
+        (None, None) => (scan(array.values()).bounds.map(|(min, max)| (min, max, 0)))
+            .or_else(|| total_order_bounds(array.iter())),
+        (Some(_), _) => total_order_bounds(array.iter()),
     };
     let (min, max, nans) = match bounds {
         Some((min, max, nans)) => (Some(min), Some(max), nans),
@@ -61,10 +77,11 @@ pub(super) fn set_double_statistics(
     Ok(())
 }
 
-/// Min and max of `values` (no nulls) by float compare, eight lanes at a
-/// time, or None when the compare may differ from total order: a NaN, or a
-/// zero at either end (the compare does not tell -0 from +0), or no value.
-fn fast_bounds(values: &[f64]) -> Option<(f64, f64, u64)> {
+/// Whether `values` are all finite, and their min and max by float compare,
+/// [`LANES`] at a time, where it gives total order's: not when a value is
+/// NaN or infinite, or a zero is at either end (the compare does not tell
+/// -0 from +0), or there is no value.
+pub(super) fn scan(values: &[f64]) -> Scan {
     let mut lo = [f64::INFINITY; LANES];
     let mut hi = [f64::NEG_INFINITY; LANES];
     // v * 0 is NaN exactly when v is NaN or infinite: any such sum is NaN.
@@ -85,9 +102,12 @@ fn fast_bounds(values: &[f64]) -> Option<(f64, f64, u64)> {
     }
     let min = lo.into_iter().fold(f64::INFINITY, f64::min);
     let max = hi.into_iter().fold(f64::NEG_INFINITY, f64::max);
-    // Infinite values are rare enough to leave to the exact scan too.
-    let plain = odd.iter().all(|o| *o == 0.0) && min <= max && min != 0.0 && max != 0.0;
-    plain.then_some((min, max, 0))
+    let finite = odd.iter().all(|o| *o == 0.0);
+    let plain = finite && min <= max && min != 0.0 && max != 0.0;
+    Scan {
+        finite,
+        bounds: plain.then_some((min, max)),
+    }
 }
 
 /// Min and max in IEEE 754 total order of the values present, NaNs left out
@@ -122,15 +142,20 @@ mod tests {
     use arrow_array::{ArrayRef, Float64Array, StringArray, UInt64Array};
     use arrow_schema::{DataType, Field};
 
-    use super::super::{BatchOutput, DoubleStatistics, columnar_file};
+    use super::super::{BatchOutput, DoubleStatistics, columnar_file, doubles};
 
-    /// A Parquet file of `blocks` (two double columns each: the values and
-    /// their negatives) with the doubles' statistics computed by `by`.
+    /// A Parquet file of `blocks` with the doubles' statistics computed by
+    /// `by`. Three double columns: the values and their negatives, built as
+    /// `egt batch` builds its columns when no value is missing ([`doubles`]:
+    /// non-finite values made null, the bounds found on the way passed on;
+    /// in odd blocks the negatives' first row failed), and the values as
+    /// they are (NaNs and infinities kept).
     fn file(blocks: &[Vec<Option<f64>>], by: DoubleStatistics) -> Vec<u8> {
         let fields = vec![
             Field::new("row", DataType::UInt64, false),
             Field::new("torque.c2", DataType::Float64, true),
             Field::new("driving_torque.s1", DataType::Float64, true),
+            Field::new("as is", DataType::Float64, true),
             Field::new("warning", DataType::Utf8, true),
         ];
         let (encoder, mut sink) =
@@ -139,16 +164,29 @@ mod tests {
         let mut first = 0u64;
         for (index, values) in blocks.iter().enumerate() {
             let len = values.len() as u64;
-            let negated = values.iter().map(|v| v.map(|v| -v));
-            let columns: Vec<ArrayRef> = vec![
-                Arc::new(UInt64Array::from_iter_values(first..first + len)),
-                Arc::new(Float64Array::from(values.clone())),
-                Arc::new(negated.collect::<Float64Array>()),
-                Arc::new(StringArray::new_null(values.len())),
-            ];
+            let negated: Vec<_> = values.iter().map(|v| v.map(|v| -v)).collect();
+            let (mut columns, mut known): (Vec<ArrayRef>, _) = (
+                vec![Arc::new(UInt64Array::from_iter_values(first..first + len))],
+                vec![None],
+            );
+            let mut failed = vec![None; values.len()];
+            failed[0] = Some(String::from("failed"));
+            let failed = (index % 2 == 1).then_some(failed.as_slice());
+            for (column, failed) in [(values.clone(), None), (negated, failed)] {
+                let all: Option<Vec<f64>> = column.iter().copied().collect();
+                let (array, bounds) = match all {
+                    Some(all) => doubles(all.into(), failed),
+                    None => (Arc::new(Float64Array::from(column)) as ArrayRef, None),
+                };
+                columns.push(array);
+                known.push(bounds);
+            }
+            columns.push(Arc::new(Float64Array::from(values.clone())));
+            known.push(None);
+            columns.push(Arc::new(StringArray::new_null(values.len())));
             first += len;
             let encoded = encoder
-                .record_batch(columns, index)
+                .record_batch(columns, &known, index)
                 .unwrap_or_else(|e| panic!("block {index}: {e}"));
             sink.append(encoded, &mut out)
                 .unwrap_or_else(|e| panic!("block {index}: {e}"));
@@ -203,7 +241,7 @@ mod tests {
         let groups = reader.metadata().row_groups();
         assert_eq!(groups.len(), blocks.len());
         for (g, group) in groups.iter().enumerate() {
-            for c in [1, 2] {
+            for c in [1, 2, 3] {
                 assert!(
                     group.column(c).statistics().is_some(),
                     "row group {g}, column {c}"
