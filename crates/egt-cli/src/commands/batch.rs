@@ -1298,7 +1298,7 @@ fn columnar(
     }
     fields.push(Field::new("warning", DataType::Utf8, true));
     fields.push(Field::new("error", DataType::Utf8, true));
-    columnar_file(kind, fields, header.len(), DoubleStatistics::Egt)
+    columnar_file(kind, fields, header.len(), NumberStatistics::Egt)
 }
 
 /// The CSV's long form of `--specs` (one row per output of each line),
@@ -1312,14 +1312,16 @@ fn long_columnar(kind: BatchOutput) -> anyhow::Result<(Encoder, Sink)> {
         Field::new("value", DataType::Float64, true),
         Field::new("error", DataType::Utf8, true),
     ];
-    columnar_file(kind, fields, 0, DoubleStatistics::Egt)
+    columnar_file(kind, fields, 0, NumberStatistics::Egt)
 }
 
-/// Who computes the row-group statistics of a Parquet file's doubles.
+/// Who computes the row-group statistics of a Parquet file's numbers (the
+/// doubles and the row numbers).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum DoubleStatistics {
+enum NumberStatistics {
     /// egt, after parquet-rs encoded the column with statistics off
-    /// ([`stats`]: the same values, vectorised on every x86-64).
+    /// ([`stats`]: the same values; the doubles' min and max vectorised on
+    /// every x86-64, the row numbers' the first and the last).
     Egt,
     /// parquet-rs, at `EnabledStatistics::Chunk` (the reference the tests
     /// compare egt's files with).
@@ -1333,7 +1335,7 @@ fn columnar_file(
     kind: BatchOutput,
     fields: Vec<arrow_schema::Field>,
     outputs: usize,
-    doubles: DoubleStatistics,
+    doubles: NumberStatistics,
 ) -> anyhow::Result<(Encoder, Sink)> {
     use parquet::file::properties::EnabledStatistics;
     use parquet::schema::types::ColumnPath;
@@ -1348,8 +1350,9 @@ fn columnar_file(
         // the page; with smaller pages they stay small (the allocator
         // committed 28.6 MiB instead of 36.6, and 10^6 rows on 2 threads
         // ran about 5 % faster; docs/benchmarks.md).
-        // The doubles' statistics are the row group's, not the page's: a
-        // row group is a block (16 384 rows, two pages a column).
+        // The numbers' statistics are the row group's, not the page's: a
+        // row group is a block (16 384 rows, two pages a double column, one
+        // of row numbers).
         let mut props = parquet::file::properties::WriterProperties::builder()
             .set_data_page_size_limit(64 * 1024)
             .set_compression(parquet::basic::Compression::SNAPPY)
@@ -1359,11 +1362,13 @@ fn columnar_file(
                 parquet::basic::Encoding::DELTA_BINARY_PACKED,
             );
         let level = match doubles {
-            DoubleStatistics::Egt => EnabledStatistics::None,
-            DoubleStatistics::Parquet => EnabledStatistics::Chunk,
+            NumberStatistics::Egt => EnabledStatistics::None,
+            NumberStatistics::Parquet => EnabledStatistics::Chunk,
         };
         for field in schema.fields() {
-            if field.data_type() == &arrow_schema::DataType::Float64 {
+            if let arrow_schema::DataType::Float64 | arrow_schema::DataType::UInt64 =
+                field.data_type()
+            {
                 props = props
                     .set_column_statistics_enabled(ColumnPath::from(field.name().as_str()), level);
             }
@@ -1396,7 +1401,7 @@ struct Encoder {
     /// Parquet's column writers (None for Arrow IPC).
     factory: Option<parquet::arrow::arrow_writer::ArrowRowGroupWriterFactory>,
     /// Who computes the doubles' statistics (Parquet).
-    doubles: DoubleStatistics,
+    doubles: NumberStatistics,
 }
 
 /// A column of doubles, null where a value is not finite or its row
@@ -1544,16 +1549,19 @@ impl Encoder {
             .into_iter()
             .map(|w| w.close())
             .collect::<Result<_, _>>()?;
-        if self.doubles == DoubleStatistics::Egt {
+        if self.doubles == NumberStatistics::Egt {
             // Every column is flat: one leaf, so one chunk, a column.
             anyhow::ensure!(
                 chunks.len() == batch.num_columns(),
                 "a nested Parquet column"
             );
             for (c, (chunk, column)) in chunks.iter_mut().zip(batch.columns()).enumerate() {
-                if let Some(doubles) = column.as_any().downcast_ref::<arrow_array::Float64Array>() {
+                let column = column.as_any();
+                if let Some(doubles) = column.downcast_ref::<arrow_array::Float64Array>() {
                     let known = known.get(c).copied().flatten();
                     stats::set_double_statistics(chunk, doubles, known)?;
+                } else if let Some(rows) = column.downcast_ref::<arrow_array::UInt64Array>() {
+                    stats::set_row_statistics(chunk, rows)?;
                 }
             }
         }
