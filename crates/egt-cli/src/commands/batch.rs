@@ -24,6 +24,7 @@ use rayon::prelude::*;
 use crate::cli::{OutputFormat, SpecArgs, SpecFormat};
 use crate::input;
 
+mod rows;
 mod stats;
 
 /// Scenarios solved and written per block (bounds memory; output streams per block).
@@ -256,14 +257,14 @@ enum Rows {
         count: usize,
     },
     /// Parsed lines of a `--rows` file.
-    Listed(Vec<Result<Vec<(usize, f64)>, String>>),
+    Listed(rows::Listed),
 }
 
 impl Rows {
     fn count(&self) -> usize {
         match self {
             Rows::Product { count, .. } => *count,
-            Rows::Listed(v) => v.len(),
+            Rows::Listed(lines) => lines.len(),
         }
     }
 
@@ -287,14 +288,14 @@ impl Rows {
                 }
                 Ok(())
             }
-            Rows::Listed(v) => match &v[i] {
+            Rows::Listed(lines) => match lines.line(i) {
                 Ok(values) => {
                     for &(c, x) in values {
                         set(c, x);
                     }
                     Ok(())
                 }
-                Err(e) => Err(e.clone()),
+                Err(e) => Err(e.to_string()),
             },
         }
     }
@@ -407,39 +408,9 @@ fn design(args: &Args, plan: &BatchPlan) -> anyhow::Result<Design> {
             .collect();
         // Parsed in parallel; the varied columns noted in line order.
         size_global_pool(args.threads);
-        let rows: Vec<Result<Vec<(usize, f64)>, String>> = lines
-            .par_iter()
-            .map(|&(k, line)| {
-                serde_json::from_str::<serde_json::Map<String, serde_json::Value>>(line)
-                    .map_err(|e| format!("{}:{}: {e}", path.display(), k + 1))
-                    .and_then(|obj| {
-                        obj.iter()
-                            .map(|(name, v)| {
-                                let c = plan.parameter(name).ok_or_else(|| {
-                                    format!(
-                                        "{}:{}: {}",
-                                        path.display(),
-                                        k + 1,
-                                        unknown(plan, name, "--rows")
-                                    )
-                                })?;
-                                let x = v.as_f64().ok_or_else(|| {
-                                    format!(
-                                        "{}:{}: `{name}` is not a number",
-                                        path.display(),
-                                        k + 1
-                                    )
-                                })?;
-                                Ok((c, x))
-                            })
-                            .collect::<Result<Vec<_>, String>>()
-                    })
-            })
-            .collect();
-        for set in rows.iter().flatten() {
-            for &(c, _) in set {
-                note(&plan.parameters()[c], c);
-            }
+        let rows = rows::parse(&lines, plan, &path.display().to_string());
+        for &(c, _) in rows.overrides() {
+            note(&plan.parameters()[c], c);
         }
         return Ok(Design {
             varied,
@@ -2611,7 +2582,7 @@ mod columnar_tests {
                 }
             }
         }
-        assert!(!Rows::Listed(Vec::new()).fill((0, 0), &mut [], Layout::Columns));
+        assert!(!Rows::Listed(super::rows::Listed::empty()).fill((0, 0), &mut [], Layout::Columns));
     }
 
     /// Blocks come back in order whatever order they finish in; the writer

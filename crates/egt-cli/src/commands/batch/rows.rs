@@ -1,0 +1,290 @@
+//! The lines of a `--rows` file, parsed in parallel into one flat list of
+//! (column, value) overrides.
+//!
+//! Each line is a JSON object of parameter values. It is read key by key
+//! with the keys borrowed from the line where they have no escapes, into a
+//! buffer each task reuses, and the task's overrides are appended to one
+//! list: no map and no vector a line. (A map a line and a vector of
+//! overrides a line made the allocator's fresh pages about half of a
+//! one-thread batch of 10^6 lines, docs/benchmarks.md.)
+
+use std::borrow::Cow;
+use std::collections::BTreeMap;
+use std::fmt;
+
+use egt_core::batch::BatchPlan;
+use rayon::prelude::*;
+use serde::de::{DeserializeSeed, Deserializer, MapAccess, Visitor};
+
+/// Lines parsed in one task.
+const TASK: usize = 4096;
+
+/// Parsed lines of a `--rows` file: line `i` sets
+/// `values[starts[i]..starts[i + 1]]`, unless it is in `errors`.
+pub(super) struct Listed {
+    values: Vec<(usize, f64)>,
+    starts: Vec<usize>,
+    errors: BTreeMap<usize, String>,
+}
+
+impl Listed {
+    /// No lines.
+    #[cfg(test)]
+    pub(super) fn empty() -> Self {
+        Listed {
+            values: Vec::new(),
+            starts: vec![0],
+            errors: BTreeMap::new(),
+        }
+    }
+
+    /// How many lines.
+    pub(super) fn len(&self) -> usize {
+        self.starts.len() - 1
+    }
+
+    /// Line `i`'s overrides, or why it is unreadable.
+    pub(super) fn line(&self, i: usize) -> Result<&[(usize, f64)], &str> {
+        match self.errors.get(&i) {
+            Some(e) => Err(e),
+            None => Ok(&self.values[self.starts[i]..self.starts[i + 1]]),
+        }
+    }
+
+    /// Every override of the readable lines, in line order.
+    pub(super) fn overrides(&self) -> &[(usize, f64)] {
+        &self.values
+    }
+}
+
+/// Parses `lines` (each with its line number in `path`, from 0) against
+/// `plan`'s parameters. A line that is not a JSON object, names a parameter
+/// the plan does not have, or gives a value that is not a number is
+/// unreadable, with a message naming the file, the line and the key.
+pub(super) fn parse(lines: &[(usize, &str)], plan: &BatchPlan, path: &str) -> Listed {
+    let tasks: Vec<Listed> = lines
+        .par_chunks(TASK)
+        .enumerate()
+        .map(|(t, chunk)| {
+            let mut part = Listed {
+                values: Vec::with_capacity(chunk.len() * 2),
+                starts: Vec::with_capacity(chunk.len() + 1),
+                errors: BTreeMap::new(),
+            };
+            part.starts.push(0);
+            let mut entries = Vec::new();
+            for (j, &(k, line)) in chunk.iter().enumerate() {
+                let at = part.values.len();
+                if let Err(e) = read_line(line, plan, &mut entries, &mut part.values) {
+                    part.values.truncate(at);
+                    part.errors
+                        .insert(t * TASK + j, format!("{path}:{}: {e}", k + 1));
+                }
+                part.starts.push(part.values.len());
+            }
+            part
+        })
+        .collect();
+    let total = tasks.iter().map(|p| p.values.len()).sum();
+    let mut all = Listed {
+        values: Vec::with_capacity(total),
+        starts: Vec::with_capacity(lines.len() + 1),
+        errors: BTreeMap::new(),
+    };
+    all.starts.push(0);
+    for part in tasks {
+        let base = all.values.len();
+        all.starts.extend(part.starts[1..].iter().map(|s| base + s));
+        all.values.extend_from_slice(&part.values);
+        all.errors.extend(part.errors);
+    }
+    all
+}
+
+/// Appends the overrides of one line to `values`. `entries` is a buffer
+/// for the line's keys and values: the whole line is read first, so that a
+/// syntax error anywhere is the one reported; a key given twice keeps its
+/// first place and its last value (as a JSON object read into a map).
+fn read_line<'a>(
+    line: &'a str,
+    plan: &BatchPlan,
+    entries: &mut Vec<(Cow<'a, str>, serde_json::Value)>,
+    values: &mut Vec<(usize, f64)>,
+) -> Result<(), String> {
+    entries.clear();
+    let mut de = serde_json::Deserializer::from_str(line);
+    Entries(entries)
+        .deserialize(&mut de)
+        .and_then(|()| de.end())
+        .map_err(|e| e.to_string())?;
+    for (name, v) in entries.iter() {
+        let c = plan
+            .parameter(name)
+            .ok_or_else(|| super::unknown(plan, name, "--rows").to_string())?;
+        let x = v
+            .as_f64()
+            .ok_or_else(|| format!("`{name}` is not a number"))?;
+        values.push((c, x));
+    }
+    Ok(())
+}
+
+/// Reads a JSON object into a list of entries.
+struct Entries<'b, 'a>(&'b mut Vec<(Cow<'a, str>, serde_json::Value)>);
+
+impl<'de, 'b> DeserializeSeed<'de> for Entries<'b, 'de> {
+    type Value = ();
+
+    fn deserialize<D: Deserializer<'de>>(self, deserializer: D) -> Result<(), D::Error> {
+        deserializer.deserialize_map(self)
+    }
+}
+
+impl<'de, 'b> Visitor<'de> for Entries<'b, 'de> {
+    type Value = ();
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a map")
+    }
+
+    fn visit_map<M: MapAccess<'de>>(self, mut map: M) -> Result<(), M::Error> {
+        while let Some(Key(name)) = map.next_key()? {
+            let value: serde_json::Value = map.next_value()?;
+            match self.0.iter_mut().find(|(n, _)| *n == name) {
+                Some(entry) => entry.1 = value,
+                None => self.0.push((name, value)),
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A key, borrowed from the line when it has no escapes.
+struct Key<'a>(Cow<'a, str>);
+
+impl<'de> serde::Deserialize<'de> for Key<'de> {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct Text;
+        impl<'de> Visitor<'de> for Text {
+            type Value = Key<'de>;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a string")
+            }
+            fn visit_borrowed_str<E>(self, v: &'de str) -> Result<Key<'de>, E> {
+                Ok(Key(Cow::Borrowed(v)))
+            }
+            fn visit_str<E>(self, v: &str) -> Result<Key<'de>, E> {
+                Ok(Key(Cow::Owned(v.to_string())))
+            }
+            fn visit_string<E>(self, v: String) -> Result<Key<'de>, E> {
+                Ok(Key(Cow::Owned(v)))
+            }
+        }
+        deserializer.deserialize_str(Text)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use egt_core::solve::prepared::Compute;
+    use egt_core::{Format, Train};
+
+    use super::*;
+
+    /// Lines over three tasks, each setting its own load, with unreadable
+    /// ones among them: every line's overrides or message lands on its own
+    /// row; a key given twice keeps its first place and its last value; an
+    /// escaped key is read; the syntax error of a line wins over its
+    /// unknown key; a line that fails after a good key leaves nothing.
+    #[test]
+    fn lines_keep_their_rows_across_tasks() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../examples/fig3_example61.toml"
+        );
+        let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{e}"));
+        let train = Train::from_str(&text, Format::Toml, "fig3").unwrap_or_else(|e| panic!("{e}"));
+        let spec = egt_core::batch::BatchSpec::from_analysis(&train, Compute::Dynamics)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let plan = BatchPlan::new(&train, &spec).unwrap_or_else(|e| panic!("{e}"));
+        let (load, ratio) = (
+            plan.parameter("torque.4")
+                .unwrap_or_else(|| panic!("torque.4")),
+            plan.parameter("ratio.G2")
+                .unwrap_or_else(|| panic!("ratio.G2")),
+        );
+        let n = 2 * TASK + 100;
+        let special = |i: usize| match i {
+            7 => Some("not json".to_string()),
+            4097 => Some("{\"torque.9\": 1, \"torque.4\": }".to_string()),
+            5000 => Some("{\"torque.9\": 1}".to_string()),
+            6000 => Some("{\"ratio.G2\": \"x\"}".to_string()),
+            6001 => Some("{\"torque.4\": -1, \"ratio.G2\": -1.4, \"torque.4\": -2}".to_string()),
+            6002 => Some("{\"torque\\u002e4\": -3}".to_string()),
+            6003 => Some("[1]".to_string()),
+            6004 => Some("{\"torque.4\": -5, \"ratio.G2\": \"x\"}".to_string()),
+            6005 => Some("{\"torque.4\": -6} x".to_string()),
+            _ => None,
+        };
+        let owned: Vec<String> = (0..n)
+            .map(|i| special(i).unwrap_or_else(|| format!("{{\"torque.4\": {}}}", -(i as f64))))
+            .collect();
+        // Line numbers as in a file with a blank line after every tenth.
+        let lines: Vec<(usize, &str)> = owned
+            .iter()
+            .enumerate()
+            .map(|(i, l)| (i + i / 10, l.as_str()))
+            .collect();
+        let listed = parse(&lines, &plan, "rows.jsonl");
+        assert_eq!(listed.len(), n);
+        let message = |i: usize| match listed.line(i) {
+            Err(e) => e.to_string(),
+            Ok(v) => panic!("line {i} read as {v:?}"),
+        };
+        assert!(
+            message(7).starts_with("rows.jsonl:8: expected ident"),
+            "{}",
+            message(7)
+        );
+        assert!(
+            message(4097).starts_with("rows.jsonl:4507: expected value"),
+            "{}",
+            message(4097)
+        );
+        assert!(message(5000).contains("torque.9"), "{}", message(5000));
+        assert!(
+            message(6000).ends_with("`ratio.G2` is not a number"),
+            "{}",
+            message(6000)
+        );
+        assert!(
+            message(6003).contains("expected a map"),
+            "{}",
+            message(6003)
+        );
+        assert!(
+            message(6004).ends_with("`ratio.G2` is not a number"),
+            "{}",
+            message(6004)
+        );
+        assert!(
+            message(6005).contains("trailing characters"),
+            "{}",
+            message(6005)
+        );
+        let read = |i: usize| {
+            listed
+                .line(i)
+                .unwrap_or_else(|e| panic!("line {i}: {e}"))
+                .to_vec()
+        };
+        assert_eq!(read(6001), vec![(load, -2.0), (ratio, -1.4)]);
+        assert_eq!(read(6002), vec![(load, -3.0)]);
+        for i in (0..n).filter(|&i| special(i).is_none()) {
+            assert_eq!(read(i), vec![(load, -(i as f64))], "line {i}");
+        }
+        let good = (0..n).filter(|&i| listed.line(i).is_ok()).count();
+        assert_eq!(good, n - 7);
+        assert_eq!(listed.overrides().len(), good + 1);
+    }
+}
