@@ -1,12 +1,12 @@
-//! The lines of a `--rows` file, parsed in parallel into one flat list of
-//! (column, value) overrides.
+//! The lines of a `--rows` file, parsed in parallel, [`TASK`] lines a task,
+//! into one flat list of (column, value) overrides a task.
 //!
 //! Each line is a JSON object of parameter values. It is read key by key
 //! with the keys borrowed from the line where they have no escapes, into a
-//! buffer each task reuses, and the task's overrides are appended to one
-//! list: no map and no vector a line. (A map a line and a vector of
-//! overrides a line made the allocator's fresh pages about half of a
-//! one-thread batch of 10^6 lines, docs/benchmarks.md.)
+//! buffer each task reuses, and the task's overrides are appended to its
+//! list: no map and no vector a line, and the lists are kept as the tasks
+//! left them. (A map and a vector a line took about twice as long, much of
+//! it the kernel clearing fresh pages; docs/benchmarks.md.)
 
 use std::borrow::Cow;
 use std::collections::BTreeMap;
@@ -19,9 +19,15 @@ use serde::de::{DeserializeSeed, Deserializer, MapAccess, Visitor};
 /// Lines parsed in one task.
 const TASK: usize = 4096;
 
-/// Parsed lines of a `--rows` file: line `i` sets
-/// `values[starts[i]..starts[i + 1]]`, unless it is in `errors`.
+/// Parsed lines of a `--rows` file, as the tasks that parsed them left
+/// them: line `i` is line `i % TASK` of part `i / TASK`.
 pub(super) struct Listed {
+    parts: Vec<Part>,
+}
+
+/// [`TASK`] lines (the last part fewer): line `j` sets
+/// `values[starts[j]..starts[j + 1]]`, unless it is in `errors`.
+struct Part {
     values: Vec<(usize, f64)>,
     starts: Vec<usize>,
     errors: BTreeMap<usize, String>,
@@ -31,29 +37,26 @@ impl Listed {
     /// No lines.
     #[cfg(test)]
     pub(super) fn empty() -> Self {
-        Listed {
-            values: Vec::new(),
-            starts: vec![0],
-            errors: BTreeMap::new(),
-        }
+        Listed { parts: Vec::new() }
     }
 
     /// How many lines.
     pub(super) fn len(&self) -> usize {
-        self.starts.len() - 1
+        self.parts.iter().map(|p| p.starts.len() - 1).sum()
     }
 
     /// Line `i`'s overrides, or why it is unreadable.
     pub(super) fn line(&self, i: usize) -> Result<&[(usize, f64)], &str> {
-        match self.errors.get(&i) {
+        let (part, j) = (&self.parts[i / TASK], i % TASK);
+        match part.errors.get(&j) {
             Some(e) => Err(e),
-            None => Ok(&self.values[self.starts[i]..self.starts[i + 1]]),
+            None => Ok(&part.values[part.starts[j]..part.starts[j + 1]]),
         }
     }
 
     /// Every override of the readable lines, in line order.
-    pub(super) fn overrides(&self) -> &[(usize, f64)] {
-        &self.values
+    pub(super) fn overrides(&self) -> impl Iterator<Item = &(usize, f64)> {
+        self.parts.iter().flat_map(|p| &p.values)
     }
 }
 
@@ -62,11 +65,10 @@ impl Listed {
 /// the plan does not have, or gives a value that is not a number is
 /// unreadable, with a message naming the file, the line and the key.
 pub(super) fn parse(lines: &[(usize, &str)], plan: &BatchPlan, path: &str) -> Listed {
-    let tasks: Vec<Listed> = lines
+    let parts = lines
         .par_chunks(TASK)
-        .enumerate()
-        .map(|(t, chunk)| {
-            let mut part = Listed {
+        .map(|chunk| {
+            let mut part = Part {
                 values: Vec::with_capacity(chunk.len() * 2),
                 starts: Vec::with_capacity(chunk.len() + 1),
                 errors: BTreeMap::new(),
@@ -77,28 +79,14 @@ pub(super) fn parse(lines: &[(usize, &str)], plan: &BatchPlan, path: &str) -> Li
                 let at = part.values.len();
                 if let Err(e) = read_line(line, plan, &mut entries, &mut part.values) {
                     part.values.truncate(at);
-                    part.errors
-                        .insert(t * TASK + j, format!("{path}:{}: {e}", k + 1));
+                    part.errors.insert(j, format!("{path}:{}: {e}", k + 1));
                 }
                 part.starts.push(part.values.len());
             }
             part
         })
         .collect();
-    let total = tasks.iter().map(|p| p.values.len()).sum();
-    let mut all = Listed {
-        values: Vec::with_capacity(total),
-        starts: Vec::with_capacity(lines.len() + 1),
-        errors: BTreeMap::new(),
-    };
-    all.starts.push(0);
-    for part in tasks {
-        let base = all.values.len();
-        all.starts.extend(part.starts[1..].iter().map(|s| base + s));
-        all.values.extend_from_slice(&part.values);
-        all.errors.extend(part.errors);
-    }
-    all
+    Listed { parts }
 }
 
 /// Appends the overrides of one line to `values`. `entries` is a buffer
@@ -191,7 +179,7 @@ mod tests {
 
     use super::*;
 
-    /// Lines over three tasks, each setting its own load, with unreadable
+    /// Lines over three tasks (parts), each setting its own load, with unreadable
     /// ones among them: every line's overrides or message lands on its own
     /// row; a key given twice keeps its first place and its last value; an
     /// escaped key is read; the syntax error of a line wins over its
@@ -285,6 +273,6 @@ mod tests {
         }
         let good = (0..n).filter(|&i| listed.line(i).is_ok()).count();
         assert_eq!(good, n - 7);
-        assert_eq!(listed.overrides().len(), good + 1);
+        assert_eq!(listed.overrides().count(), good + 1);
     }
 }
