@@ -1,5 +1,5 @@
 //! The lines of a `--rows` file, parsed in parallel, [`TASK`] lines a task,
-//! into one flat list of (column, value) overrides a task.
+//! each task's into one flat list of (column, value) overrides.
 //!
 //! Each line is a JSON object of parameter values. It is read key by key
 //! with the keys borrowed from the line where they have no escapes, into a
@@ -105,6 +105,7 @@ fn read_line<'a>(
         .deserialize(&mut de)
         .and_then(|()| de.end())
         .map_err(|e| e.to_string())?;
+    keep_first_places_and_last_values(entries);
     for (name, v) in entries.iter() {
         let c = plan
             .parameter(name)
@@ -137,14 +138,46 @@ impl<'de, 'b> Visitor<'de> for Entries<'b, 'de> {
 
     fn visit_map<M: MapAccess<'de>>(self, mut map: M) -> Result<(), M::Error> {
         while let Some(Key(name)) = map.next_key()? {
-            let value: serde_json::Value = map.next_value()?;
-            match self.0.iter_mut().find(|(n, _)| *n == name) {
-                Some(entry) => entry.1 = value,
-                None => self.0.push((name, value)),
-            }
+            self.0.push((name, map.next_value()?));
         }
         Ok(())
     }
+}
+
+/// Of keys given more than once, keeps the first place and the last value,
+/// as a JSON object read into a map does: by comparing names on a short
+/// line, by a hash map of the first places on a long one (a large train's
+/// line may set thousands of parameters).
+fn keep_first_places_and_last_values(entries: &mut Vec<(Cow<'_, str>, serde_json::Value)>) {
+    let short = entries.len() <= 16;
+    let twice = |i: usize| (0..i).any(|j| entries[j].0 == entries[i].0);
+    if short && !(1..entries.len()).any(twice) {
+        return;
+    }
+    let first: Vec<usize> = if short {
+        (0..entries.len())
+            .map(|i| (0..i).find(|&j| entries[j].0 == entries[i].0).unwrap_or(i))
+            .collect()
+    } else {
+        let mut seen = std::collections::HashMap::with_capacity(entries.len());
+        (0..entries.len())
+            .map(|i| *seen.entry(&*entries[i].0).or_insert(i))
+            .collect()
+    };
+    if first.iter().enumerate().all(|(i, &f)| f == i) {
+        return;
+    }
+    for (i, &f) in first.iter().enumerate() {
+        if f != i {
+            let value = std::mem::take(&mut entries[i].1);
+            entries[f].1 = value;
+        }
+    }
+    let mut i = 0;
+    entries.retain(|_| {
+        i += 1;
+        first[i - 1] == i - 1
+    });
 }
 
 /// A key, borrowed from the line when it has no escapes.
@@ -212,6 +245,14 @@ mod tests {
             6003 => Some("[1]".to_string()),
             6004 => Some("{\"torque.4\": -5, \"ratio.G2\": \"x\"}".to_string()),
             6005 => Some("{\"torque.4\": -6} x".to_string()),
+            // Twenty keys, two of them ten times each (the long line's way).
+            6006 => Some(format!(
+                "{{{}}}",
+                (1..=10)
+                    .map(|k| format!("\"ratio.G2\": -1.{k}, \"torque.4\": -{k}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )),
             _ => None,
         };
         let owned: Vec<String> = (0..n)
@@ -268,11 +309,12 @@ mod tests {
         };
         assert_eq!(read(6001), vec![(load, -2.0), (ratio, -1.4)]);
         assert_eq!(read(6002), vec![(load, -3.0)]);
+        assert_eq!(read(6006), vec![(ratio, -1.1), (load, -10.0)]);
         for i in (0..n).filter(|&i| special(i).is_none()) {
             assert_eq!(read(i), vec![(load, -(i as f64))], "line {i}");
         }
         let good = (0..n).filter(|&i| listed.line(i).is_ok()).count();
         assert_eq!(good, n - 7);
-        assert_eq!(listed.overrides().count(), good + 1);
+        assert_eq!(listed.overrides().count(), good + 2);
     }
 }
