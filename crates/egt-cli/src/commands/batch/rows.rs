@@ -209,8 +209,88 @@ impl<'de> serde::Deserialize<'de> for Key<'de> {
 mod tests {
     use egt_core::solve::prepared::Compute;
     use egt_core::{Format, Train};
+    use proptest::prelude::*;
 
     use super::*;
+
+    /// Fig. 3's plan for dynamics.
+    fn fig3_plan() -> BatchPlan {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../examples/fig3_example61.toml"
+        );
+        let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{e}"));
+        let train = Train::from_str(&text, Format::Toml, "fig3").unwrap_or_else(|e| panic!("{e}"));
+        let spec = egt_core::batch::BatchSpec::from_analysis(&train, Compute::Dynamics)
+            .unwrap_or_else(|e| panic!("{e}"));
+        BatchPlan::new(&train, &spec).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// The reading of a line before this module: the whole line into a map
+    /// (serde_json's, keeping first places), then key by key.
+    fn read_as_a_map(line: &str, plan: &BatchPlan, at: &str) -> Result<Vec<(usize, f64)>, String> {
+        let map: serde_json::Map<String, serde_json::Value> =
+            serde_json::from_str(line).map_err(|e| format!("{at}: {e}"))?;
+        map.iter()
+            .map(|(name, v)| {
+                let c = plan.parameter(name).ok_or_else(|| {
+                    format!("{at}: {}", super::super::unknown(plan, name, "--rows"))
+                })?;
+                let x = v
+                    .as_f64()
+                    .ok_or_else(|| format!("{at}: `{name}` is not a number"))?;
+                Ok((c, x))
+            })
+            .collect()
+    }
+
+    /// A line: an object of keys (known, unknown, escaped, repeated) and
+    /// values (numbers, and what is not one), or something else, with or
+    /// without trailing text.
+    fn line() -> impl Strategy<Value = String> {
+        let key = prop::sample::select(vec![
+            "\"torque.4\"",
+            "\"ratio.G2\"",
+            "\"torque.9\"",
+            "\"torque\\u002e4\"",
+            "\"\"",
+        ]);
+        let value = prop_oneof![
+            (-1e3..1e3f64).prop_map(|x| format!("{x:?}")),
+            (-100i64..100).prop_map(|x| x.to_string()),
+            prop::sample::select(vec!["\"x\"", "null", "true", "[1]", "{}", "1e400", "-0"])
+                .prop_map(str::to_string),
+        ];
+        let object = prop::collection::vec((key, value), 0..24).prop_map(|entries| {
+            let inner: Vec<String> = entries.iter().map(|(k, v)| format!("{k}: {v}")).collect();
+            format!("{{{}}}", inner.join(", "))
+        });
+        let tail = prop::sample::select(vec!["", "", "", " ", " x", ",", "}"]);
+        prop_oneof![
+            8 => (object, tail).prop_map(|(o, t)| format!("{o}{t}")),
+            1 => prop::sample::select(vec!["[1]", "3", "not json", "\"s\"", "{", "{\"torque.4\" -1}"])
+                .prop_map(str::to_string),
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// Every line reads as it read into a map: the same overrides in the
+        /// same order, or the same message.
+        #[test]
+        fn lines_read_as_they_did_into_a_map(lines in prop::collection::vec(line(), 1..300)) {
+            let plan = fig3_plan();
+            let numbered: Vec<(usize, &str)> = lines.iter().map(String::as_str).enumerate().collect();
+            let listed = parse(&numbered, &plan, "rows.jsonl");
+            prop_assert_eq!(listed.len(), lines.len());
+            for (i, l) in lines.iter().enumerate() {
+                let want = read_as_a_map(l, &plan, &format!("rows.jsonl:{}", i + 1));
+                let got = listed.line(i).map(<[_]>::to_vec).map_err(str::to_string);
+                prop_assert_eq!(got, want, "line {}: {}", i + 1, l);
+            }
+        }
+    }
 
     /// Lines over three tasks (parts), each setting its own load, with unreadable
     /// ones among them: every line's overrides or message lands on its own
