@@ -24,6 +24,7 @@ use rayon::prelude::*;
 use crate::cli::{OutputFormat, SpecArgs, SpecFormat};
 use crate::input;
 
+mod pages;
 mod rows;
 mod stats;
 
@@ -1207,10 +1208,35 @@ struct Done {
 enum Encoded {
     /// JSON Lines or CSV text.
     Text(Vec<String>),
-    /// Parquet column chunks of one row group.
-    Parquet(Vec<parquet::arrow::arrow_writer::ArrowColumnChunk>),
+    /// Parquet column chunks of one row group, in the schema's order.
+    Parquet(Vec<Piece>),
     /// One Arrow record batch.
     Arrow(arrow_array::RecordBatch),
+}
+
+/// A Parquet column chunk, encoded by parquet-rs's Arrow writer or by egt.
+enum Piece {
+    Arrow(parquet::arrow::arrow_writer::ArrowColumnChunk),
+    Egt(pages::Chunk),
+}
+
+/// A block's row numbers.
+enum RowNumbers {
+    /// `first`, `first + 1`, ...: `len` of them (a block of a wide batch).
+    Run { first: u64, len: usize },
+    /// Given one by one (the long form, where a spec line's rows repeat).
+    Listed(arrow_array::UInt64Array),
+}
+
+impl RowNumbers {
+    fn array(self) -> arrow_array::ArrayRef {
+        std::sync::Arc::new(match self {
+            RowNumbers::Run { first, len } => {
+                arrow_array::UInt64Array::from_iter_values(first..first + len as u64)
+            }
+            RowNumbers::Listed(rows) => rows,
+        })
+    }
 }
 
 /// A block's parameters or results, row- or column-major.
@@ -1376,7 +1402,7 @@ fn columnar_file(
         // of row numbers).
         let mut props = parquet::file::properties::WriterProperties::builder()
             .set_data_page_size_limit(64 * 1024)
-            .set_compression(parquet::basic::Compression::SNAPPY)
+            .set_compression(pages::COMPRESSION)
             .set_dictionary_enabled(false)
             .set_column_encoding(
                 ColumnPath::from("row"),
@@ -1400,7 +1426,8 @@ fn columnar_file(
         let (writer, factory) =
             parquet::arrow::ArrowWriter::try_new(Vec::new(), schema.clone(), Some(props))?
                 .into_serialized_writer()?;
-        (Some(factory), Sink::Parquet(Box::new(writer)))
+        let rows = writer.schema_descr().column(0);
+        (Some((factory, rows)), Sink::Parquet(Box::new(writer)))
     } else {
         let writer = arrow_ipc::writer::FileWriter::try_new(Vec::new(), &schema)?;
         (None, Sink::Arrow(Box::new(writer)))
@@ -1419,8 +1446,12 @@ struct Encoder {
     schema: arrow_schema::SchemaRef,
     /// Output columns (after row, state and the varied parameters).
     outputs: usize,
-    /// Parquet's column writers (None for Arrow IPC).
-    factory: Option<parquet::arrow::arrow_writer::ArrowRowGroupWriterFactory>,
+    /// Parquet's column writers, and the row numbers' column (None for
+    /// Arrow IPC).
+    factory: Option<(
+        parquet::arrow::arrow_writer::ArrowRowGroupWriterFactory,
+        parquet::schema::types::ColumnDescPtr,
+    )>,
     /// Who computes the numbers' statistics (Parquet).
     numbers: NumberStatistics,
 }
@@ -1479,21 +1510,24 @@ impl Encoder {
     }
 
     fn encode(&self, plan: &BatchPlan, b: &Block<'_>) -> anyhow::Result<Encoded> {
-        use arrow_array::{ArrayRef, StringArray, UInt64Array};
+        use arrow_array::{ArrayRef, StringArray};
         use std::sync::Arc;
         let (params, results) = (b.params, b.results);
         let len = b.messages.len();
+        let rows = RowNumbers::Run {
+            first: b.first_row as u64,
+            len,
+        };
+        // The columns after the row numbers.
         let mut columns: Vec<ArrayRef> = Vec::with_capacity(self.schema.fields().len());
-        columns.push(Arc::new(UInt64Array::from_iter_values(
-            (b.first_row..b.first_row + len).map(|r| r as u64),
-        )));
         if let Some(s) = b.state {
             columns.push(Arc::new(StringArray::from_iter_values(
                 std::iter::repeat_n(s, len),
             )));
         }
-        // The doubles' bounds found while building them, by column.
-        let mut known = vec![None; columns.len()];
+        // The doubles' bounds found while building them, by column of the
+        // schema.
+        let mut known = vec![None; 1 + columns.len()];
         for (j, &(_, c)) in b.varied.iter().enumerate() {
             let c = if b.varied_only { j } else { c };
             let (column, bounds) = doubles(params.column(c), None);
@@ -1539,26 +1573,53 @@ impl Encoder {
         } else {
             Arc::new(StringArray::new_null(len))
         });
-        self.record_batch(columns, &known, b.index)
+        self.record_batch(rows, columns, &known, b.index)
     }
 
-    /// Columns in the schema's order as one Arrow record batch, or as the
-    /// Parquet column chunks of row group `index`.
-    /// `known`: by column, the min and max of a double column without
-    /// nulls, where already found ([`doubles`]).
+    /// The row numbers and the other columns, in the schema's order, as one
+    /// Arrow record batch, or as the Parquet column chunks of row group
+    /// `index`.
+    /// `known`: by column of the schema, the min and max of a double column
+    /// without nulls, where already found ([`doubles`]).
     fn record_batch(
         &self,
-        columns: Vec<arrow_array::ArrayRef>,
+        rows: RowNumbers,
+        others: Vec<arrow_array::ArrayRef>,
         known: &[Option<(f64, f64)>],
         index: usize,
     ) -> anyhow::Result<Encoded> {
-        let batch = arrow_array::RecordBatch::try_new(self.schema.clone(), columns)?;
-        let Some(factory) = &self.factory else {
-            return Ok(Encoded::Arrow(batch));
+        let whole = |rows: RowNumbers, mut others: Vec<arrow_array::ArrayRef>| {
+            others.insert(0, rows.array());
+            arrow_array::RecordBatch::try_new(self.schema.clone(), others)
+        };
+        let Some((factory, row_column)) = &self.factory else {
+            return Ok(Encoded::Arrow(whole(rows, others)?));
         };
         let mut writers = factory.create_column_writers(index)?;
+        // The row numbers of a wide block, encoded by egt (pages.rs).
+        let own = match (self.numbers, &rows) {
+            (NumberStatistics::Egt, &RowNumbers::Run { first, len }) => {
+                pages::row_numbers(row_column, first, len)?
+            }
+            _ => None,
+        };
+        let mut pieces = Vec::with_capacity(writers.len());
+        let (columns, skipped) = match own {
+            Some(chunk) => {
+                pieces.push(Piece::Egt(chunk));
+                writers.remove(0);
+                let len = others.first().map_or(0, |a| a.len());
+                let rest = arrow_schema::Schema::new(self.schema.fields()[1..].to_vec());
+                let options = arrow_array::RecordBatchOptions::new().with_row_count(Some(len));
+                let batch =
+                    arrow_array::RecordBatch::try_new_with_options(rest.into(), others, &options)?;
+                (batch, 1)
+            }
+            None => (whole(rows, others)?, 0),
+        };
+        let fields = &self.schema.fields()[skipped..];
         let mut leaves = writers.iter_mut();
-        for (array, field) in batch.columns().iter().zip(self.schema.fields()) {
+        for (array, field) in columns.columns().iter().zip(fields) {
             for leaf in parquet::arrow::arrow_writer::compute_leaves(field, array)? {
                 match leaves.next() {
                     Some(w) => w.write(&leaf)?,
@@ -1573,20 +1634,21 @@ impl Encoder {
         if self.numbers == NumberStatistics::Egt {
             // Every column is flat: one leaf, so one chunk, a column.
             anyhow::ensure!(
-                chunks.len() == batch.num_columns(),
+                chunks.len() == columns.num_columns(),
                 "a nested Parquet column"
             );
-            for (c, (chunk, column)) in chunks.iter_mut().zip(batch.columns()).enumerate() {
+            for (c, (chunk, column)) in chunks.iter_mut().zip(columns.columns()).enumerate() {
                 let column = column.as_any();
                 if let Some(doubles) = column.downcast_ref::<arrow_array::Float64Array>() {
-                    let known = known.get(c).copied().flatten();
+                    let known = known.get(skipped + c).copied().flatten();
                     stats::set_double_statistics(chunk, doubles, known)?;
                 } else if let Some(rows) = column.downcast_ref::<arrow_array::UInt64Array>() {
                     stats::set_row_statistics(chunk, rows)?;
                 }
             }
         }
-        Ok(Encoded::Parquet(chunks))
+        pieces.extend(chunks.into_iter().map(Piece::Arrow));
+        Ok(Encoded::Parquet(pieces))
     }
 }
 
@@ -1604,8 +1666,11 @@ impl Sink {
         let bytes = match (self, encoded) {
             (Sink::Parquet(w), Encoded::Parquet(chunks)) => {
                 let mut group = w.next_row_group()?;
-                for chunk in chunks {
-                    chunk.append_to_row_group(&mut group)?;
+                for piece in chunks {
+                    match piece {
+                        Piece::Arrow(chunk) => chunk.append_to_row_group(&mut group)?,
+                        Piece::Egt(chunk) => chunk.append_to_row_group(&mut group)?,
+                    }
                 }
                 group.close()?;
                 w.flush()?;
@@ -1996,13 +2061,13 @@ fn long_block(
         }
     }
     let columns: Vec<ArrayRef> = vec![
-        Arc::new(UInt64Array::from(row)),
         Arc::new(StringArray::from(name)),
         Arc::new(StringArray::from(quantity)),
         Arc::new(Float64Array::from(value)),
         Arc::new(StringArray::from(error)),
     ];
-    encoder.record_batch(columns, &[], b)
+    let rows = RowNumbers::Listed(UInt64Array::from(row));
+    encoder.record_batch(rows, columns, &[], b)
 }
 
 /// Parse, validate, prepare and solve one spec line.

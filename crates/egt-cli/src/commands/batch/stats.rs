@@ -175,10 +175,10 @@ fn total_order_bounds(values: impl Iterator<Item = Option<f64>>) -> Option<(f64,
 mod tests {
     use std::sync::Arc;
 
-    use arrow_array::{ArrayRef, Float64Array, StringArray, UInt64Array};
+    use arrow_array::{ArrayRef, Float64Array, StringArray};
     use arrow_schema::{DataType, Field};
 
-    use super::super::{BatchOutput, NumberStatistics, columnar_file, doubles};
+    use super::super::{BatchOutput, NumberStatistics, RowNumbers, columnar_file, doubles};
 
     /// A Parquet file of `blocks` with the doubles' statistics computed by
     /// `by`. Three double columns: the values and their negatives, built as
@@ -201,10 +201,7 @@ mod tests {
         for (index, values) in blocks.iter().enumerate() {
             let len = values.len() as u64;
             let negated: Vec<_> = values.iter().map(|v| v.map(|v| -v)).collect();
-            let (mut columns, mut known): (Vec<ArrayRef>, _) = (
-                vec![Arc::new(UInt64Array::from_iter_values(first..first + len))],
-                vec![None],
-            );
+            let (mut columns, mut known): (Vec<ArrayRef>, _) = (vec![], vec![None]);
             let mut failed = vec![None; values.len()];
             failed[0] = Some(String::from("failed"));
             let failed = (index % 2 == 1).then_some(failed.as_slice());
@@ -220,9 +217,13 @@ mod tests {
             columns.push(Arc::new(Float64Array::from(values.clone())));
             known.push(None);
             columns.push(Arc::new(StringArray::new_null(values.len())));
+            let rows = RowNumbers::Run {
+                first,
+                len: values.len(),
+            };
             first += len;
             let encoded = encoder
-                .record_batch(columns, &known, index)
+                .record_batch(rows, columns, &known, index)
                 .unwrap_or_else(|e| panic!("block {index}: {e}"));
             sink.append(encoded, &mut out)
                 .unwrap_or_else(|e| panic!("block {index}: {e}"));
@@ -232,7 +233,9 @@ mod tests {
     }
 
     /// egt's statistics are parquet-rs's, the doubles' and the row
-    /// numbers': the files are the same bytes, over
+    /// numbers', and so is egt's chunk of row numbers (pages.rs; blocks of
+    /// one row, of a few, of a page's limit of 20 000, first rows of one-
+    /// to three-byte varints): the files are the same bytes, over
     /// blocks that take the fast path (spanning pages, shorter than a lane
     /// group, one value) and every case it hands to the exact scan (zeros
     /// of either sign at either end, NaNs of either sign, infinities,
