@@ -1401,7 +1401,7 @@ fn columnar_file(
         // row group is a block (16 384 rows, two pages a double column, one
         // of row numbers).
         let mut props = parquet::file::properties::WriterProperties::builder()
-            .set_data_page_size_limit(64 * 1024)
+            .set_data_page_size_limit(pages::PAGE_BYTES)
             .set_compression(pages::COMPRESSION)
             .set_dictionary_enabled(false)
             .set_column_encoding(
@@ -1426,8 +1426,8 @@ fn columnar_file(
         let (writer, factory) =
             parquet::arrow::ArrowWriter::try_new(Vec::new(), schema.clone(), Some(props))?
                 .into_serialized_writer()?;
-        let rows = writer.schema_descr().column(0);
-        (Some((factory, rows)), Sink::Parquet(Box::new(writer)))
+        let columns = writer.schema_descr().columns().to_vec();
+        (Some((factory, columns)), Sink::Parquet(Box::new(writer)))
     } else {
         let writer = arrow_ipc::writer::FileWriter::try_new(Vec::new(), &schema)?;
         (None, Sink::Arrow(Box::new(writer)))
@@ -1446,11 +1446,11 @@ struct Encoder {
     schema: arrow_schema::SchemaRef,
     /// Output columns (after row, state and the varied parameters).
     outputs: usize,
-    /// Parquet's column writers, and the row numbers' column (None for
-    /// Arrow IPC).
+    /// Parquet's column writers, and the file's columns (None for Arrow
+    /// IPC).
     factory: Option<(
         parquet::arrow::arrow_writer::ArrowRowGroupWriterFactory,
-        parquet::schema::types::ColumnDescPtr,
+        Vec<parquet::schema::types::ColumnDescPtr>,
     )>,
     /// Who computes the numbers' statistics (Parquet).
     numbers: NumberStatistics,
@@ -1592,22 +1592,29 @@ impl Encoder {
             others.insert(0, rows.array());
             arrow_array::RecordBatch::try_new(self.schema.clone(), others)
         };
-        let Some((factory, row_column)) = &self.factory else {
+        let Some((factory, descriptors)) = &self.factory else {
             return Ok(Encoded::Arrow(whole(rows, others)?));
         };
-        let mut writers = factory.create_column_writers(index)?;
+        let writers = factory.create_column_writers(index)?;
+        // Every column is flat: one leaf, so one writer, a column.
+        anyhow::ensure!(
+            writers.len() == descriptors.len() && descriptors.len() == self.schema.fields().len(),
+            "a nested Parquet column"
+        );
+        let egt = self.numbers == NumberStatistics::Egt;
+        let mut pieces = Vec::with_capacity(writers.len());
+        let mut writers = writers.into_iter();
         // The row numbers of a wide block, encoded by egt (pages.rs).
-        let own = match (self.numbers, &rows) {
-            (NumberStatistics::Egt, &RowNumbers::Run { first, len }) => {
-                pages::row_numbers(row_column, first, len)?
+        let own = match (egt, &rows) {
+            (true, &RowNumbers::Run { first, len }) => {
+                pages::row_numbers(&descriptors[0], first, len)?
             }
             _ => None,
         };
-        let mut pieces = Vec::with_capacity(writers.len());
         let (columns, skipped) = match own {
             Some(chunk) => {
                 pieces.push(Piece::Egt(chunk));
-                writers.remove(0);
+                writers.next();
                 let len = others.first().map_or(0, |a| a.len());
                 let rest = arrow_schema::Schema::new(self.schema.fields()[1..].to_vec());
                 let options = arrow_array::RecordBatchOptions::new().with_row_count(Some(len));
@@ -1618,36 +1625,36 @@ impl Encoder {
             None => (whole(rows, others)?, 0),
         };
         let fields = &self.schema.fields()[skipped..];
-        let mut leaves = writers.iter_mut();
-        for (array, field) in columns.columns().iter().zip(fields) {
+        let mut scratch = Vec::new();
+        for (c, ((array, field), mut writer)) in
+            (columns.columns().iter().zip(fields).zip(writers)).enumerate()
+        {
+            let (column, known) = (skipped + c, known.get(skipped + c).copied().flatten());
+            let doubles = array.as_any().downcast_ref::<arrow_array::Float64Array>();
+            // A double column without nulls, encoded by egt (pages.rs).
+            if let Some(doubles) =
+                doubles.filter(|d| egt && arrow_array::Array::null_count(*d) == 0)
+                && let Some(mut chunk) =
+                    pages::doubles(&descriptors[column], doubles.values(), &mut scratch)?
+            {
+                stats::set_double_statistics(chunk.close_mut(), doubles, known)?;
+                pieces.push(Piece::Egt(chunk));
+                continue;
+            }
             for leaf in parquet::arrow::arrow_writer::compute_leaves(field, array)? {
-                match leaves.next() {
-                    Some(w) => w.write(&leaf)?,
-                    None => anyhow::bail!("more Parquet leaves than column writers"),
+                writer.write(&leaf)?;
+            }
+            let mut chunk = writer.close()?;
+            if egt {
+                let any = array.as_any();
+                if let Some(doubles) = doubles {
+                    stats::set_double_statistics(chunk.close_mut(), doubles, known)?;
+                } else if let Some(rows) = any.downcast_ref::<arrow_array::UInt64Array>() {
+                    stats::set_row_statistics(chunk.close_mut(), rows)?;
                 }
             }
+            pieces.push(Piece::Arrow(chunk));
         }
-        let mut chunks: Vec<_> = writers
-            .into_iter()
-            .map(|w| w.close())
-            .collect::<Result<_, _>>()?;
-        if self.numbers == NumberStatistics::Egt {
-            // Every column is flat: one leaf, so one chunk, a column.
-            anyhow::ensure!(
-                chunks.len() == columns.num_columns(),
-                "a nested Parquet column"
-            );
-            for (c, (chunk, column)) in chunks.iter_mut().zip(columns.columns()).enumerate() {
-                let column = column.as_any();
-                if let Some(doubles) = column.downcast_ref::<arrow_array::Float64Array>() {
-                    let known = known.get(skipped + c).copied().flatten();
-                    stats::set_double_statistics(chunk, doubles, known)?;
-                } else if let Some(rows) = column.downcast_ref::<arrow_array::UInt64Array>() {
-                    stats::set_row_statistics(chunk, rows)?;
-                }
-            }
-        }
-        pieces.extend(chunks.into_iter().map(Piece::Arrow));
         Ok(Encoded::Parquet(pieces))
     }
 }

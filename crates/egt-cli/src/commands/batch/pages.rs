@@ -10,6 +10,15 @@
 //! writes that page, compressed and framed by parquet-rs's own page writer,
 //! and the chunk's metadata as parquet-rs's column writer sets it (a test
 //! compares the files byte for byte).
+//!
+//! A double column without nulls is, for the same writer, a list of the
+//! rows that hold a value (every row), the values gathered through it into
+//! the encoder's buffer, and that buffer copied into the page before
+//! Snappy: three passes and two copies, all to put the values after a
+//! definition level that says "present" for every row. egt writes those
+//! pages (PLAIN, a page's worth of values at a time) straight from the
+//! column. A column with nulls (a failed row, a value that is not finite)
+//! is rare and still parquet-rs's.
 
 use parquet::basic::{Compression, Encoding, EncodingMask, PageType};
 use parquet::column::page::{CompressedPage, Page, PageWriter};
@@ -27,6 +36,12 @@ pub(super) const COMPRESSION: Compression = Compression::SNAPPY;
 /// a block of at most this many rows take one page.
 pub(super) const PAGE_ROWS: usize = 20_000;
 
+/// The data page size limit `egt batch` sets: a page of doubles holds
+/// this many bytes of values, 8 192 values. (A block's column is 128 KiB,
+/// and the writer's page buffers grow by doubling up to the page; with
+/// pages smaller than the default 1 MiB they stay small: docs/benchmarks.md.)
+pub(super) const PAGE_BYTES: usize = 64 * 1024;
+
 /// A column chunk encoded by egt, to be appended to its row group.
 pub(super) struct Chunk {
     bytes: bytes::Bytes,
@@ -34,6 +49,11 @@ pub(super) struct Chunk {
 }
 
 impl Chunk {
+    /// The metadata the chunk will be appended with.
+    pub(super) fn close_mut(&mut self) -> &mut ColumnCloseResult {
+        &mut self.close
+    }
+
     /// Append the chunk to `group`, as the next column.
     pub(super) fn append_to_row_group<W: std::io::Write + Send>(
         self,
@@ -57,11 +77,7 @@ pub(super) fn row_numbers(descr: &ColumnDescPtr, first: u64, len: usize) -> Resu
     }
     let mut plain = Vec::with_capacity(16 + 5 * (len - 1).div_ceil(BLOCK));
     consecutive_deltas(first as i64, len, &mut plain);
-    let mut compressed = vec![0; snap::raw::max_compress_len(plain.len())];
-    let n = snap::raw::Encoder::new()
-        .compress(&plain, &mut compressed)
-        .map_err(|e| parquet::errors::ParquetError::External(Box::new(e)))?;
-    compressed.truncate(n);
+    let compressed = compress(&mut snap::raw::Encoder::new(), &plain)?;
     let page = Page::DataPage {
         buf: compressed.into(),
         num_values: len as u32,
@@ -109,6 +125,97 @@ pub(super) fn row_numbers(descr: &ColumnDescPtr, first: u64, len: usize) -> Resu
         bytes: bytes.into(),
         close,
     }))
+}
+
+/// The doubles `values` of column `descr` (an optional DOUBLE, flat), all
+/// present, as PLAIN pages of [`PAGE_BYTES`] each and a last one, without
+/// statistics; None when there are none or more than [`PAGE_ROWS`]
+/// (parquet-rs writes those). `scratch` holds a page before Snappy.
+pub(super) fn doubles(
+    descr: &ColumnDescPtr,
+    values: &arrow_buffer::ScalarBuffer<f64>,
+    scratch: &mut Vec<u8>,
+) -> Result<Option<Chunk>> {
+    if values.is_empty() || values.len() > PAGE_ROWS || descr.max_def_level() != 1 {
+        return Ok(None);
+    }
+    let mut sink = TrackedWrite::new(Vec::with_capacity(values.len() * 8 + 256));
+    let mut offsets = OffsetIndexBuilder::new();
+    let (mut compressed_size, mut uncompressed_size, mut pages) = (0i64, 0i64, 0);
+    let mut snappy = snap::raw::Encoder::new();
+    // PLAIN is little-endian, as Arrow holds doubles on this machine.
+    #[cfg(target_endian = "little")]
+    let bytes = values.inner().as_slice();
+    #[cfg(not(target_endian = "little"))]
+    let bytes = &values
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect::<Vec<u8>>();
+    for page in bytes.chunks(PAGE_BYTES) {
+        let rows = page.len() / 8;
+        // The definition levels (version 1: their length first), one RLE
+        // run of 1s; then the values.
+        scratch.clear();
+        scratch.extend_from_slice(&[0; 4]);
+        uleb128(scratch, (rows as u64) << 1);
+        scratch.push(1);
+        let levels = (scratch.len() - 4) as u32;
+        scratch[..4].copy_from_slice(&levels.to_le_bytes());
+        scratch.extend_from_slice(page);
+        let compressed = compress(&mut snappy, scratch)?;
+        let page = Page::DataPage {
+            buf: compressed.into(),
+            num_values: rows as u32,
+            encoding: Encoding::PLAIN,
+            def_level_encoding: Encoding::RLE,
+            rep_level_encoding: Encoding::RLE,
+            statistics: None,
+        };
+        let spec = SerializedPageWriter::new(&mut sink)
+            .write_page(CompressedPage::new(page, scratch.len()))?;
+        offsets.append_offset_and_size(spec.offset as i64, spec.compressed_size as i32);
+        offsets.append_row_count(rows as i64);
+        compressed_size += spec.compressed_size as i64;
+        uncompressed_size += spec.uncompressed_size as i64;
+        pages += 1;
+    }
+    let encodings = [Encoding::PLAIN, Encoding::RLE];
+    let metadata = ColumnChunkMetaData::builder(descr.clone())
+        .set_compression(COMPRESSION)
+        .set_encodings_mask(EncodingMask::new_from_encodings(encodings.iter()))
+        .set_page_encoding_stats(vec![PageEncodingStats {
+            page_type: PageType::DATA_PAGE,
+            encoding: Encoding::PLAIN,
+            count: pages,
+        }])
+        .set_total_compressed_size(compressed_size)
+        .set_total_uncompressed_size(uncompressed_size)
+        .set_num_values(values.len() as i64)
+        .set_data_page_offset(0)
+        .build()?;
+    let bytes = sink.into_inner()?;
+    let close = ColumnCloseResult {
+        bytes_written: bytes.len() as u64,
+        rows_written: values.len() as u64,
+        metadata,
+        bloom_filter: None,
+        column_index: None,
+        offset_index: Some(offsets.build()),
+    };
+    Ok(Some(Chunk {
+        bytes: bytes.into(),
+        close,
+    }))
+}
+
+/// `input` compressed by Snappy, as parquet-rs's codec compresses a page.
+fn compress(snappy: &mut snap::raw::Encoder, input: &[u8]) -> Result<Vec<u8>> {
+    let mut out = vec![0; snap::raw::max_compress_len(input.len())];
+    let n = snappy
+        .compress(input, &mut out)
+        .map_err(|e| parquet::errors::ParquetError::External(Box::new(e)))?;
+    out.truncate(n);
+    Ok(out)
 }
 
 /// Values a block of DELTA_BINARY_PACKED INT64 as parquet-rs writes it

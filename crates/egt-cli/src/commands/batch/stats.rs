@@ -15,7 +15,7 @@
 //! byte).
 
 use arrow_array::{Array, Float64Array, UInt64Array};
-use parquet::arrow::arrow_writer::ArrowColumnChunk;
+use parquet::column::writer::ColumnCloseResult;
 use parquet::file::metadata::LevelHistogram;
 use parquet::file::statistics::{Statistics, ValueStatistics};
 
@@ -34,13 +34,13 @@ pub(super) struct Scan {
     pub bounds: Option<(f64, f64)>,
 }
 
-/// Sets the row-group statistics of `chunk`, written with statistics off,
+/// Sets the row-group statistics of a chunk (`close`), written with statistics off,
 /// to those parquet-rs computes for `array` at `EnabledStatistics::Chunk`:
 /// min, max, null and NaN counts, and the definition levels' histogram.
 /// `known`: the [`Scan`] bounds of `array`'s values, if it has no nulls and
 /// they were scanned already.
 pub(super) fn set_double_statistics(
-    chunk: &mut ArrowColumnChunk,
+    close: &mut ColumnCloseResult,
     array: &Float64Array,
     known: Option<(f64, f64)>,
 ) -> parquet::errors::Result<()> {
@@ -55,7 +55,6 @@ pub(super) fn set_double_statistics(
         Some((min, max, nans)) => (Some(min), Some(max), nans),
         None => (None, None, 0),
     };
-    let close = chunk.close_mut();
     let descr = close.metadata.column_descr_ptr();
     let statistics = ValueStatistics::<f64>::new(min, max, None, Some(nulls as u64), false)
         .with_nan_count((array.len() > nulls).then_some(nans))
@@ -86,13 +85,12 @@ pub(super) fn set_double_statistics(
 /// 64-bit integers runs scalar on the baseline x86-64, 3 % of a one-thread
 /// batch.)
 pub(super) fn set_row_statistics(
-    chunk: &mut ArrowColumnChunk,
+    close: &mut ColumnCloseResult,
     rows: &UInt64Array,
 ) -> parquet::errors::Result<()> {
     let values = rows.values();
     debug_assert!(values.windows(2).all(|w| w[0] <= w[1]), "rows out of order");
     debug_assert_eq!(rows.null_count(), 0, "a null row number");
-    let close = chunk.close_mut();
     let descr = close.metadata.column_descr_ptr();
     // Parquet keeps an unsigned 64-bit integer in INT64, bit for bit.
     let (min, max) = (values.first(), values.last());
@@ -233,9 +231,11 @@ mod tests {
     }
 
     /// egt's statistics are parquet-rs's, the doubles' and the row
-    /// numbers', and so is egt's chunk of row numbers (pages.rs; blocks of
-    /// one row, of a few, of a page's limit of 20 000, first rows of one-
-    /// to three-byte varints): the files are the same bytes, over
+    /// numbers', and so are egt's chunks of row numbers and of doubles
+    /// without nulls (pages.rs; blocks of one row, of a few, of one page
+    /// of doubles and one more, of two, of the row numbers' page limit of
+    /// 20 000, one more and twice as many; first rows of one- to
+    /// three-byte varints; NaNs kept): the files are the same bytes, over
     /// blocks that take the fast path (spanning pages, shorter than a lane
     /// group, one value) and every case it hands to the exact scan (zeros
     /// of either sign at either end, NaNs of either sign, infinities,
@@ -252,7 +252,7 @@ mod tests {
         let nan = f64::NAN;
         let negative_nan = f64::from_bits(nan.to_bits() | (1 << 63));
         let some = |v: &[f64]| v.iter().map(|&v| Some(v)).collect::<Vec<_>>();
-        let blocks = vec![
+        let mut blocks: Vec<Vec<Option<f64>>> = vec![
             (0..20_000).map(|_| Some(uniform())).collect(),
             (0..9).map(|_| Some(uniform().abs() + 1.0)).collect(),
             some(&[5.0]),
@@ -269,6 +269,11 @@ mod tests {
             vec![None, None, None],
             vec![None, Some(nan)],
         ];
+        // Pages of doubles end at 8 192 values, the row numbers' at 20 000;
+        // parquet-rs writes a longer block's (egt's bound, mutation-checked).
+        for len in [8_192, 8_193, 16_384, 20_001, 40_000] {
+            blocks.push((0..len).map(|_| Some(uniform())).collect());
+        }
         let egt = file(&blocks, NumberStatistics::Egt);
         let parquet = file(&blocks, NumberStatistics::Parquet);
         // The files would be equal with no statistics on either side.
