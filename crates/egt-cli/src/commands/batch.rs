@@ -1280,13 +1280,16 @@ impl Matrix<'_> {
     /// Whether a row's value in column `c` is above `limit`.
     fn any_above(&self, c: usize, limit: f64) -> bool {
         if self.columns {
-            // The largest value by a float compare four lanes wide (a NaN is
-            // never above; an early exit would not vectorise, and the usual
-            // block has no such row).
-            let (chunks, rest) = self.data[c * self.rows..][..self.rows].as_chunks::<4>();
-            let mut most = [f64::NEG_INFINITY; 4];
+            // The largest value by a float compare sixteen lanes wide (a NaN
+            // is never above; an early exit would not vectorise, and the
+            // usual block has no such row). Sixteen lanes are eight SSE2
+            // registers: eight chains of compares, so that the loop is not
+            // bound by their latency.
+            const LANES: usize = 16;
+            let (chunks, rest) = self.data[c * self.rows..][..self.rows].as_chunks::<LANES>();
+            let mut most = [f64::NEG_INFINITY; LANES];
             for chunk in chunks {
-                for l in 0..4 {
+                for l in 0..LANES {
                     most[l] = if chunk[l] > most[l] {
                         chunk[l]
                     } else {
