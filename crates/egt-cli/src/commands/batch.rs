@@ -1628,7 +1628,6 @@ impl Encoder {
             None => (whole(rows, others)?, 0),
         };
         let fields = &self.schema.fields()[skipped..];
-        let mut scratch = Vec::new();
         for (c, ((array, field), mut writer)) in
             (columns.columns().iter().zip(fields).zip(writers)).enumerate()
         {
@@ -1637,8 +1636,7 @@ impl Encoder {
             // A double column without nulls, encoded by egt (pages.rs).
             if let Some(doubles) =
                 doubles.filter(|d| egt && arrow_array::Array::null_count(*d) == 0)
-                && let Some(mut chunk) =
-                    pages::doubles(&descriptors[column], doubles.values(), &mut scratch)?
+                && let Some(mut chunk) = pages::doubles(&descriptors[column], doubles.values())?
             {
                 stats::set_double_statistics(chunk.close_mut(), doubles, known)?;
                 pieces.push(Piece::Egt(chunk));

@@ -20,6 +20,9 @@
 //! column. A column with nulls (a failed row, a value that is not finite)
 //! is rare and still parquet-rs's.
 
+use std::cell::RefCell;
+use std::sync::Arc;
+
 use parquet::basic::{Compression, Encoding, EncodingMask, PageType};
 use parquet::column::page::{CompressedPage, Page, PageWriter};
 use parquet::column::writer::ColumnCloseResult;
@@ -77,9 +80,8 @@ pub(super) fn row_numbers(descr: &ColumnDescPtr, first: u64, len: usize) -> Resu
     }
     let mut plain = Vec::with_capacity(16 + 5 * (len - 1).div_ceil(BLOCK));
     consecutive_deltas(first as i64, len, &mut plain);
-    let compressed = compress(&mut snap::raw::Encoder::new(), &plain)?;
     let page = Page::DataPage {
-        buf: compressed.into(),
+        buf: compress(&mut snap::raw::Encoder::new(), &mut Arc::default(), &plain)?,
         num_values: len as u32,
         encoding: Encoding::DELTA_BINARY_PACKED,
         def_level_encoding: Encoding::RLE,
@@ -130,11 +132,10 @@ pub(super) fn row_numbers(descr: &ColumnDescPtr, first: u64, len: usize) -> Resu
 /// The doubles `values` of column `descr` (an optional DOUBLE, flat), all
 /// present, as PLAIN pages of [`PAGE_BYTES`] each and a last one, without
 /// statistics; None when there are none or more than [`PAGE_ROWS`]
-/// (parquet-rs writes those). `scratch` holds a page before Snappy.
+/// (parquet-rs writes those).
 pub(super) fn doubles(
     descr: &ColumnDescPtr,
     values: &arrow_buffer::ScalarBuffer<f64>,
-    scratch: &mut Vec<u8>,
 ) -> Result<Option<Chunk>> {
     if values.is_empty() || values.len() > PAGE_ROWS || descr.max_def_level() != 1 {
         return Ok(None);
@@ -142,7 +143,12 @@ pub(super) fn doubles(
     let mut sink = TrackedWrite::new(Vec::with_capacity(values.len() * 8 + 256));
     let mut offsets = OffsetIndexBuilder::new();
     let (mut compressed_size, mut uncompressed_size, mut pages) = (0i64, 0i64, 0);
-    let mut snappy = snap::raw::Encoder::new();
+    let mut buffers = BUFFERS.with_borrow_mut(std::mem::take);
+    let Buffers {
+        plain: scratch,
+        compressed,
+        snappy,
+    } = &mut buffers;
     // PLAIN is little-endian, as Arrow holds doubles on this machine.
     #[cfg(target_endian = "little")]
     let bytes = values.inner().as_slice();
@@ -162,9 +168,8 @@ pub(super) fn doubles(
         let levels = (scratch.len() - 4) as u32;
         scratch[..4].copy_from_slice(&levels.to_le_bytes());
         scratch.extend_from_slice(page);
-        let compressed = compress(&mut snappy, scratch)?;
         let page = Page::DataPage {
-            buf: compressed.into(),
+            buf: compress(snappy, compressed, scratch)?,
             num_values: rows as u32,
             encoding: Encoding::PLAIN,
             def_level_encoding: Encoding::RLE,
@@ -194,6 +199,7 @@ pub(super) fn doubles(
         .set_data_page_offset(0)
         .build()?;
     let bytes = sink.into_inner()?;
+    BUFFERS.set(buffers);
     let close = ColumnCloseResult {
         bytes_written: bytes.len() as u64,
         rows_written: values.len() as u64,
@@ -208,14 +214,58 @@ pub(super) fn doubles(
     }))
 }
 
-/// `input` compressed by Snappy, as parquet-rs's codec compresses a page.
-fn compress(snappy: &mut snap::raw::Encoder, input: &[u8]) -> Result<Vec<u8>> {
-    let mut out = vec![0; snap::raw::max_compress_len(input.len())];
+/// A thread's buffers for the pages of a chunk, kept from chunk to chunk
+/// (a block's pages were fresh allocations, which the allocator zeroed or
+/// the kernel cleared).
+struct Buffers {
+    /// A page before Snappy.
+    plain: Vec<u8>,
+    /// A page after Snappy: lent to the page writer, which drops its share
+    /// once it has copied the page.
+    compressed: Arc<Vec<u8>>,
+    snappy: snap::raw::Encoder,
+}
+
+impl Default for Buffers {
+    fn default() -> Self {
+        Buffers {
+            plain: Vec::new(),
+            compressed: Arc::default(),
+            snappy: snap::raw::Encoder::new(),
+        }
+    }
+}
+
+thread_local! {
+    static BUFFERS: RefCell<Buffers> = RefCell::new(Buffers::default());
+}
+
+/// A share of a compressed page, as the bytes of a page.
+struct Lent(Arc<Vec<u8>>);
+
+impl AsRef<[u8]> for Lent {
+    fn as_ref(&self) -> &[u8] {
+        &self.0
+    }
+}
+
+/// `input` compressed by Snappy, as parquet-rs's codec compresses a page,
+/// into `out` (grown if need be; copied only if a share of it is still
+/// out, which the page writer does not keep).
+fn compress(
+    snappy: &mut snap::raw::Encoder,
+    out: &mut Arc<Vec<u8>>,
+    input: &[u8],
+) -> Result<bytes::Bytes> {
+    let buffer = Arc::make_mut(out);
+    let need = snap::raw::max_compress_len(input.len());
+    if buffer.len() < need {
+        buffer.resize(need, 0);
+    }
     let n = snappy
-        .compress(input, &mut out)
+        .compress(input, buffer)
         .map_err(|e| parquet::errors::ParquetError::External(Box::new(e)))?;
-    out.truncate(n);
-    Ok(out)
+    Ok(bytes::Bytes::from_owner(Lent(out.clone())).slice(..n))
 }
 
 /// Values a block of DELTA_BINARY_PACKED INT64 as parquet-rs writes it
