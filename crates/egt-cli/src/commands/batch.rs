@@ -1426,9 +1426,12 @@ fn columnar_file(
         let props = props.build();
         // The Arrow writer adds the Arrow schema to the file's metadata;
         // its lower half lets row groups be encoded in parallel.
-        let (writer, factory) =
-            parquet::arrow::ArrowWriter::try_new(Vec::new(), schema.clone(), Some(props))?
-                .into_serialized_writer()?;
+        let (writer, factory) = parquet::arrow::ArrowWriter::try_new(
+            pages::Splice::default(),
+            schema.clone(),
+            Some(props),
+        )?
+        .into_serialized_writer()?;
         let columns = writer.schema_descr().columns().to_vec();
         (Some((factory, columns)), Sink::Parquet(Box::new(writer)))
     } else {
@@ -1664,7 +1667,7 @@ impl Encoder {
 /// drained to the output after every block, so memory stays one wave of
 /// blocks whatever the batch.
 enum Sink {
-    Parquet(Box<parquet::file::writer::SerializedFileWriter<Vec<u8>>>),
+    Parquet(Box<parquet::file::writer::SerializedFileWriter<pages::Splice>>),
     Arrow(Box<arrow_ipc::writer::FileWriter<Vec<u8>>>),
 }
 
@@ -1672,17 +1675,32 @@ impl Sink {
     /// Append an encoded block and pass the bytes written so far on to `out`.
     fn append(&mut self, encoded: Encoded, out: &mut dyn Write) -> anyhow::Result<()> {
         let bytes = match (self, encoded) {
-            (Sink::Parquet(w), Encoded::Parquet(chunks)) => {
+            (Sink::Parquet(w), Encoded::Parquet(pieces)) => {
+                // Where egt's chunks go: the chunks of a row group follow
+                // one another from where the file is.
+                let mut at = w.bytes_written() as u64;
+                for piece in &pieces {
+                    let len = match piece {
+                        Piece::Arrow(chunk) => chunk.close().metadata.compressed_size() as u64,
+                        Piece::Egt(chunk) => {
+                            w.inner_mut().hole(at, chunk.len());
+                            chunk.len()
+                        }
+                    };
+                    at += len;
+                }
+                let mut own = Vec::new();
                 let mut group = w.next_row_group()?;
-                for piece in chunks {
+                for piece in pieces {
                     match piece {
                         Piece::Arrow(chunk) => chunk.append_to_row_group(&mut group)?,
-                        Piece::Egt(chunk) => chunk.append_to_row_group(&mut group)?,
+                        Piece::Egt(chunk) => own.push(chunk.append_to_row_group(&mut group)?),
                     }
                 }
                 group.close()?;
                 w.flush()?;
-                w.inner_mut()
+                w.inner_mut().drain(&own, out)?;
+                return Ok(());
             }
             (Sink::Arrow(w), Encoded::Arrow(batch)) => {
                 w.write(&batch)?;
@@ -1698,7 +1716,10 @@ impl Sink {
     /// Write the footer.
     fn finish(self, out: &mut dyn Write) -> anyhow::Result<()> {
         let bytes = match self {
-            Sink::Parquet(w) => w.into_inner()?,
+            Sink::Parquet(w) => {
+                w.into_inner()?.drain(&[], out)?;
+                return Ok(());
+            }
             Sink::Arrow(mut w) => {
                 w.finish()?;
                 w.into_inner()?

@@ -19,8 +19,18 @@
 //! pages (PLAIN, a page's worth of values at a time) straight from the
 //! column. A column with nulls (a failed row, a value that is not finite)
 //! is rare and still parquet-rs's.
+//!
+//! parquet-rs's file writer copies an encoded chunk into the file through a
+//! small buffer, that is twice, on the thread that writes the file in
+//! order (which reads it from the cache of the thread that encoded it).
+//! egt's chunks skip that: the writer is given blanks of their length
+//! ([`Chunk::append_to_row_group`]), which the file's buffer ([`Splice`])
+//! does not keep, and the chunks themselves go to the output in their
+//! place.
 
 use std::cell::RefCell;
+use std::collections::VecDeque;
+use std::io::{Read, Write};
 use std::sync::Arc;
 
 use parquet::basic::{Compression, Encoding, EncodingMask, PageType};
@@ -28,6 +38,7 @@ use parquet::column::page::{CompressedPage, Page, PageWriter};
 use parquet::column::writer::ColumnCloseResult;
 use parquet::errors::Result;
 use parquet::file::metadata::{ColumnChunkMetaData, OffsetIndexBuilder, PageEncodingStats};
+use parquet::file::reader::{ChunkReader, Length};
 use parquet::file::statistics::{Statistics, ValueStatistics};
 use parquet::file::writer::{SerializedPageWriter, SerializedRowGroupWriter, TrackedWrite};
 use parquet::schema::types::ColumnDescPtr;
@@ -57,12 +68,148 @@ impl Chunk {
         &mut self.close
     }
 
-    /// Append the chunk to `group`, as the next column.
-    pub(super) fn append_to_row_group<W: std::io::Write + Send>(
+    /// Its length in the file.
+    pub(super) fn len(&self) -> u64 {
+        self.close.metadata.compressed_size() as u64
+    }
+
+    /// Append the chunk to `group`, as the next column, in blanks (the
+    /// file's [`Splice`] has a hole for it), and give back its bytes for
+    /// the hole.
+    pub(super) fn append_to_row_group<W: Write + Send>(
         self,
         group: &mut SerializedRowGroupWriter<'_, W>,
-    ) -> Result<()> {
-        group.append_column(&self.bytes, self.close)
+    ) -> Result<bytes::Bytes> {
+        group.append_column(&Blank(self.bytes.len() as u64), self.close)?;
+        Ok(self.bytes)
+    }
+}
+
+/// A chunk's length in blanks, for parquet-rs's writer to copy.
+struct Blank(u64);
+
+impl Length for Blank {
+    fn len(&self) -> u64 {
+        self.0
+    }
+}
+
+impl ChunkReader for Blank {
+    type T = Blanks;
+
+    fn get_read(&self, start: u64) -> Result<Blanks> {
+        Ok(Blanks(self.0.saturating_sub(start)))
+    }
+
+    fn get_bytes(&self, start: u64, length: usize) -> Result<bytes::Bytes> {
+        let available = self.0.saturating_sub(start).min(length as u64);
+        Ok(vec![0; available as usize].into())
+    }
+}
+
+/// Blanks left to read: a read says it filled the buffer and leaves it as
+/// it was (its bytes land in a hole of the [`Splice`]).
+struct Blanks(u64);
+
+impl Read for Blanks {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = (buf.len() as u64).min(self.0);
+        self.0 -= n;
+        Ok(n as usize)
+    }
+}
+
+/// The bytes parquet-rs's file writer writes (the magic, the chunks it
+/// encodes, the page indexes and the footer), kept until they are passed
+/// on to the output ([`Splice::drain`]), with holes where egt's chunks go.
+#[derive(Default)]
+pub(super) struct Splice {
+    /// The file position of the next byte written.
+    position: u64,
+    /// Where egt's chunks go, in order: their start and end in the file.
+    holes: VecDeque<(u64, u64)>,
+    /// The bytes written outside the holes since the last drain.
+    kept: Vec<u8>,
+    /// Where in `kept` each hole met since the last drain is.
+    marks: Vec<usize>,
+}
+
+impl Splice {
+    /// A chunk of egt's, of `len` bytes, goes at file position `start`
+    /// (holes are made in the order of the file).
+    pub(super) fn hole(&mut self, start: u64, len: u64) {
+        if len > 0 {
+            self.holes.push_back((start, start + len));
+        }
+    }
+
+    /// Pass the bytes kept so far on to `out`, with `chunks`, egt's chunks
+    /// since the last drain, in their holes.
+    pub(super) fn drain(&mut self, chunks: &[bytes::Bytes], out: &mut dyn Write) -> Result<()> {
+        let chunks: Vec<_> = chunks.iter().filter(|c| !c.is_empty()).collect();
+        if chunks.len() != self.marks.len() {
+            return Err(parquet::errors::ParquetError::General(format!(
+                "{} chunks for {} holes in the Parquet file",
+                chunks.len(),
+                self.marks.len()
+            )));
+        }
+        // One vectored write (a system call a block, not two a chunk).
+        let mut slices = Vec::with_capacity(2 * chunks.len() + 1);
+        let mut from = 0;
+        for (&mark, chunk) in self.marks.iter().zip(chunks) {
+            slices.push(std::io::IoSlice::new(&self.kept[from..mark]));
+            slices.push(std::io::IoSlice::new(chunk));
+            from = mark;
+        }
+        slices.push(std::io::IoSlice::new(&self.kept[from..]));
+        let mut rest = &mut slices[..];
+        std::io::IoSlice::advance_slices(&mut rest, 0);
+        while !rest.is_empty() {
+            match out.write_vectored(rest) {
+                Ok(0) => return Err(std::io::Error::from(std::io::ErrorKind::WriteZero).into()),
+                Ok(n) => std::io::IoSlice::advance_slices(&mut rest, n),
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(e.into()),
+            }
+        }
+        self.kept.clear();
+        self.marks.clear();
+        Ok(())
+    }
+}
+
+impl Write for Splice {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let mut rest = buf;
+        while !rest.is_empty() {
+            let n = match self.holes.front() {
+                Some(&(start, end)) if self.position >= start => {
+                    if self.position == start {
+                        self.marks.push(self.kept.len());
+                    }
+                    let n = (end - self.position).min(rest.len() as u64);
+                    if self.position + n == end {
+                        self.holes.pop_front();
+                    }
+                    n as usize
+                }
+                next => {
+                    let n = next.map_or(rest.len() as u64, |&(start, _)| {
+                        (start - self.position).min(rest.len() as u64)
+                    }) as usize;
+                    self.kept.extend_from_slice(&rest[..n]);
+                    n
+                }
+            };
+            self.position += n as u64;
+            rest = &rest[n..];
+        }
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
     }
 }
 
@@ -295,4 +442,49 @@ fn uleb128(out: &mut Vec<u8>, mut v: u64) {
         v >>= 7;
     }
     out.push(v as u8);
+}
+
+#[cfg(test)]
+mod tests {
+    use std::io::Write;
+
+    use super::Splice;
+
+    /// Whatever the sizes of the writes, and with drains between blocks, the
+    /// output is the file: the bytes kept, each chunk in its hole (holes at
+    /// the start, next to one another, of one byte, and at the end).
+    #[test]
+    fn splice_puts_chunks_in_their_holes_whatever_the_writes() {
+        let file: Vec<u8> = (0..1000u32).map(|i| (i * 7 % 251) as u8).collect();
+        let holes = [(0, 10), (10, 5), (100, 1), (500, 300), (999, 1)];
+        let hole = |i: usize| holes.iter().any(|&(s, l)| (s..s + l).contains(&i));
+        // parquet-rs's writer writes blanks where the holes are.
+        let written: Vec<u8> = (file.iter().enumerate())
+            .map(|(i, &b)| if hole(i) { 0 } else { b })
+            .collect();
+        let chunk = |&(s, l): &(usize, usize)| bytes::Bytes::copy_from_slice(&file[s..s + l]);
+        for step in [1, 3, 7, 64, 1000] {
+            let mut splice = Splice::default();
+            for &(s, l) in &holes {
+                splice.hole(s as u64, l as u64);
+            }
+            let mut out = Vec::new();
+            // Two blocks: the first ends after the fourth hole.
+            for (range, drained) in [(0..850, &holes[..4]), (850..1000, &holes[4..])] {
+                for piece in written[range].chunks(step) {
+                    splice.write_all(piece).unwrap_or_else(|e| panic!("{e}"));
+                }
+                let chunks: Vec<_> = drained.iter().map(chunk).collect();
+                splice
+                    .drain(&chunks, &mut out)
+                    .unwrap_or_else(|e| panic!("{e}"));
+            }
+            assert!(out == file, "writes of {step} bytes");
+        }
+        // A chunk too few or too many is an error, not a broken file.
+        let mut splice = Splice::default();
+        splice.hole(2, 3);
+        splice.write_all(&[1; 8]).unwrap_or_else(|e| panic!("{e}"));
+        assert!(splice.drain(&[], &mut Vec::new()).is_err());
+    }
 }
