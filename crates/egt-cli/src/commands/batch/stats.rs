@@ -272,6 +272,60 @@ mod tests {
         out
     }
 
+    /// The scan gives the same answer compiled for every instruction set
+    /// the machine has (the files' test runs only the one dispatched to),
+    /// and the answer of a plain fold, on columns of every length up to 80
+    /// with NaNs of either sign, infinities and zeros of either sign placed
+    /// at random.
+    #[test]
+    fn the_scan_agrees_on_every_instruction_set() {
+        use super::{Scan, Scanning, scan};
+        use pulp::WithSimd;
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            state >> 11
+        };
+        let odd = [
+            f64::NAN,
+            -f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            0.0,
+            -0.0,
+        ];
+        for case in 0..4000 {
+            let len = case % 81;
+            let values: Vec<f64> = (0..len)
+                .map(|_| match next() % 40 {
+                    0 => odd[(next() % 6) as usize],
+                    _ => (next() as f64 / (1u64 << 53) as f64 - 0.5) * 1e3,
+                })
+                .collect();
+            let finite = values.iter().all(|v| v.is_finite());
+            let min = values.iter().copied().fold(f64::INFINITY, f64::min);
+            let max = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let plain = finite && len > 0 && min != 0.0 && max != 0.0;
+            let expected = Scan {
+                finite,
+                bounds: plain.then_some((min, max)),
+            };
+            let mut got = vec![("dispatched", scan(&values))];
+            got.push(("scalar", Scanning(&values).with_simd(pulp::Scalar)));
+            if let Some(simd) = pulp::x86::V3::try_new() {
+                got.push(("AVX2", Scanning(&values).with_simd(simd)));
+            }
+            if let Some(simd) = pulp::x86::V4::try_new() {
+                got.push(("AVX-512", Scanning(&values).with_simd(simd)));
+            }
+            for (set, scan) in got {
+                assert_eq!(scan, expected, "{set}, case {case}: {values:?}");
+            }
+        }
+    }
+
     /// egt's statistics are parquet-rs's, the doubles' and the row
     /// numbers', and so are egt's chunks of row numbers and of doubles
     /// without nulls (pages.rs; blocks of one row, of a few, of one page
