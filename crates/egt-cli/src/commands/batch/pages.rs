@@ -58,7 +58,11 @@ pub(super) const PAGE_BYTES: usize = 64 * 1024;
 
 /// A column chunk encoded by egt, to be appended to its row group.
 pub(super) struct Chunk {
-    bytes: bytes::Bytes,
+    /// Its pages, each with its header: each a buffer of its own, of at
+    /// most 64 KiB and a few bytes, so that the allocator reuses them
+    /// block after block (a chunk's 128 KiB buffer was above mimalloc's
+    /// medium sizes, and came from fresh memory the kernel cleared).
+    pages: Vec<bytes::Bytes>,
     close: ColumnCloseResult,
 }
 
@@ -74,14 +78,14 @@ impl Chunk {
     }
 
     /// Append the chunk to `group`, as the next column, in blanks (the
-    /// file's [`Splice`] has a hole for it), and give back its bytes for
+    /// file's [`Splice`] has a hole for it), and give back its pages for
     /// the hole.
     pub(super) fn append_to_row_group<W: Write + Send>(
         self,
         group: &mut SerializedRowGroupWriter<'_, W>,
-    ) -> Result<bytes::Bytes> {
-        group.append_column(&Blank(self.bytes.len() as u64), self.close)?;
-        Ok(self.bytes)
+    ) -> Result<Vec<bytes::Bytes>> {
+        group.append_column(&Blank(self.len()), self.close)?;
+        Ok(self.pages)
     }
 }
 
@@ -144,9 +148,15 @@ impl Splice {
     }
 
     /// Pass the bytes kept so far on to `out`, with `chunks`, egt's chunks
-    /// since the last drain, in their holes.
-    pub(super) fn drain(&mut self, chunks: &[bytes::Bytes], out: &mut dyn Write) -> Result<()> {
-        let chunks: Vec<_> = chunks.iter().filter(|c| !c.is_empty()).collect();
+    /// since the last drain (each as its pages), in their holes.
+    pub(super) fn drain(
+        &mut self,
+        chunks: &[Vec<bytes::Bytes>],
+        out: &mut dyn Write,
+    ) -> Result<()> {
+        let chunks: Vec<_> = (chunks.iter())
+            .filter(|c| c.iter().any(|p| !p.is_empty()))
+            .collect();
         if chunks.len() != self.marks.len() {
             return Err(parquet::errors::ParquetError::General(format!(
                 "{} chunks for {} holes in the Parquet file",
@@ -155,11 +165,11 @@ impl Splice {
             )));
         }
         // One vectored write (a system call a block, not two a chunk).
-        let mut slices = Vec::with_capacity(2 * chunks.len() + 1);
+        let mut slices = Vec::with_capacity(4 * chunks.len() + 1);
         let mut from = 0;
         for (&mark, chunk) in self.marks.iter().zip(chunks) {
             slices.push(std::io::IoSlice::new(&self.kept[from..mark]));
-            slices.push(std::io::IoSlice::new(chunk));
+            slices.extend(chunk.iter().map(|page| std::io::IoSlice::new(page)));
             from = mark;
         }
         slices.push(std::io::IoSlice::new(&self.kept[from..]));
@@ -271,7 +281,7 @@ pub(super) fn row_numbers(descr: &ColumnDescPtr, first: u64, len: usize) -> Resu
         offset_index: Some(offsets.build()),
     };
     Ok(Some(Chunk {
-        bytes: bytes.into(),
+        pages: vec![bytes.into()],
         close,
     }))
 }
@@ -287,7 +297,7 @@ pub(super) fn doubles(
     if values.is_empty() || values.len() > PAGE_ROWS || descr.max_def_level() != 1 {
         return Ok(None);
     }
-    let mut sink = TrackedWrite::new(Vec::with_capacity(values.len() * 8 + 256));
+    let mut chunk = Vec::with_capacity(values.len().div_ceil(PAGE_BYTES / 8));
     let mut offsets = OffsetIndexBuilder::new();
     let (mut compressed_size, mut uncompressed_size, mut pages) = (0i64, 0i64, 0);
     let mut buffers = BUFFERS.with_borrow_mut(std::mem::take);
@@ -315,8 +325,10 @@ pub(super) fn doubles(
         let levels = (scratch.len() - 4) as u32;
         scratch[..4].copy_from_slice(&levels.to_le_bytes());
         scratch.extend_from_slice(page);
+        let buf = compress(snappy, compressed, scratch)?;
+        let mut sink = TrackedWrite::new(Vec::with_capacity(buf.len() + 64));
         let page = Page::DataPage {
-            buf: compress(snappy, compressed, scratch)?,
+            buf,
             num_values: rows as u32,
             encoding: Encoding::PLAIN,
             def_level_encoding: Encoding::RLE,
@@ -325,7 +337,8 @@ pub(super) fn doubles(
         };
         let spec = SerializedPageWriter::new(&mut sink)
             .write_page(CompressedPage::new(page, scratch.len()))?;
-        offsets.append_offset_and_size(spec.offset as i64, spec.compressed_size as i32);
+        offsets.append_offset_and_size(compressed_size, spec.compressed_size as i32);
+        chunk.push(bytes::Bytes::from(sink.into_inner()?));
         offsets.append_row_count(rows as i64);
         compressed_size += spec.compressed_size as i64;
         uncompressed_size += spec.uncompressed_size as i64;
@@ -345,10 +358,9 @@ pub(super) fn doubles(
         .set_num_values(values.len() as i64)
         .set_data_page_offset(0)
         .build()?;
-    let bytes = sink.into_inner()?;
     BUFFERS.set(buffers);
     let close = ColumnCloseResult {
-        bytes_written: bytes.len() as u64,
+        bytes_written: compressed_size as u64,
         rows_written: values.len() as u64,
         metadata,
         bloom_filter: None,
@@ -356,7 +368,7 @@ pub(super) fn doubles(
         offset_index: Some(offsets.build()),
     };
     Ok(Some(Chunk {
-        bytes: bytes.into(),
+        pages: chunk,
         close,
     }))
 }
@@ -462,7 +474,12 @@ mod tests {
         let written: Vec<u8> = (file.iter().enumerate())
             .map(|(i, &b)| if hole(i) { 0 } else { b })
             .collect();
-        let chunk = |&(s, l): &(usize, usize)| bytes::Bytes::copy_from_slice(&file[s..s + l]);
+        // Each chunk in pages of up to 128 bytes.
+        let chunk = |&(s, l): &(usize, usize)| {
+            (file[s..s + l].chunks(128))
+                .map(bytes::Bytes::copy_from_slice)
+                .collect::<Vec<_>>()
+        };
         for step in [1, 3, 7, 64, 1000] {
             let mut splice = Splice::default();
             for &(s, l) in &holes {
