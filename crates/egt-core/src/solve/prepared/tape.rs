@@ -1021,11 +1021,16 @@ impl Program {
                 valid &= word(m as usize);
             }
         }
-        let moving = word(MOVING);
-        for r in 0..BLOCK {
-            w.valid[r] = valid >> r & 1 == 1;
-            w.moving[r] = moving >> r & 1 == 1;
-        }
+        // The usual block: every row valid, and moving (or none). Filled
+        // whole; bit by bit only otherwise (a test and a store a row was
+        // 3 % of a one-thread `egt batch`).
+        let bits = |mask: u64| match mask {
+            u64::MAX => [true; BLOCK],
+            0 => [false; BLOCK],
+            _ => std::array::from_fn(|r| mask >> r & 1 == 1),
+        };
+        w.valid = bits(valid);
+        w.moving = bits(word(MOVING));
         w.all_valid = valid == u64::MAX;
     }
 
