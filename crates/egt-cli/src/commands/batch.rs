@@ -1403,8 +1403,12 @@ fn columnar_file(
         // The numbers' statistics are the row group's, not the page's: a
         // row group is a block (16 384 rows, two pages a double column, one
         // of row numbers).
+        // Pages of version 1, their sizes and the compression set here are
+        // those egt writes its own chunks with (pages.rs).
         let mut props = parquet::file::properties::WriterProperties::builder()
+            .set_writer_version(parquet::file::properties::WriterVersion::PARQUET_1_0)
             .set_data_page_size_limit(pages::PAGE_BYTES)
+            .set_data_page_row_count_limit(pages::PAGE_ROWS)
             .set_compression(pages::COMPRESSION)
             .set_dictionary_enabled(false)
             .set_column_encoding(
@@ -1683,7 +1687,7 @@ impl Sink {
                     let len = match piece {
                         Piece::Arrow(chunk) => chunk.close().metadata.compressed_size() as u64,
                         Piece::Egt(chunk) => {
-                            w.inner_mut().hole(at, chunk.len());
+                            w.inner_mut().hole(at, chunk.len())?;
                             chunk.len()
                         }
                     };

@@ -46,8 +46,8 @@ use parquet::schema::types::ColumnDescPtr;
 /// The compression of every Parquet column `egt batch` writes.
 pub(super) const COMPRESSION: Compression = Compression::SNAPPY;
 
-/// parquet-rs's limit of rows a data page (its default): the row numbers of
-/// a block of at most this many rows take one page.
+/// The limit of rows a data page `egt batch` sets (parquet-rs's default):
+/// the row numbers of a block of at most this many rows take one page.
 pub(super) const PAGE_ROWS: usize = 20_000;
 
 /// The data page size limit `egt batch` sets: a page of doubles holds
@@ -139,12 +139,20 @@ pub(super) struct Splice {
 }
 
 impl Splice {
-    /// A chunk of egt's, of `len` bytes, goes at file position `start`
-    /// (holes are made in the order of the file).
-    pub(super) fn hole(&mut self, start: u64, len: u64) {
+    /// A chunk of egt's, of `len` bytes, goes at file position `start`.
+    /// Holes are made in the order of the file, ahead of what was written:
+    /// one behind is an error (the writer's bytes there are gone).
+    pub(super) fn hole(&mut self, start: u64, len: u64) -> Result<()> {
+        let after = self.holes.back().map_or(self.position, |&(_, end)| end);
+        if start < after {
+            return Err(parquet::errors::ParquetError::General(format!(
+                "a hole at byte {start} of the Parquet file, behind byte {after}"
+            )));
+        }
         if len > 0 {
             self.holes.push_back((start, start + len));
         }
+        Ok(())
     }
 
     /// Pass the bytes kept so far on to `out`, with `chunks`, egt's chunks
@@ -224,17 +232,25 @@ impl Write for Splice {
 }
 
 /// The row numbers `first`, `first + 1`, ... (`len` of them) of column
-/// `descr` (a required INT64, written DELTA_BINARY_PACKED), with their
-/// row-group statistics; None when they would not fit one page or there
-/// are none (parquet-rs writes those).
+/// `descr` (a flat required INT64, written DELTA_BINARY_PACKED), with their
+/// row-group statistics; None when they would not fit one page, there are
+/// none, the last is past `i64::MAX` or the column is not such
+/// (parquet-rs writes those).
 pub(super) fn row_numbers(descr: &ColumnDescPtr, first: u64, len: usize) -> Result<Option<Chunk>> {
-    if len == 0 || len > PAGE_ROWS {
+    let flat_required = descr.max_def_level() == 0 && descr.max_rep_level() == 0;
+    if len == 0
+        || len > PAGE_ROWS
+        || !flat_required
+        || descr.physical_type() != parquet::basic::Type::INT64
+    {
         return Ok(None);
     }
-    let last = first + (len as u64 - 1);
-    if last > i64::MAX as u64 {
+    let Some(last) = first
+        .checked_add(len as u64 - 1)
+        .filter(|&l| l <= i64::MAX as u64)
+    else {
         return Ok(None);
-    }
+    };
     let mut plain = Vec::with_capacity(16 + 5 * (len - 1).div_ceil(BLOCK));
     consecutive_deltas(first as i64, len, &mut plain);
     let page = Page::DataPage {
@@ -286,15 +302,20 @@ pub(super) fn row_numbers(descr: &ColumnDescPtr, first: u64, len: usize) -> Resu
     }))
 }
 
-/// The doubles `values` of column `descr` (an optional DOUBLE, flat), all
+/// The doubles `values` of column `descr` (a flat optional DOUBLE), all
 /// present, as PLAIN pages of [`PAGE_BYTES`] each and a last one, without
-/// statistics; None when there are none or more than [`PAGE_ROWS`]
-/// (parquet-rs writes those).
+/// statistics; None when there are none, more than [`PAGE_ROWS`], or the
+/// column is not such (parquet-rs writes those).
 pub(super) fn doubles(
     descr: &ColumnDescPtr,
     values: &arrow_buffer::ScalarBuffer<f64>,
 ) -> Result<Option<Chunk>> {
-    if values.is_empty() || values.len() > PAGE_ROWS || descr.max_def_level() != 1 {
+    let flat_optional = descr.max_def_level() == 1 && descr.max_rep_level() == 0;
+    if values.is_empty()
+        || values.len() > PAGE_ROWS
+        || !flat_optional
+        || descr.physical_type() != parquet::basic::Type::DOUBLE
+    {
         return Ok(None);
     }
     let mut chunk = Vec::with_capacity(values.len().div_ceil(PAGE_BYTES / 8));
@@ -483,7 +504,9 @@ mod tests {
         for step in [1, 3, 7, 64, 1000] {
             let mut splice = Splice::default();
             for &(s, l) in &holes {
-                splice.hole(s as u64, l as u64);
+                splice
+                    .hole(s as u64, l as u64)
+                    .unwrap_or_else(|e| panic!("{e}"));
             }
             let mut out = Vec::new();
             // Two blocks: the first ends after the fourth hole.
@@ -500,8 +523,13 @@ mod tests {
         }
         // A chunk too few or too many is an error, not a broken file.
         let mut splice = Splice::default();
-        splice.hole(2, 3);
+        splice.hole(2, 3).unwrap_or_else(|e| panic!("{e}"));
         splice.write_all(&[1; 8]).unwrap_or_else(|e| panic!("{e}"));
         assert!(splice.drain(&[], &mut Vec::new()).is_err());
+        // So is a hole behind what was written, or behind the last hole.
+        assert!(splice.hole(7, 1).is_err());
+        let mut splice = Splice::default();
+        splice.hole(4, 4).unwrap_or_else(|e| panic!("{e}"));
+        assert!(splice.hole(6, 1).is_err());
     }
 }
