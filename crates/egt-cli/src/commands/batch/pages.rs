@@ -253,53 +253,102 @@ pub(super) fn row_numbers(descr: &ColumnDescPtr, first: u64, len: usize) -> Resu
     };
     let mut plain = Vec::with_capacity(16 + 5 * (len - 1).div_ceil(BLOCK));
     consecutive_deltas(first as i64, len, &mut plain);
-    let page = Page::DataPage {
-        buf: compress(&mut snap::raw::Encoder::new(), &mut Arc::default(), &plain)?,
-        num_values: len as u32,
-        encoding: Encoding::DELTA_BINARY_PACKED,
-        def_level_encoding: Encoding::RLE,
-        rep_level_encoding: Encoding::RLE,
-        statistics: None,
-    };
-    let mut sink = TrackedWrite::new(Vec::new());
-    let spec =
-        SerializedPageWriter::new(&mut sink).write_page(CompressedPage::new(page, plain.len()))?;
-    let bytes = sink.into_inner()?;
+    let buf = compress(&mut snap::raw::Encoder::new(), &mut Arc::default(), &plain)?;
+    let mut pages = Pages::default();
+    pages.push(buf, plain.len(), len, Encoding::DELTA_BINARY_PACKED)?;
     // Parquet keeps an unsigned 64-bit integer in INT64, bit for bit.
     let statistics =
         ValueStatistics::<i64>::new(Some(first as i64), Some(last as i64), None, Some(0), false)
             .with_backwards_compatible_min_max(descr.sort_order().is_signed());
-    // The column writer lists RLE (its levels' encoding) for every chunk.
-    let encodings = [Encoding::RLE, Encoding::DELTA_BINARY_PACKED];
-    let metadata = ColumnChunkMetaData::builder(descr.clone())
-        .set_compression(COMPRESSION)
-        .set_encodings_mask(EncodingMask::new_from_encodings(encodings.iter()))
-        .set_page_encoding_stats(vec![PageEncodingStats {
-            page_type: PageType::DATA_PAGE,
-            encoding: Encoding::DELTA_BINARY_PACKED,
-            count: 1,
-        }])
-        .set_total_compressed_size(spec.compressed_size as i64)
-        .set_total_uncompressed_size(spec.uncompressed_size as i64)
-        .set_num_values(len as i64)
-        .set_data_page_offset(spec.offset as i64)
-        .set_statistics(Statistics::Int64(statistics))
-        .build()?;
-    let mut offsets = OffsetIndexBuilder::new();
-    offsets.append_offset_and_size(spec.offset as i64, spec.compressed_size as i32);
-    offsets.append_row_count(len as i64);
-    let close = ColumnCloseResult {
-        bytes_written: spec.bytes_written,
-        rows_written: len as u64,
-        metadata,
-        bloom_filter: None,
-        column_index: None,
-        offset_index: Some(offsets.build()),
-    };
-    Ok(Some(Chunk {
-        pages: vec![bytes.into()],
-        close,
-    }))
+    let statistics = Some(Statistics::Int64(statistics));
+    pages
+        .finish(descr, Encoding::DELTA_BINARY_PACKED, statistics)
+        .map(Some)
+}
+
+/// The pages of a chunk being written, each framed by parquet-rs's page
+/// writer in a buffer of its own, and what the chunk's metadata needs.
+#[derive(Default)]
+struct Pages {
+    pages: Vec<bytes::Bytes>,
+    offsets: OffsetIndexBuilder,
+    /// Bytes in the file so far, headers included: compressed, and as they
+    /// would be uncompressed.
+    compressed: i64,
+    uncompressed: i64,
+    values: usize,
+}
+
+impl Pages {
+    /// A data page of version 1 and `rows` values (its levels, if any,
+    /// are in `buf`): `buf`, `plain` bytes compressed.
+    fn push(
+        &mut self,
+        buf: bytes::Bytes,
+        plain: usize,
+        rows: usize,
+        encoding: Encoding,
+    ) -> Result<()> {
+        let mut sink = TrackedWrite::new(Vec::with_capacity(buf.len() + 64));
+        let page = Page::DataPage {
+            buf,
+            num_values: rows as u32,
+            encoding,
+            def_level_encoding: Encoding::RLE,
+            rep_level_encoding: Encoding::RLE,
+            statistics: None,
+        };
+        let spec =
+            SerializedPageWriter::new(&mut sink).write_page(CompressedPage::new(page, plain))?;
+        self.offsets
+            .append_offset_and_size(self.compressed, spec.compressed_size as i32);
+        self.offsets.append_row_count(rows as i64);
+        self.compressed += spec.compressed_size as i64;
+        self.uncompressed += spec.uncompressed_size as i64;
+        self.values += rows;
+        self.pages.push(sink.into_inner()?.into());
+        Ok(())
+    }
+
+    /// The chunk of column `descr`, its pages all `encoding`, with its
+    /// metadata and offset index as parquet-rs's column writer sets them
+    /// (`statistics`, if any, the row group's).
+    fn finish(
+        self,
+        descr: &ColumnDescPtr,
+        encoding: Encoding,
+        statistics: Option<Statistics>,
+    ) -> Result<Chunk> {
+        // The column writer lists RLE (its levels' encoding) for every chunk.
+        let encodings = [Encoding::RLE, encoding];
+        let mut metadata = ColumnChunkMetaData::builder(descr.clone())
+            .set_compression(COMPRESSION)
+            .set_encodings_mask(EncodingMask::new_from_encodings(encodings.iter()))
+            .set_page_encoding_stats(vec![PageEncodingStats {
+                page_type: PageType::DATA_PAGE,
+                encoding,
+                count: self.pages.len() as i32,
+            }])
+            .set_total_compressed_size(self.compressed)
+            .set_total_uncompressed_size(self.uncompressed)
+            .set_num_values(self.values as i64)
+            .set_data_page_offset(0);
+        if let Some(statistics) = statistics {
+            metadata = metadata.set_statistics(statistics);
+        }
+        let close = ColumnCloseResult {
+            bytes_written: self.compressed as u64,
+            rows_written: self.values as u64,
+            metadata: metadata.build()?,
+            bloom_filter: None,
+            column_index: None,
+            offset_index: Some(self.offsets.build()),
+        };
+        Ok(Chunk {
+            pages: self.pages,
+            close,
+        })
+    }
 }
 
 /// The doubles `values` of column `descr` (a flat optional DOUBLE), all
@@ -318,9 +367,7 @@ pub(super) fn doubles(
     {
         return Ok(None);
     }
-    let mut chunk = Vec::with_capacity(values.len().div_ceil(PAGE_BYTES / 8));
-    let mut offsets = OffsetIndexBuilder::new();
-    let (mut compressed_size, mut uncompressed_size, mut pages) = (0i64, 0i64, 0);
+    let mut pages = Pages::default();
     let mut buffers = BUFFERS.with_borrow_mut(std::mem::take);
     let Buffers {
         plain: scratch,
@@ -347,51 +394,10 @@ pub(super) fn doubles(
         scratch[..4].copy_from_slice(&levels.to_le_bytes());
         scratch.extend_from_slice(page);
         let buf = compress(snappy, compressed, scratch)?;
-        let mut sink = TrackedWrite::new(Vec::with_capacity(buf.len() + 64));
-        let page = Page::DataPage {
-            buf,
-            num_values: rows as u32,
-            encoding: Encoding::PLAIN,
-            def_level_encoding: Encoding::RLE,
-            rep_level_encoding: Encoding::RLE,
-            statistics: None,
-        };
-        let spec = SerializedPageWriter::new(&mut sink)
-            .write_page(CompressedPage::new(page, scratch.len()))?;
-        offsets.append_offset_and_size(compressed_size, spec.compressed_size as i32);
-        chunk.push(bytes::Bytes::from(sink.into_inner()?));
-        offsets.append_row_count(rows as i64);
-        compressed_size += spec.compressed_size as i64;
-        uncompressed_size += spec.uncompressed_size as i64;
-        pages += 1;
+        pages.push(buf, scratch.len(), rows, Encoding::PLAIN)?;
     }
-    let encodings = [Encoding::PLAIN, Encoding::RLE];
-    let metadata = ColumnChunkMetaData::builder(descr.clone())
-        .set_compression(COMPRESSION)
-        .set_encodings_mask(EncodingMask::new_from_encodings(encodings.iter()))
-        .set_page_encoding_stats(vec![PageEncodingStats {
-            page_type: PageType::DATA_PAGE,
-            encoding: Encoding::PLAIN,
-            count: pages,
-        }])
-        .set_total_compressed_size(compressed_size)
-        .set_total_uncompressed_size(uncompressed_size)
-        .set_num_values(values.len() as i64)
-        .set_data_page_offset(0)
-        .build()?;
     BUFFERS.set(buffers);
-    let close = ColumnCloseResult {
-        bytes_written: compressed_size as u64,
-        rows_written: values.len() as u64,
-        metadata,
-        bloom_filter: None,
-        column_index: None,
-        offset_index: Some(offsets.build()),
-    };
-    Ok(Some(Chunk {
-        pages: chunk,
-        close,
-    }))
+    pages.finish(descr, Encoding::PLAIN, None).map(Some)
 }
 
 /// A thread's buffers for the pages of a chunk, kept from chunk to chunk

@@ -272,6 +272,16 @@ mod tests {
         out
     }
 
+    /// 53 pseudo-random bits a call (a linear congruential generator).
+    fn random_bits(mut state: u64) -> impl FnMut() -> u64 {
+        move || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1);
+            state >> 11
+        }
+    }
+
     /// The scan gives the same answer compiled for every instruction set
     /// the machine has (the files' test runs only the one dispatched to),
     /// and the answer of a plain fold, on columns of every length up to 80
@@ -281,13 +291,7 @@ mod tests {
     fn the_scan_agrees_on_every_instruction_set() {
         use super::{Scan, Scanning, scan};
         use pulp::WithSimd;
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = move || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            state >> 11
-        };
+        let mut next = random_bits(0x9e37_79b9_7f4a_7c15);
         let odd = [
             f64::NAN,
             -f64::NAN,
@@ -338,13 +342,8 @@ mod tests {
     /// nulls, no value at all).
     #[test]
     fn egt_statistics_are_parquets_byte_for_byte() {
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut uniform = move || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1);
-            (state >> 11) as f64 / (1u64 << 53) as f64 * 2000.0 - 1000.0
-        };
+        let mut bits = random_bits(0x2545_f491_4f6c_dd1d);
+        let mut uniform = move || bits() as f64 / (1u64 << 53) as f64 * 2000.0 - 1000.0;
         let nan = f64::NAN;
         let negative_nan = f64::from_bits(nan.to_bits() | (1 << 63));
         let some = |v: &[f64]| v.iter().map(|&v| Some(v)).collect::<Vec<_>>();
