@@ -1229,6 +1229,13 @@ enum RowNumbers {
 }
 
 impl RowNumbers {
+    fn len(&self) -> usize {
+        match self {
+            RowNumbers::Run { len, .. } => *len,
+            RowNumbers::Listed(rows) => arrow_array::Array::len(rows),
+        }
+    }
+
     fn array(self) -> arrow_array::ArrayRef {
         std::sync::Arc::new(match self {
             RowNumbers::Run { first, len } => {
@@ -1625,7 +1632,7 @@ impl Encoder {
             Some(chunk) => {
                 pieces.push(Piece::Egt(chunk));
                 writers.next();
-                let len = others.first().map_or(0, |a| a.len());
+                let len = rows.len();
                 let rest = arrow_schema::Schema::new(self.schema.fields()[1..].to_vec());
                 let options = arrow_array::RecordBatchOptions::new().with_row_count(Some(len));
                 let batch =
