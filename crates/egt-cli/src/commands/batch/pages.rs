@@ -21,8 +21,9 @@
 //! is rare and still parquet-rs's.
 //!
 //! parquet-rs's file writer copies an encoded chunk into the file through a
-//! small buffer, that is twice, on the thread that writes the file in
-//! order (which reads it from the cache of the thread that encoded it).
+//! small buffer (into it and out of it), on the thread that writes the file
+//! in order, which reads the chunk from the cache of the thread that
+//! encoded it.
 //! egt's chunks skip that: the writer is given blanks of their length
 //! ([`Chunk::append_to_row_group`]), which the file's buffer ([`Splice`])
 //! does not keep, and the chunks themselves go to the output in their
