@@ -1444,7 +1444,11 @@ fn columnar_file(
         )?
         .into_serialized_writer()?;
         let columns = writer.schema_descr().columns().to_vec();
-        (Some((factory, columns)), Sink::Parquet(Box::new(writer)))
+        let rest = arrow_schema::Schema::new(schema.fields()[1..].to_vec());
+        (
+            Some((factory, columns, rest.into())),
+            Sink::Parquet(Box::new(writer)),
+        )
     } else {
         let writer = arrow_ipc::writer::FileWriter::try_new(Vec::new(), &schema)?;
         (None, Sink::Arrow(Box::new(writer)))
@@ -1463,11 +1467,13 @@ struct Encoder {
     schema: arrow_schema::SchemaRef,
     /// Output columns (after row, state and the varied parameters).
     outputs: usize,
-    /// Parquet's column writers, and the file's columns (None for Arrow
-    /// IPC).
+    /// Parquet's column writers, the file's columns, and the schema of the
+    /// columns after the row numbers (for a block whose row numbers egt
+    /// writes). None for Arrow IPC.
     factory: Option<(
         parquet::arrow::arrow_writer::ArrowRowGroupWriterFactory,
         Vec<parquet::schema::types::ColumnDescPtr>,
+        arrow_schema::SchemaRef,
     )>,
     /// Who computes the numbers' statistics (Parquet).
     numbers: NumberStatistics,
@@ -1609,7 +1615,7 @@ impl Encoder {
             others.insert(0, rows.array());
             arrow_array::RecordBatch::try_new(self.schema.clone(), others)
         };
-        let Some((factory, descriptors)) = &self.factory else {
+        let Some((factory, descriptors, rest)) = &self.factory else {
             return Ok(Encoded::Arrow(whole(rows, others)?));
         };
         let writers = factory.create_column_writers(index)?;
@@ -1632,11 +1638,10 @@ impl Encoder {
             Some(chunk) => {
                 pieces.push(Piece::Egt(chunk));
                 writers.next();
-                let len = rows.len();
-                let rest = arrow_schema::Schema::new(self.schema.fields()[1..].to_vec());
-                let options = arrow_array::RecordBatchOptions::new().with_row_count(Some(len));
+                let options =
+                    arrow_array::RecordBatchOptions::new().with_row_count(Some(rows.len()));
                 let batch =
-                    arrow_array::RecordBatch::try_new_with_options(rest.into(), others, &options)?;
+                    arrow_array::RecordBatch::try_new_with_options(rest.clone(), others, &options)?;
                 (batch, 1)
             }
             None => (whole(rows, others)?, 0),
