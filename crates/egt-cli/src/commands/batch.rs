@@ -25,6 +25,7 @@ use crate::cli::{OutputFormat, SpecArgs, SpecFormat};
 use crate::input;
 
 mod pages;
+mod repeats;
 mod rows;
 mod stats;
 
@@ -299,6 +300,30 @@ impl Rows {
                 Err(e) => Err(e.to_string()),
             },
         }
+    }
+
+    /// How parameter column `c` repeats in a grid or zip: row `i` holds
+    /// value `(i / stride) % count` of its axis, as (stride, count). None
+    /// for a `--rows` file, or a column the design does not set.
+    fn pattern(&self, c: usize) -> Option<(usize, usize)> {
+        let Rows::Product { zipped, axes, .. } = self else {
+            return None;
+        };
+        // As `fill` sets them, the last it sets: the last axis first, then
+        // the zipped arrays.
+        let (mut stride, mut last) = (1usize, None);
+        for (col, vals) in axes.iter().rev() {
+            if *col == c {
+                last = Some((stride, vals.len()));
+            }
+            stride = stride.saturating_mul(vals.len());
+        }
+        for (col, vals) in zipped {
+            if *col == c {
+                last = Some((stride, vals.len()));
+            }
+        }
+        last
     }
 
     /// Rows `start..start + len` of a grid or zip into `params`, column-major
@@ -865,6 +890,8 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
                 &Block {
                     index: i,
                     first_row: base_row,
+                    design: &design.rows,
+                    design_row: start,
                     state: state.as_deref(),
                     varied: &design.varied,
                     varied_only,
@@ -1318,6 +1345,9 @@ struct Block<'a> {
     /// Its place among all blocks (the Parquet row group's index).
     index: usize,
     first_row: usize,
+    /// The design, and the row of it the block starts at.
+    design: &'a Rows,
+    design_row: usize,
     state: Option<&'a str>,
     varied: &'a [(String, usize)],
     /// `params` holds the varied columns only, in `varied`'s order.
@@ -1512,6 +1542,16 @@ fn doubles(
     (std::sync::Arc::new(array), known)
 }
 
+/// What a block's double column is known to hold before it is encoded.
+#[derive(Clone, Copy, Default)]
+struct Known {
+    /// Its min and max, where it has no nulls and they were found
+    /// ([`doubles`]).
+    bounds: Option<(f64, f64)>,
+    /// How its values repeat: a grid's or zip's parameter column.
+    pattern: Option<repeats::Pattern>,
+}
+
 /// A column of optional texts: all null without building one by one when
 /// `text` gives none (the usual block: no warning, no error).
 fn texts<'a>(
@@ -1550,12 +1590,16 @@ impl Encoder {
         }
         // The doubles' bounds found while building them, by column of the
         // schema.
-        let mut known = vec![None; 1 + columns.len()];
+        let mut known = vec![Known::default(); 1 + columns.len()];
         for (j, &(_, c)) in b.varied.iter().enumerate() {
-            let c = if b.varied_only { j } else { c };
-            let (column, bounds) = doubles(params.column(c), None);
+            let (column, bounds) = doubles(params.column(if b.varied_only { j } else { c }), None);
             columns.push(column);
-            known.push(bounds);
+            let pattern = (b.design.pattern(c)).map(|(stride, count)| repeats::Pattern {
+                first: b.design_row,
+                stride,
+                count,
+            });
+            known.push(Known { bounds, pattern });
         }
         let failed = |r: usize| b.messages[r].is_some();
         let any_failed = b.any_failed.then_some(b.messages);
@@ -1573,7 +1617,10 @@ impl Encoder {
                 ),
             };
             columns.push(column);
-            known.push(bounds);
+            known.push(Known {
+                bounds,
+                pattern: None,
+            });
         }
         // Most blocks have no row past the warning's limit: a scan of the
         // condition columns finds so, with no test row by row.
@@ -1602,13 +1649,13 @@ impl Encoder {
     /// The row numbers and the other columns, in the schema's order, as one
     /// Arrow record batch, or as the Parquet column chunks of row group
     /// `index`.
-    /// `known`: by column of the schema, the min and max of a double column
+    /// `known`: by column of the schema, what is known of a double column
     /// without nulls, where already found ([`doubles`]).
     fn record_batch(
         &self,
         rows: RowNumbers,
         others: Vec<arrow_array::ArrayRef>,
-        known: &[Option<(f64, f64)>],
+        known: &[Known],
         index: usize,
     ) -> anyhow::Result<Encoded> {
         let whole = |rows: RowNumbers, mut others: Vec<arrow_array::ArrayRef>| {
@@ -1650,14 +1697,16 @@ impl Encoder {
         for (c, ((array, field), mut writer)) in
             (columns.columns().iter().zip(fields).zip(writers)).enumerate()
         {
-            let (column, known) = (skipped + c, known.get(skipped + c).copied().flatten());
+            let column = skipped + c;
+            let Known { bounds, pattern } = known.get(column).copied().unwrap_or_default();
             let doubles = array.as_any().downcast_ref::<arrow_array::Float64Array>();
             // A double column without nulls, encoded by egt (pages.rs).
             if let Some(doubles) =
                 doubles.filter(|d| egt && arrow_array::Array::null_count(*d) == 0)
-                && let Some(mut chunk) = pages::doubles(&descriptors[column], doubles.values())?
+                && let Some(mut chunk) =
+                    pages::doubles(&descriptors[column], doubles.values(), pattern)?
             {
-                stats::set_double_statistics(chunk.close_mut(), doubles, known)?;
+                stats::set_double_statistics(chunk.close_mut(), doubles, bounds)?;
                 pieces.push(Piece::Egt(chunk));
                 continue;
             }
@@ -1668,7 +1717,7 @@ impl Encoder {
             if egt {
                 let any = array.as_any();
                 if let Some(doubles) = doubles {
-                    stats::set_double_statistics(chunk.close_mut(), doubles, known)?;
+                    stats::set_double_statistics(chunk.close_mut(), doubles, bounds)?;
                 } else if let Some(rows) = any.downcast_ref::<arrow_array::UInt64Array>() {
                     stats::set_row_statistics(chunk.close_mut(), rows)?;
                 }
@@ -2914,6 +2963,18 @@ mod columnar_tests {
             "--columns",
             "driving_torque.2,speed.3",
         ];
+        // Two blocks of a grid whose first axis holds each value for 100
+        // rows and whose last repeats after 100 (egt writes the Snappy
+        // streams of both: repeats.rs).
+        let repeats = [
+            fig3.as_str(),
+            "--grid",
+            "torque.4=-10:-20:300",
+            "--grid",
+            "ratio.G2=-1.2:-1.4:100",
+            "--columns",
+            "driving_torque.2",
+        ];
         let states = [
             zf.as_str(),
             "--state",
@@ -2929,6 +2990,7 @@ mod columnar_tests {
         ];
         for (args, ok) in [
             (&varied[..], true),
+            (&repeats[..], true),
             (&states[..], true),
             (&shift[..], true),
             (&bad[..], false),

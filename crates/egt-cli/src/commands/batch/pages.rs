@@ -18,7 +18,8 @@
 //! definition level that says "present" for every row. egt writes those
 //! pages (PLAIN, a page's worth of values at a time) straight from the
 //! column. A column with nulls (a failed row, a value that is not finite)
-//! is rare and still parquet-rs's.
+//! is rare and still parquet-rs's. A grid's parameter column, whose
+//! repeats egt knows, is compressed from them ([`repeats`]).
 //!
 //! parquet-rs's file writer copies an encoded chunk into the file through a
 //! small buffer (into it and out of it), on the thread that writes the file
@@ -43,6 +44,8 @@ use parquet::file::reader::{ChunkReader, Length};
 use parquet::file::statistics::{Statistics, ValueStatistics};
 use parquet::file::writer::{SerializedPageWriter, SerializedRowGroupWriter, TrackedWrite};
 use parquet::schema::types::ColumnDescPtr;
+
+use super::repeats::{self, Pattern, uleb128};
 
 /// The compression of every Parquet column `egt batch` writes.
 pub(super) const COMPRESSION: Compression = Compression::SNAPPY;
@@ -354,11 +357,13 @@ impl Pages {
 
 /// The doubles `values` of column `descr` (a flat optional DOUBLE), all
 /// present, as PLAIN pages of [`PAGE_BYTES`] each and a last one, without
-/// statistics; None when there are none, more than [`PAGE_ROWS`], or the
-/// column is not such (parquet-rs writes those).
+/// statistics (their Snappy streams egt's where `pattern` says how the
+/// values repeat: [`repeats`]); None when there are none, more than
+/// [`PAGE_ROWS`], or the column is not such (parquet-rs writes those).
 pub(super) fn doubles(
     descr: &ColumnDescPtr,
     values: &arrow_buffer::ScalarBuffer<f64>,
+    pattern: Option<Pattern>,
 ) -> Result<Option<Chunk>> {
     let flat_optional = descr.max_def_level() == 1 && descr.max_rep_level() == 0;
     if values.is_empty()
@@ -373,6 +378,8 @@ pub(super) fn doubles(
     let Buffers {
         plain: scratch,
         compressed,
+        repeated,
+        head,
         snappy,
     } = &mut buffers;
     // PLAIN is little-endian, as Arrow holds doubles on this machine.
@@ -383,7 +390,7 @@ pub(super) fn doubles(
         .iter()
         .flat_map(|v| v.to_le_bytes())
         .collect::<Vec<u8>>();
-    for page in bytes.chunks(PAGE_BYTES) {
+    for (k, page) in bytes.chunks(PAGE_BYTES).enumerate() {
         let rows = page.len() / 8;
         // The definition levels (version 1: their length first), one RLE
         // run of 1s; then the values.
@@ -393,9 +400,22 @@ pub(super) fn doubles(
         scratch.push(1);
         let levels = (scratch.len() - 4) as u32;
         scratch[..4].copy_from_slice(&levels.to_le_bytes());
-        scratch.extend_from_slice(page);
-        let buf = compress(snappy, compressed, scratch)?;
-        pages.push(buf, scratch.len(), rows, Encoding::PLAIN)?;
+        let plain = scratch.len() + page.len();
+        // A grid's column: its repeats written as such (repeats.rs).
+        let pattern = pattern.map(|p| p.skip(k * (PAGE_BYTES / 8)));
+        let levels = &scratch[..];
+        let buf = match pattern {
+            Some(p)
+                if repeats::compress((levels, page), p, snappy, head, Arc::make_mut(repeated)) =>
+            {
+                bytes::Bytes::from_owner(Lent(repeated.clone()))
+            }
+            _ => {
+                scratch.extend_from_slice(page);
+                compress(snappy, compressed, scratch)?
+            }
+        };
+        pages.push(buf, plain, rows, Encoding::PLAIN)?;
     }
     BUFFERS.set(buffers);
     pages.finish(descr, Encoding::PLAIN, None).map(Some)
@@ -410,6 +430,12 @@ struct Buffers {
     /// A page after Snappy: lent to the page writer, which drops its share
     /// once it has copied the page.
     compressed: Arc<Vec<u8>>,
+    /// A page of a grid's column, compressed by egt ([`repeats`]): its own
+    /// buffer, as long as its stream, where `compressed` stays as long as
+    /// Snappy's compressor wants (growing it again would clear it).
+    repeated: Arc<Vec<u8>>,
+    /// The levels and first period of such a page, for Snappy.
+    head: Vec<u8>,
     snappy: snap::raw::Encoder,
 }
 
@@ -418,6 +444,8 @@ impl Default for Buffers {
         Buffers {
             plain: Vec::new(),
             compressed: Arc::default(),
+            repeated: Arc::default(),
+            head: Vec::new(),
             snappy: snap::raw::Encoder::new(),
         }
     }
@@ -473,15 +501,6 @@ fn consecutive_deltas(first: i64, len: usize, out: &mut Vec<u8>) {
     for _ in 0..(len - 1).div_ceil(BLOCK) {
         out.extend_from_slice(&[2, 0, 0, 0, 0]);
     }
-}
-
-/// `v` as an unsigned LEB128 varint.
-fn uleb128(out: &mut Vec<u8>, mut v: u64) {
-    while v >= 0x80 {
-        out.push((v as u8) | 0x80);
-        v >>= 7;
-    }
-    out.push(v as u8);
 }
 
 #[cfg(test)]

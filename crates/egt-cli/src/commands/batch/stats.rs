@@ -218,7 +218,7 @@ mod tests {
     use arrow_array::{ArrayRef, Float64Array, StringArray};
     use arrow_schema::{DataType, Field};
 
-    use super::super::{BatchOutput, NumberStatistics, RowNumbers, columnar_file, doubles};
+    use super::super::{BatchOutput, Known, NumberStatistics, RowNumbers, columnar_file, doubles};
 
     /// A Parquet file of `blocks` with the doubles' statistics computed by
     /// `by`. Three double columns: the values and their negatives, built as
@@ -241,7 +241,7 @@ mod tests {
         for (index, values) in blocks.iter().enumerate() {
             let len = values.len() as u64;
             let negated: Vec<_> = values.iter().map(|v| v.map(|v| -v)).collect();
-            let (mut columns, mut known): (Vec<ArrayRef>, _) = (vec![], vec![None]);
+            let (mut columns, mut known): (Vec<ArrayRef>, _) = (vec![], vec![Known::default()]);
             let mut failed = vec![None; values.len()];
             failed[0] = Some(String::from("failed"));
             let failed = (index % 2 == 1).then_some(failed.as_slice());
@@ -252,10 +252,13 @@ mod tests {
                     None => (Arc::new(Float64Array::from(column)) as ArrayRef, None),
                 };
                 columns.push(array);
-                known.push(bounds);
+                known.push(Known {
+                    bounds,
+                    pattern: None,
+                });
             }
             columns.push(Arc::new(Float64Array::from(values.clone())));
-            known.push(None);
+            known.push(Known::default());
             columns.push(Arc::new(StringArray::new_null(values.len())));
             let rows = RowNumbers::Run {
                 first,
