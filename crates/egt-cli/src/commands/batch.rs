@@ -1488,6 +1488,7 @@ fn columnar_file(
         outputs,
         factory,
         numbers,
+        nulls: std::sync::Mutex::default(),
     };
     Ok((encoder, sink))
 }
@@ -1507,6 +1508,10 @@ struct Encoder {
     )>,
     /// Who computes the numbers' statistics (Parquet).
     numbers: NumberStatistics,
+    /// Columns of nulls only (a block without warnings or errors), as
+    /// parquet-rs wrote them once for a column and a length: by (column,
+    /// rows). Such a chunk is the same in every block ([`Encoder::nulls`]).
+    nulls: std::sync::Mutex<Vec<((usize, usize), pages::Chunk)>>,
 }
 
 /// A column of doubles, null where a value is not finite or its row
@@ -1646,6 +1651,36 @@ impl Encoder {
         self.record_batch(rows, columns, &known, b.index)
     }
 
+    /// Column `column` of `len` nulls, as parquet-rs wrote it for an
+    /// earlier block ([`Encoder::keep_nulls`]), if it did.
+    fn nulls(&self, column: usize, len: usize) -> Option<pages::Chunk> {
+        let kept = self.nulls.lock().ok()?;
+        let found = kept.iter().find(|(key, _)| *key == (column, len));
+        found.map(|(_, chunk)| chunk.clone())
+    }
+
+    /// Keep column `column` of `len` nulls, which parquet-rs wrote with
+    /// metadata `close`, for the blocks to come: its pages are egt's
+    /// ([`pages::nulls`]), the same bytes (a test compares the files), and
+    /// its metadata parquet-rs's.
+    fn keep_nulls(
+        &self,
+        column: usize,
+        len: usize,
+        close: &parquet::column::writer::ColumnCloseResult,
+        descr: &parquet::schema::types::ColumnDescPtr,
+    ) -> anyhow::Result<()> {
+        let Some(chunk) = pages::nulls(descr, len, close.clone())? else {
+            return Ok(());
+        };
+        if let Ok(mut kept) = self.nulls.lock()
+            && !kept.iter().any(|(key, _)| *key == (column, len))
+        {
+            kept.push(((column, len), chunk));
+        }
+        Ok(())
+    }
+
     /// The row numbers and the other columns, in the schema's order, as one
     /// Arrow record batch, or as the Parquet column chunks of row group
     /// `index`.
@@ -1665,15 +1700,29 @@ impl Encoder {
         let Some((factory, descriptors, rest)) = &self.factory else {
             return Ok(Encoded::Arrow(whole(rows, others)?));
         };
-        let writers = factory.create_column_writers(index)?;
         // Every column is flat: one leaf, so one writer, a column.
         anyhow::ensure!(
-            writers.len() == descriptors.len() && descriptors.len() == self.schema.fields().len(),
+            descriptors.len() == self.schema.fields().len(),
             "a nested Parquet column"
         );
+        // parquet-rs's writers, made when a column first needs one (a
+        // block whose chunks are all egt's needs none).
+        let mut writers: Vec<Option<_>> = Vec::new();
+        let mut writer = |column: usize| {
+            if writers.is_empty() {
+                writers = (factory.create_column_writers(index)?.into_iter())
+                    .map(Some)
+                    .collect();
+                anyhow::ensure!(
+                    writers.len() == descriptors.len(),
+                    "a nested Parquet column"
+                );
+            }
+            let w = writers.get_mut(column).and_then(Option::take);
+            w.ok_or_else(|| anyhow::anyhow!("no Parquet writer for column {column}"))
+        };
         let egt = self.numbers == NumberStatistics::Egt;
-        let mut pieces = Vec::with_capacity(writers.len());
-        let mut writers = writers.into_iter();
+        let mut pieces = Vec::with_capacity(descriptors.len());
         // The row numbers of a wide block, encoded by egt (pages.rs).
         let own = match (egt, &rows) {
             (true, &RowNumbers::Run { first, len }) => {
@@ -1684,7 +1733,6 @@ impl Encoder {
         let (columns, skipped) = match own {
             Some(chunk) => {
                 pieces.push(Piece::Egt(chunk));
-                writers.next();
                 let options =
                     arrow_array::RecordBatchOptions::new().with_row_count(Some(rows.len()));
                 let batch =
@@ -1694,10 +1742,14 @@ impl Encoder {
             None => (whole(rows, others)?, 0),
         };
         let fields = &self.schema.fields()[skipped..];
-        for (c, ((array, field), mut writer)) in
-            (columns.columns().iter().zip(fields).zip(writers)).enumerate()
-        {
+        for (c, (array, field)) in (columns.columns().iter().zip(fields)).enumerate() {
             let column = skipped + c;
+            let len = arrow_array::Array::len(array);
+            let nulls = egt && len > 0 && arrow_array::Array::null_count(array) == len;
+            if nulls && let Some(chunk) = self.nulls(column, len) {
+                pieces.push(Piece::Egt(chunk));
+                continue;
+            }
             let Known { bounds, pattern } = known.get(column).copied().unwrap_or_default();
             let doubles = array.as_any().downcast_ref::<arrow_array::Float64Array>();
             // A double column without nulls, encoded by egt (pages.rs).
@@ -1710,6 +1762,7 @@ impl Encoder {
                 pieces.push(Piece::Egt(chunk));
                 continue;
             }
+            let mut writer = writer(column)?;
             for leaf in parquet::arrow::arrow_writer::compute_leaves(field, array)? {
                 writer.write(&leaf)?;
             }
@@ -1721,6 +1774,9 @@ impl Encoder {
                 } else if let Some(rows) = any.downcast_ref::<arrow_array::UInt64Array>() {
                     stats::set_row_statistics(chunk.close_mut(), rows)?;
                 }
+            }
+            if nulls {
+                self.keep_nulls(column, len, chunk.close(), &descriptors[column])?;
             }
             pieces.push(Piece::Arrow(chunk));
         }

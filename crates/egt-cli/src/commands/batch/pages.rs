@@ -61,6 +61,7 @@ pub(super) const PAGE_ROWS: usize = 20_000;
 pub(super) const PAGE_BYTES: usize = 64 * 1024;
 
 /// A column chunk encoded by egt, to be appended to its row group.
+#[derive(Clone)]
 pub(super) struct Chunk {
     /// Its pages, each with its header: each a buffer of its own, of at
     /// most 64 KiB and a few bytes, so that the allocator reuses them
@@ -419,6 +420,41 @@ pub(super) fn doubles(
     }
     BUFFERS.set(buffers);
     pages.finish(descr, Encoding::PLAIN, None).map(Some)
+}
+
+/// Column `descr` (flat and optional) of `len` nulls, which parquet-rs
+/// wrote with metadata `close`: its page (the definition levels, one RLE
+/// run of 0s, and no values) with that metadata. None when the page is not
+/// as long as the one parquet-rs wrote, or not alone in the chunk, or the
+/// column is not such: parquet-rs writes those.
+pub(super) fn nulls(
+    descr: &ColumnDescPtr,
+    len: usize,
+    close: ColumnCloseResult,
+) -> Result<Option<Chunk>> {
+    let flat_optional = descr.max_def_level() == 1 && descr.max_rep_level() == 0;
+    let one_page = close
+        .offset_index
+        .as_ref()
+        .is_some_and(|o| o.page_locations().len() == 1);
+    if len == 0 || !flat_optional || !one_page {
+        return Ok(None);
+    }
+    let mut plain = vec![0; 4];
+    uleb128(&mut plain, (len as u64) << 1);
+    plain.push(0);
+    let levels = (plain.len() - 4) as u32;
+    plain[..4].copy_from_slice(&levels.to_le_bytes());
+    let buf = compress(&mut snap::raw::Encoder::new(), &mut Arc::default(), &plain)?;
+    let mut pages = Pages::default();
+    pages.push(buf, plain.len(), len, Encoding::PLAIN)?;
+    if pages.compressed != close.metadata.compressed_size() {
+        return Ok(None);
+    }
+    Ok(Some(Chunk {
+        pages: pages.pages,
+        close,
+    }))
 }
 
 /// A thread's buffers for the pages of a chunk, kept from chunk to chunk
