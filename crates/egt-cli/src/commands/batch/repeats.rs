@@ -168,32 +168,49 @@ impl Stream<'_> {
 }
 
 /// Copies of `len` bytes from `offset` bytes back, in pieces of at most 64
-/// (as Snappy's compressor splits them: none shorter than 4).
+/// (as Snappy's compressor splits them: none shorter than 4). The pieces of
+/// 64 are all alike: one is written, then doubled.
 fn copy(out: &mut Vec<u8>, offset: usize, mut len: usize) {
-    while len >= 68 {
-        copy_piece(out, offset, 64);
-        len -= 64;
+    if len >= 68 {
+        let pieces = (len - 68) / 64 + 1;
+        let (bytes, n) = piece(offset, 64);
+        let start = out.len();
+        let end = start + pieces * n;
+        out.reserve(pieces * n);
+        out.extend_from_slice(&bytes[..n]);
+        while out.len() < end {
+            let more = (out.len() - start).min(end - out.len());
+            out.extend_from_within(start..start + more);
+        }
+        len -= pieces * 64;
     }
     if len > 64 {
-        copy_piece(out, offset, 60);
+        let (bytes, n) = piece(offset, 60);
+        out.extend_from_slice(&bytes[..n]);
         len -= 60;
     }
-    copy_piece(out, offset, len);
+    let (bytes, n) = piece(offset, len);
+    out.extend_from_slice(&bytes[..n]);
 }
 
-/// One copy element of 1 to 64 bytes: the shortest form for its offset.
-fn copy_piece(out: &mut Vec<u8>, offset: usize, len: usize) {
+/// One copy element of 1 to 64 bytes, the shortest form for its offset,
+/// and its length.
+fn piece(offset: usize, len: usize) -> ([u8; 5], usize) {
     debug_assert!((1..=64).contains(&len) && offset > 0);
+    let mut bytes = [0; 5];
     if (4..12).contains(&len) && offset < 2048 {
-        out.push(0b01 | (((len - 4) as u8) << 2) | (((offset >> 8) as u8) << 5));
-        out.push(offset as u8);
+        bytes[0] = 0b01 | (((len - 4) as u8) << 2) | (((offset >> 8) as u8) << 5);
+        bytes[1] = offset as u8;
+        (bytes, 2)
     } else if let Ok(offset) = u16::try_from(offset) {
-        out.push(0b10 | (((len - 1) as u8) << 2));
-        out.extend_from_slice(&offset.to_le_bytes());
+        bytes[0] = 0b10 | (((len - 1) as u8) << 2);
+        bytes[1..3].copy_from_slice(&offset.to_le_bytes());
+        (bytes, 3)
     } else {
         // A page is at most a few hundred KiB: the offset fits 32 bits.
-        out.push(0b11 | (((len - 1) as u8) << 2));
-        out.extend_from_slice(&(offset as u32).to_le_bytes());
+        bytes[0] = 0b11 | (((len - 1) as u8) << 2);
+        bytes[1..5].copy_from_slice(&(offset as u32).to_le_bytes());
+        (bytes, 5)
     }
 }
 
