@@ -258,9 +258,16 @@ pub(super) fn row_numbers(descr: &ColumnDescPtr, first: u64, len: usize) -> Resu
     };
     let mut plain = Vec::with_capacity(16 + 5 * (len - 1).div_ceil(BLOCK));
     consecutive_deltas(first as i64, len, &mut plain);
-    let buf = compress(&mut snap::raw::Encoder::new(), &mut Arc::default(), &plain)?;
+    let mut buffer = Arc::default();
+    let compressed = compress(&mut snap::raw::Encoder::new(), &mut buffer, &plain)?;
     let mut pages = Pages::default();
-    pages.push(buf, plain.len(), len, Encoding::DELTA_BINARY_PACKED)?;
+    pages.push(
+        buffer,
+        compressed,
+        plain.len(),
+        len,
+        Encoding::DELTA_BINARY_PACKED,
+    )?;
     // Parquet keeps an unsigned 64-bit integer in INT64, bit for bit.
     let statistics =
         ValueStatistics::<i64>::new(Some(first as i64), Some(last as i64), None, Some(0), false)
@@ -286,33 +293,51 @@ struct Pages {
 
 impl Pages {
     /// A data page of version 1 and `rows` values (its levels, if any,
-    /// are in `buf`): `buf`, `plain` bytes compressed.
+    /// are in the page): the `len` bytes after [`HEADROOM`] in `buffer`,
+    /// `plain` bytes compressed. Its header, which parquet-rs's page
+    /// writer writes, goes in the headroom: the page is not copied. The
+    /// buffer is given back, for its pool.
     fn push(
         &mut self,
-        buf: bytes::Bytes,
+        mut buffer: Arc<Vec<u8>>,
+        len: usize,
         plain: usize,
         rows: usize,
         encoding: Encoding,
-    ) -> Result<()> {
-        let mut sink = TrackedWrite::new(Vec::with_capacity(buf.len() + 64));
+    ) -> Result<Arc<Vec<u8>>> {
         let page = Page::DataPage {
-            buf,
+            buf: bytes::Bytes::from_owner(Lent(buffer.clone())).slice(HEADROOM..HEADROOM + len),
             num_values: rows as u32,
             encoding,
             def_level_encoding: Encoding::RLE,
             rep_level_encoding: Encoding::RLE,
             statistics: None,
         };
+        let mut sink = TrackedWrite::new(Header::default());
         let spec =
             SerializedPageWriter::new(&mut sink).write_page(CompressedPage::new(page, plain))?;
+        let kept = sink.into_inner()?.0;
+        let header = spec
+            .compressed_size
+            .checked_sub(len)
+            .filter(|&h| h <= kept.len())
+            .ok_or_else(|| {
+                parquet::errors::ParquetError::General(format!(
+                    "a page header longer than the {HEADROOM} bytes kept for it"
+                ))
+            })?;
+        // The page writer has dropped its share: no copy.
+        Arc::make_mut(&mut buffer)[HEADROOM - header..HEADROOM].copy_from_slice(&kept[..header]);
+        let page = bytes::Bytes::from_owner(Lent(buffer.clone()));
+        self.pages
+            .push(page.slice(HEADROOM - header..HEADROOM + len));
         self.offsets
             .append_offset_and_size(self.compressed, spec.compressed_size as i32);
         self.offsets.append_row_count(rows as i64);
         self.compressed += spec.compressed_size as i64;
         self.uncompressed += spec.uncompressed_size as i64;
         self.values += rows;
-        self.pages.push(sink.into_inner()?.into());
-        Ok(())
+        Ok(buffer)
     }
 
     /// The chunk of column `descr`, its pages all `encoding`, with its
@@ -404,19 +429,29 @@ pub(super) fn doubles(
         let plain = scratch.len() + page.len();
         // A grid's column: its repeats written as such (repeats.rs).
         let pattern = pattern.map(|p| p.skip(k * (PAGE_BYTES / 8)));
-        let levels = &scratch[..];
-        let buf = match pattern {
-            Some(p)
-                if repeats::compress((levels, page), p, snappy, head, Arc::make_mut(repeated)) =>
-            {
-                bytes::Bytes::from_owner(Lent(repeated.clone()))
+        let mut by_pattern = pattern.map(|_| repeated.take());
+        let written = match (pattern, by_pattern.as_mut().and_then(Arc::get_mut)) {
+            (Some(p), Some(out)) => {
+                out.clear();
+                out.resize(HEADROOM, 0);
+                repeats::compress((scratch, page), p, snappy, head, out)
+                    .then(|| out.len() - HEADROOM)
             }
-            _ => {
+            _ => None,
+        };
+        let (buffer, len, pool) = match (written, by_pattern) {
+            (Some(len), Some(buffer)) => (buffer, len, &mut *repeated),
+            (_, unused) => {
+                if let Some(buffer) = unused {
+                    repeated.give(buffer);
+                }
                 scratch.extend_from_slice(page);
-                compress(snappy, compressed, scratch)?
+                let mut buffer = compressed.take();
+                let len = compress(snappy, &mut buffer, scratch)?;
+                (buffer, len, &mut *compressed)
             }
         };
-        pages.push(buf, plain, rows, Encoding::PLAIN)?;
+        pool.give(pages.push(buffer, len, plain, rows, Encoding::PLAIN)?);
     }
     BUFFERS.set(buffers);
     pages.finish(descr, Encoding::PLAIN, None).map(Some)
@@ -445,9 +480,10 @@ pub(super) fn nulls(
     plain.push(0);
     let levels = (plain.len() - 4) as u32;
     plain[..4].copy_from_slice(&levels.to_le_bytes());
-    let buf = compress(&mut snap::raw::Encoder::new(), &mut Arc::default(), &plain)?;
+    let mut buffer = Arc::default();
+    let compressed = compress(&mut snap::raw::Encoder::new(), &mut buffer, &plain)?;
     let mut pages = Pages::default();
-    pages.push(buf, plain.len(), len, Encoding::PLAIN)?;
+    pages.push(buffer, compressed, plain.len(), len, Encoding::PLAIN)?;
     if pages.compressed != close.metadata.compressed_size() {
         return Ok(None);
     }
@@ -463,13 +499,13 @@ pub(super) fn nulls(
 struct Buffers {
     /// A page before Snappy.
     plain: Vec<u8>,
-    /// A page after Snappy: lent to the page writer, which drops its share
-    /// once it has copied the page.
-    compressed: Arc<Vec<u8>>,
-    /// A page of a grid's column, compressed by egt ([`repeats`]): its own
-    /// buffer, as long as its stream, where `compressed` stays as long as
-    /// Snappy's compressor wants (growing it again would clear it).
-    repeated: Arc<Vec<u8>>,
+    /// Pages after Snappy's compressor.
+    compressed: Pool,
+    /// Pages of a grid's column, compressed by egt ([`repeats`]): a pool of
+    /// their own, as long as their streams, where `compressed`'s stay as
+    /// long as Snappy's compressor wants (growing them again would clear
+    /// them).
+    repeated: Pool,
     /// The levels and first period of such a page, for Snappy.
     head: Vec<u8>,
     snappy: snap::raw::Encoder,
@@ -479,11 +515,62 @@ impl Default for Buffers {
     fn default() -> Self {
         Buffers {
             plain: Vec::new(),
-            compressed: Arc::default(),
-            repeated: Arc::default(),
+            compressed: Pool::default(),
+            repeated: Pool::default(),
             head: Vec::new(),
             snappy: snap::raw::Encoder::new(),
         }
+    }
+}
+
+/// Bytes before a compressed page in its buffer, where its header goes (a
+/// data page's header without statistics takes about 20).
+const HEADROOM: usize = 64;
+
+/// Buffers of compressed pages, each taken again once the output has
+/// written its page (the oldest first: pages go out in order).
+#[derive(Default)]
+struct Pool(VecDeque<Arc<Vec<u8>>>);
+
+impl Pool {
+    /// Buffers kept at most: more pages out at once than egt's blocks in
+    /// flight hold are let go.
+    const MOST: usize = 256;
+
+    /// A buffer no page is written from any more, or a new one.
+    fn take(&mut self) -> Arc<Vec<u8>> {
+        if self
+            .0
+            .front_mut()
+            .is_some_and(|b| Arc::get_mut(b).is_some())
+        {
+            return self.0.pop_front().unwrap_or_default();
+        }
+        Arc::default()
+    }
+
+    /// `buffer`, whose page is out, to be taken again once it is written.
+    fn give(&mut self, buffer: Arc<Vec<u8>>) {
+        if self.0.len() < Self::MOST {
+            self.0.push_back(buffer);
+        }
+    }
+}
+
+/// The start of what parquet-rs's page writer writes: a page's header (the
+/// page itself, after it, is not kept).
+#[derive(Default)]
+struct Header(Vec<u8>);
+
+impl Write for Header {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let room = HEADROOM.saturating_sub(self.0.len());
+        self.0.extend_from_slice(&buf[..room.min(buf.len())]);
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
     }
 }
 
@@ -501,22 +588,22 @@ impl AsRef<[u8]> for Lent {
 }
 
 /// `input` compressed by Snappy, as parquet-rs's codec compresses a page,
-/// into `out` (grown if need be; copied only if a share of it is still
-/// out, which the page writer does not keep).
+/// into `out` after [`HEADROOM`] bytes (grown if need be; copied only if a
+/// share of it is still out, which a buffer from a [`Pool`] has not), and
+/// its length.
 fn compress(
     snappy: &mut snap::raw::Encoder,
     out: &mut Arc<Vec<u8>>,
     input: &[u8],
-) -> Result<bytes::Bytes> {
+) -> Result<usize> {
     let buffer = Arc::make_mut(out);
-    let need = snap::raw::max_compress_len(input.len());
+    let need = HEADROOM + snap::raw::max_compress_len(input.len());
     if buffer.len() < need {
         buffer.resize(need, 0);
     }
-    let n = snappy
-        .compress(input, buffer)
-        .map_err(|e| parquet::errors::ParquetError::External(Box::new(e)))?;
-    Ok(bytes::Bytes::from_owner(Lent(out.clone())).slice(..n))
+    snappy
+        .compress(input, &mut buffer[HEADROOM..])
+        .map_err(|e| parquet::errors::ParquetError::External(Box::new(e)))
 }
 
 /// Values a block of DELTA_BINARY_PACKED INT64 as parquet-rs writes it

@@ -52,11 +52,11 @@ const VALUE: usize = 8;
 /// neighbouring values, which share bytes.
 const SHORT_RUNS: usize = 64;
 
-/// Into `out`, the Snappy (raw) stream of `prefix` followed by `values`
-/// (the bytes of doubles, 8 each), which repeat as `pattern` says. False,
-/// with `out` of no use, if a repeat the pattern claims is not in the
-/// bytes, or if the pattern saves nothing (each value once in the page):
-/// Snappy's own compressor is the one to use then. A first period of
+/// Onto the end of `out`, the Snappy (raw) stream of `prefix` followed by
+/// `values` (the bytes of doubles, 8 each), which repeat as `pattern` says.
+/// False, with what was added to `out` of no use, if a repeat the pattern
+/// claims is not in the bytes, or if the pattern saves nothing (each value
+/// once in the page): Snappy's own compressor is the one to use then. A first period of
 /// short runs is compressed by `snappy` (through `scratch`), which finds
 /// what repeats inside it.
 pub(super) fn compress(
@@ -83,7 +83,7 @@ pub(super) fn compress(
         return false;
     }
     let total = prefix.len() + values.len();
-    out.clear();
+    let base = out.len();
     let stream = Stream { prefix, values };
     // The start of the bytes not yet in the stream (a literal to come),
     // counted in the prefix and values together.
@@ -100,12 +100,12 @@ pub(super) fn compress(
         let mut theirs = Vec::with_capacity(10);
         uleb128(&mut theirs, scratch.len() as u64);
         let at = length.len() - theirs.len();
-        out.resize(at + snap::raw::max_compress_len(scratch.len()), 0);
-        let Ok(written) = snappy.compress(scratch, &mut out[at..]) else {
+        out.resize(base + at + snap::raw::max_compress_len(scratch.len()), 0);
+        let Ok(written) = snappy.compress(scratch, &mut out[base + at..]) else {
             return false;
         };
-        out.truncate(at + written);
-        out[..length.len()].copy_from_slice(&length);
+        out.truncate(base + at + written);
+        out[base..base + length.len()].copy_from_slice(&length);
     } else {
         uleb128(out, total as u64);
         literal = 0;
@@ -229,6 +229,7 @@ mod tests {
 
     fn compress(prefix: &[u8], values: &[u8], pattern: Pattern, out: &mut Vec<u8>) -> bool {
         let mut snappy = snap::raw::Encoder::new();
+        out.clear();
         compress_with((prefix, values), pattern, &mut snappy, &mut Vec::new(), out)
     }
 
