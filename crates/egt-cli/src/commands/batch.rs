@@ -1489,6 +1489,7 @@ fn columnar_file(
         factory,
         numbers,
         nulls: std::sync::Mutex::default(),
+        null_arrays: std::sync::Mutex::default(),
     };
     Ok((encoder, sink))
 }
@@ -1512,6 +1513,8 @@ struct Encoder {
     /// parquet-rs wrote them once for a column and a length: by (column,
     /// rows). Such a chunk is the same in every block ([`Encoder::nulls`]).
     nulls: std::sync::Mutex<Vec<((usize, usize), pages::Chunk)>>,
+    /// Arrays of nulls only, of a type and a length ([`Encoder::null_column`]).
+    null_arrays: std::sync::Mutex<Vec<arrow_array::ArrayRef>>,
 }
 
 /// A column of doubles, null where a value is not finite or its row
@@ -1617,7 +1620,7 @@ impl Encoder {
             let (column, bounds) = match src {
                 Some(i) => doubles(results.column(i), any_failed),
                 None => (
-                    Arc::new(arrow_array::Float64Array::new_null(len)) as ArrayRef,
+                    self.null_column(&arrow_schema::DataType::Float64, len),
                     None,
                 ),
             };
@@ -1639,16 +1642,30 @@ impl Encoder {
                 }
             })
         } else {
-            Arc::new(StringArray::new_null(len))
+            self.null_column(&arrow_schema::DataType::Utf8, len)
         });
         columns.push(if b.any_failed {
             texts(len, |r| {
                 b.messages[r].as_deref().map(std::borrow::Cow::Borrowed)
             })
         } else {
-            Arc::new(StringArray::new_null(len))
+            self.null_column(&arrow_schema::DataType::Utf8, len)
         });
         self.record_batch(rows, columns, &known, b.index)
+    }
+
+    /// An array of `len` nulls of type `of`, one for every block of that
+    /// length (a new one was 64 KiB of offsets to clear for a text column,
+    /// every block).
+    fn null_column(&self, of: &arrow_schema::DataType, len: usize) -> arrow_array::ArrayRef {
+        let mut kept = self.null_arrays.lock().unwrap_or_else(|e| e.into_inner());
+        let found = kept.iter().find(|a| a.len() == len && a.data_type() == of);
+        if let Some(array) = found {
+            return array.clone();
+        }
+        let array = arrow_array::new_null_array(of, len);
+        kept.push(array.clone());
+        array
     }
 
     /// Column `column` of `len` nulls, as parquet-rs wrote it for an
