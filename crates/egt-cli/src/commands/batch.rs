@@ -31,15 +31,23 @@ mod stats;
 
 /// Scenarios solved and written per block (bounds memory; output streams per block).
 const BLOCK: usize = 1 << 14;
+/// Scenarios a block of Parquet or Arrow IPC output: a Parquet row group.
+/// Larger than a text block: what a block costs besides its rows (a row
+/// group's metadata and its place in the footer, the page writers, a task)
+/// was a tenth of a 10^7-row batch to Parquet at 16 384 rows (10^7 rows, 2
+/// threads: 34.3 -> 31.0 ms; docs/benchmarks.md). Text stays at [`BLOCK`]:
+/// at this size CSV ran 5 % slower and JSON Lines 40 %.
+const COLUMNAR_BLOCK: usize = 1 << 16;
 /// Bytes of parameter and result rows one block may hold: the rows of a
 /// large train are wide (a 10 000-link chain has 35 000 parameters and
 /// 40 000 outputs a row, 600 kB), so its blocks hold fewer rows.
 const BLOCK_BYTES: usize = 64 << 20;
 
 /// Rows per block for rows of `width` doubles (parameters and outputs):
-/// [`BLOCK`], or fewer so that a block holds at most [`BLOCK_BYTES`].
-fn block_rows(width: usize) -> usize {
-    (BLOCK_BYTES / 8usize.saturating_mul(width.max(1))).clamp(1, BLOCK)
+/// `most` ([`BLOCK`] or [`COLUMNAR_BLOCK`]), or fewer so that a block holds
+/// at most [`BLOCK_BYTES`].
+fn block_rows(width: usize, most: usize) -> usize {
+    (BLOCK_BYTES / 8usize.saturating_mul(width.max(1))).clamp(1, most)
 }
 /// Rows formatted per parallel task.
 const FORMAT_TASK: usize = 1024;
@@ -63,7 +71,7 @@ pub enum BatchOutput {
     /// Comma-separated values with a header.
     Csv,
     /// Apache Parquet (binary; redirect to a file): the CSV's columns, typed,
-    /// empty cells as nulls, one row group per block of 16 384 scenarios
+    /// empty cells as nulls, one row group per block of 65 536 scenarios
     /// (fewer for a large train, whose rows are wide: a block holds at most
     /// 64 MiB of them; with `--specs`, the CSV's long form: row, name,
     /// quantity, value, error).
@@ -720,11 +728,16 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
     // Rows per block: fewer for wide rows (large trains), the same for every
     // plan. Every output counts, chosen or not: the solve holds them all
     // for the rows of a task.
+    let most = if encoder.is_some() {
+        COLUMNAR_BLOCK
+    } else {
+        BLOCK
+    };
     let block = plans
         .iter()
-        .map(|(_, p)| block_rows(p.parameters().len() + p.all_outputs().len()))
+        .map(|(_, p)| block_rows(p.parameters().len() + p.all_outputs().len(), most))
         .min()
-        .unwrap_or(BLOCK);
+        .unwrap_or(most);
     let blocks = per_plan.div_ceil(block);
     let all = blocks * plans.len();
     // Blocks run as tasks on one thread each ([`in_order`]), which solves,
@@ -955,7 +968,7 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
     // on this thread, which only copies bytes (docs/benchmarks.md has the
     // history: waves of blocks left a thread idle while the other finished
     // its block and while this one wrote).
-    let ahead = if block < BLOCK { 1 } else { AHEAD };
+    let ahead = if block < most { 1 } else { AHEAD };
     in_order(all, ahead, threads, &solve, |d| {
         let d = d?;
         match d.encoded {
@@ -1218,7 +1231,8 @@ fn size_global_pool(requested: Option<usize>) {
 }
 
 /// How many blocks a thread may be ahead of the writer ([`in_order`]), when
-/// blocks are of [`BLOCK`] rows. Blocks cut short by [`BLOCK_BYTES`] (wide
+/// blocks are of [`BLOCK`] rows ([`COLUMNAR_BLOCK`] for Parquet and Arrow
+/// IPC; 1 measured slower there). Blocks cut short by [`BLOCK_BYTES`] (wide
 /// rows, large trains) keep one a thread, as much as the waves before held.
 /// (4 and 8 measured no faster than 2, 2026-11-26.)
 const AHEAD: usize = 2;
@@ -1432,14 +1446,14 @@ fn columnar_file(
         // numbers count up by one: delta-encoded, they take a few bytes a
         // page, where Snappy spent more time on them than on any other
         // column and left half of their bytes (docs/benchmarks.md).
-        // Pages of 64 KiB rather than the default 1 MiB: a block's column
-        // is 128 KiB, and the writer's page buffers grow by doubling up to
-        // the page; with smaller pages they stay small (the allocator
-        // committed 28.6 MiB instead of 36.6, and 10^6 rows on 2 threads
-        // ran about 5 % faster; docs/benchmarks.md).
+        // Pages of 64 KiB rather than the default 1 MiB: the writer's page
+        // buffers grow by doubling up to the page; with smaller pages they
+        // stay small (with blocks of 16 384 rows, of 128 KiB a column, the
+        // allocator committed 28.6 MiB instead of 36.6, and 10^6 rows on 2
+        // threads ran about 5 % faster; docs/benchmarks.md).
         // The numbers' statistics are the row group's, not the page's: a
-        // row group is a block (16 384 rows, two pages a double column, one
-        // of row numbers).
+        // row group is a block (65 536 rows, eight pages a double column,
+        // one of row numbers).
         // Pages of version 1, their sizes and the compression set here are
         // those egt writes its own chunks with (pages.rs).
         let mut props = parquet::file::properties::WriterProperties::builder()
@@ -2881,12 +2895,14 @@ mod columnar_tests {
     /// alternating sets' speed ratio is 1).
     #[test]
     fn wide_rows_are_cut_into_short_blocks() {
-        use super::{BLOCK, BLOCK_BYTES, block_rows};
-        assert_eq!(block_rows(45), BLOCK);
+        use super::{BLOCK, BLOCK_BYTES, COLUMNAR_BLOCK, block_rows};
+        assert_eq!(block_rows(45, BLOCK), BLOCK);
+        assert_eq!(block_rows(45, COLUMNAR_BLOCK), COLUMNAR_BLOCK);
         let w = 75_000;
-        let r = block_rows(w);
+        let r = block_rows(w, COLUMNAR_BLOCK);
         assert!(r < BLOCK && r * w * 8 <= BLOCK_BYTES && (r + 1) * w * 8 > BLOCK_BYTES);
-        assert_eq!(block_rows(usize::MAX / 4), 1);
+        assert_eq!(block_rows(w, BLOCK), r);
+        assert_eq!(block_rows(usize::MAX / 4, COLUMNAR_BLOCK), 1);
 
         let sets = 750;
         let mut spec = String::from("frame = \"case\"\n");
@@ -2987,9 +3003,10 @@ mod columnar_tests {
             "--columns",
             "driving_torque.2",
         ];
-        // Three blocks and a part: blocks are solved in parallel waves and
-        // must come out in order.
-        let n = 3 * super::BLOCK + 100;
+        // Three blocks and a part (Parquet's and Arrow's; twelve and a part
+        // of text): blocks are solved in parallel waves and must come out in
+        // order.
+        let n = 3 * super::COLUMNAR_BLOCK + 100;
         let grid = format!("torque.4=-10:-20:{n}");
         let long = [
             fig3.as_str(),
@@ -3108,7 +3125,7 @@ mod columnar_tests {
     #[test]
     fn a_failed_row_leaves_no_message_in_later_blocks() {
         let fig3 = example("fig3_example61.toml");
-        let n = 4 * super::BLOCK + 100;
+        let n = 4 * super::COLUMNAR_BLOCK + 100;
         // Row 0 is Fig. 3's lock (tau_2 = -1.5), the others far from it.
         let grid = format!("ratio.G2=-1.5:-1.9:{n}");
         for threads in ["1", "2"] {

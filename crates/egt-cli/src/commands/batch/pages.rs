@@ -50,12 +50,14 @@ use super::repeats::{self, Pattern, uleb128};
 /// The compression of every Parquet column `egt batch` writes.
 pub(super) const COMPRESSION: Compression = Compression::SNAPPY;
 
-/// The limit of rows a data page `egt batch` sets (parquet-rs's default):
-/// the row numbers of a block of at most this many rows take one page.
-pub(super) const PAGE_ROWS: usize = 20_000;
+/// The limit of rows a data page `egt batch` sets: a Parquet block's rows
+/// (parquet-rs's default is 20 000). The row numbers of a block of at most
+/// this many rows take one page, and so do the nulls of a column without a
+/// value; pages of doubles end at [`PAGE_BYTES`] before.
+pub(super) const PAGE_ROWS: usize = super::COLUMNAR_BLOCK;
 
 /// The data page size limit `egt batch` sets: a page of doubles holds
-/// this many bytes of values, 8 192 values. (A block's column is 128 KiB,
+/// this many bytes of values, 8 192 values. (A block's column is 512 KiB,
 /// and the writer's page buffers grow by doubling up to the page; with
 /// pages smaller than the default 1 MiB they stay small: docs/benchmarks.md.)
 pub(super) const PAGE_BYTES: usize = 64 * 1024;

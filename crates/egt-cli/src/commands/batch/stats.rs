@@ -336,8 +336,8 @@ mod tests {
     /// egt's statistics are parquet-rs's, the doubles' and the row
     /// numbers', and so are egt's chunks of row numbers and of doubles
     /// without nulls (pages.rs; blocks of one row, of a few, of one page
-    /// of doubles and one more, of two, of the row numbers' page limit of
-    /// 20 000, one more and twice as many; first rows of one- to
+    /// of doubles and one more, of two, of the rows' page limit (a block),
+    /// one more and twice as many; first rows of one- to
     /// three-byte varints; NaNs kept): the files are the same bytes, over
     /// blocks that take the fast path (spanning pages, shorter than a lane
     /// group, one value) and every case it hands to the exact scan (zeros
@@ -367,11 +367,21 @@ mod tests {
             vec![None, None, None],
             vec![None, Some(nan)],
         ];
-        // Pages of doubles end at 8 192 values, the row numbers' at 20 000;
+        // Pages of doubles end at 8 192 values, the row numbers' at a block;
         // parquet-rs writes a longer block's (egt's bound, mutation-checked).
         // A column of nulls is parquet-rs's the first time for a length,
-        // egt's after (the warnings': 9, 1, 10, 2, 3 and 16 384 rows twice).
-        for len in [8_192, 8_193, 16_384, 20_001, 40_000, 16_384, 20_001] {
+        // egt's after (the warnings': 9, 1, 10, 2, 3 and a block twice).
+        let page = super::super::pages::PAGE_ROWS;
+        for len in [
+            8_192,
+            8_193,
+            16_384,
+            page,
+            page + 1,
+            2 * page,
+            page,
+            page + 1,
+        ] {
             blocks.push((0..len).map(|_| Some(uniform())).collect());
         }
         let egt = file(&blocks, NumberStatistics::Egt);
