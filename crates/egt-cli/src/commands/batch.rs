@@ -1328,24 +1328,10 @@ impl Matrix<'_> {
     /// Whether a row's value in column `c` is above `limit`.
     fn any_above(&self, c: usize, limit: f64) -> bool {
         if self.columns {
-            // The largest value by a float compare sixteen lanes wide (a NaN
-            // is never above; an early exit would not vectorise, and the
-            // usual block has no such row). Sixteen lanes are eight SSE2
-            // registers: eight chains of compares, so that the loop is not
-            // bound by their latency.
-            const LANES: usize = 16;
-            let (chunks, rest) = self.data[c * self.rows..][..self.rows].as_chunks::<LANES>();
-            let mut most = [f64::NEG_INFINITY; LANES];
-            for chunk in chunks {
-                for l in 0..LANES {
-                    most[l] = if chunk[l] > most[l] {
-                        chunk[l]
-                    } else {
-                        most[l]
-                    };
-                }
-            }
-            most.iter().chain(rest).any(|&x| x > limit)
+            // The largest value by a float compare, as wide as the machine
+            // compares (a NaN is never above; an early exit would not
+            // vectorise, and the usual block has no such row).
+            stats::largest(&self.data[c * self.rows..][..self.rows]) > limit
         } else {
             (self.data[c..].iter().step_by(self.width))
                 .take(self.rows)

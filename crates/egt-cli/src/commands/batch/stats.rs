@@ -186,6 +186,51 @@ impl pulp::WithSimd for Scanning<'_> {
     }
 }
 
+/// The largest of `values` by a float compare (a NaN is never the largest):
+/// -inf when there are none, or only NaNs. Compiled for the instruction set
+/// the machine has, as [`scan`] is.
+pub(super) fn largest(values: &[f64]) -> f64 {
+    pulp::Arch::new().dispatch(Largest(values))
+}
+
+/// [`largest`] as a [`pulp::WithSimd`]: an accumulator of [`REGISTERS`]
+/// registers, as [`Scanning`]'s.
+struct Largest<'a>(&'a [f64]);
+
+impl pulp::WithSimd for Largest<'_> {
+    type Output = f64;
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, simd: S) -> f64 {
+        let (head, tail) = S::as_simd_f64s(self.0);
+        let mut hi = [simd.splat_f64s(f64::NEG_INFINITY); REGISTERS];
+        let mut take = |k: usize, v: S::f64s| {
+            hi[k] = simd.select_f64s(simd.greater_than_f64s(v, hi[k]), v, hi[k]);
+        };
+        let (groups, rest) = head.as_chunks::<REGISTERS>();
+        for group in groups {
+            for (k, &v) in group.iter().enumerate() {
+                take(k, v);
+            }
+        }
+        for (k, &v) in rest.iter().enumerate() {
+            take(k, v);
+        }
+        let mut max = f64::NEG_INFINITY;
+        for h in hi {
+            let mut out = [f64::NEG_INFINITY; 8];
+            let n = std::mem::size_of::<S::f64s>() / 8;
+            simd.partial_store_f64s(&mut out[..n], h);
+            for &x in &out[..n] {
+                max = if x > max { x } else { max };
+            }
+        }
+        for &v in tail {
+            max = if v > max { v } else { max };
+        }
+        max
+    }
+}
+
 /// Min and max in IEEE 754 total order of the values present, NaNs left out
 /// and counted; when every value present is NaN, the least and greatest NaN
 /// (parquet-rs's rule). None when no value is present.
@@ -285,14 +330,15 @@ mod tests {
         }
     }
 
-    /// The scan gives the same answer compiled for every instruction set
-    /// the machine has (the files' test runs only the one dispatched to),
-    /// and the answer of a plain fold, on columns of every length up to 80
+    /// The scan and the largest value give the same answers compiled for
+    /// every instruction set the machine has (the files' test runs only the
+    /// one dispatched to), and a plain fold's, on columns of every length up
+    /// to 80
     /// with NaNs of either sign, infinities and zeros of either sign placed
     /// at random.
     #[test]
     fn the_scan_agrees_on_every_instruction_set() {
-        use super::{Scan, Scanning, scan};
+        use super::{Largest, Scan, Scanning, largest, scan};
         use pulp::WithSimd;
         let mut next = random_bits(0x9e37_79b9_7f4a_7c15);
         let odd = [
@@ -329,6 +375,21 @@ mod tests {
             }
             for (set, scan) in got {
                 assert_eq!(scan, expected, "{set}, case {case}: {values:?}");
+            }
+            // The largest, NaNs left out (-inf if nothing else).
+            let mut got = vec![("dispatched", largest(&values))];
+            got.push(("scalar", Largest(&values).with_simd(pulp::Scalar)));
+            if let Some(simd) = pulp::x86::V3::try_new() {
+                got.push(("AVX2", Largest(&values).with_simd(simd)));
+            }
+            if let Some(simd) = pulp::x86::V4::try_new() {
+                got.push(("AVX-512", Largest(&values).with_simd(simd)));
+            }
+            for (set, largest) in got {
+                assert!(
+                    largest == max,
+                    "{set}, case {case}: {largest} for {values:?}"
+                );
             }
         }
     }
