@@ -1558,6 +1558,9 @@ struct Known {
     bounds: Option<(f64, f64)>,
     /// How its values repeat: a grid's or zip's parameter column.
     pattern: Option<repeats::Pattern>,
+    /// Not scanned yet, for its bounds or for values that are not finite
+    /// (to be nulls): a grid's column, which egt's chunk scans.
+    unscanned: bool,
 }
 
 /// A column of optional texts: all null without building one by one when
@@ -1599,15 +1602,32 @@ impl Encoder {
         // The doubles' bounds found while building them, by column of the
         // schema.
         let mut known = vec![Known::default(); 1 + columns.len()];
+        // A grid's column is scanned while egt compresses it, where it does
+        // (`record_batch`): only its literals need to be read.
+        let unscanned = self.factory.is_some() && self.numbers == NumberStatistics::Egt;
         for (j, &(_, c)) in b.varied.iter().enumerate() {
-            let (column, bounds) = doubles(params.column(if b.varied_only { j } else { c }), None);
-            columns.push(column);
+            let values = params.column(if b.varied_only { j } else { c });
             let pattern = (b.design.pattern(c)).map(|(stride, count)| repeats::Pattern {
                 first: b.design_row,
                 stride,
                 count,
             });
-            known.push(Known { bounds, pattern });
+            if pattern.is_some() && unscanned {
+                columns.push(Arc::new(arrow_array::Float64Array::new(values, None)));
+                known.push(Known {
+                    bounds: None,
+                    pattern,
+                    unscanned: true,
+                });
+                continue;
+            }
+            let (column, bounds) = doubles(values, None);
+            columns.push(column);
+            known.push(Known {
+                bounds,
+                pattern,
+                unscanned: false,
+            });
         }
         let failed = |r: usize| b.messages[r].is_some();
         let any_failed = b.any_failed.then_some(b.messages);
@@ -1627,7 +1647,7 @@ impl Encoder {
             columns.push(column);
             known.push(Known {
                 bounds,
-                pattern: None,
+                ..Known::default()
             });
         }
         // Most blocks have no row past the warning's limit: a scan of the
@@ -1767,17 +1787,34 @@ impl Encoder {
                 pieces.push(Piece::Egt(chunk));
                 continue;
             }
-            let Known { bounds, pattern } = known.get(column).copied().unwrap_or_default();
-            let doubles = array.as_any().downcast_ref::<arrow_array::Float64Array>();
-            // A double column without nulls, encoded by egt (pages.rs).
-            if let Some(doubles) =
-                doubles.filter(|d| egt && arrow_array::Array::null_count(*d) == 0)
-                && let Some(mut chunk) =
-                    pages::doubles(&descriptors[column], doubles.values(), pattern)?
+            let Known {
+                mut bounds,
+                pattern,
+                unscanned,
+            } = known.get(column).copied().unwrap_or_default();
+            let mut doubles = array.as_any().downcast_ref::<arrow_array::Float64Array>();
+            // A double column without nulls, encoded by egt (pages.rs); a
+            // grid's, not scanned, scanned there.
+            if let Some(d) = doubles.filter(|d| egt && arrow_array::Array::null_count(*d) == 0)
+                && let Some((mut chunk, literals)) =
+                    pages::doubles(&descriptors[column], d.values(), pattern)?
+                && (!unscanned || literals.is_some_and(|l| l.finite))
             {
-                stats::set_double_statistics(chunk.close_mut(), doubles, bounds)?;
+                if unscanned {
+                    bounds = literals.and_then(|l| l.bounds);
+                }
+                stats::set_double_statistics(chunk.close_mut(), d, bounds)?;
                 pieces.push(Piece::Egt(chunk));
                 continue;
+            }
+            // A grid's column not scanned, with a value that is not finite
+            // (a null) or too long for egt's chunk: as `doubles` makes it.
+            let rescanned;
+            let mut array = array;
+            if unscanned && let Some(d) = doubles {
+                rescanned = self::doubles(d.values().clone(), None);
+                (array, bounds) = (&rescanned.0, rescanned.1);
+                doubles = array.as_any().downcast_ref::<arrow_array::Float64Array>();
             }
             let mut writer = writer(column)?;
             for leaf in parquet::arrow::arrow_writer::compute_leaves(field, array)? {

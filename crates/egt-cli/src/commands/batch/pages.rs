@@ -46,6 +46,7 @@ use parquet::file::writer::{SerializedPageWriter, SerializedRowGroupWriter, Trac
 use parquet::schema::types::ColumnDescPtr;
 
 use super::repeats::{self, Pattern, uleb128};
+use super::stats::{self, Scan};
 
 /// The compression of every Parquet column `egt batch` writes.
 pub(super) const COMPRESSION: Compression = Compression::SNAPPY;
@@ -385,14 +386,16 @@ impl Pages {
 
 /// The doubles `values` of column `descr` (a flat optional DOUBLE), all
 /// present, as PLAIN pages of [`PAGE_BYTES`] each and a last one, without
-/// statistics (their Snappy streams egt's where `pattern` says how the
-/// values repeat: [`repeats`]); None when there are none, more than
-/// [`PAGE_ROWS`], or the column is not such (parquet-rs writes those).
+/// statistics. Where `pattern` says how the values repeat, their Snappy
+/// streams are egt's ([`repeats`]), and the [`Scan`] of the column comes
+/// with the chunk (from the values the streams hold as literals; a page
+/// Snappy's compressor takes is scanned). None when there are none, more
+/// than [`PAGE_ROWS`], or the column is not such (parquet-rs writes those).
 pub(super) fn doubles(
     descr: &ColumnDescPtr,
     values: &arrow_buffer::ScalarBuffer<f64>,
     pattern: Option<Pattern>,
-) -> Result<Option<Chunk>> {
+) -> Result<Option<(Chunk, Option<Scan>)>> {
     let flat_optional = descr.max_def_level() == 1 && descr.max_rep_level() == 0;
     if values.is_empty()
         || values.len() > PAGE_ROWS
@@ -408,8 +411,10 @@ pub(super) fn doubles(
         compressed,
         repeated,
         head,
+        firsts,
         snappy,
     } = &mut buffers;
+    let mut column: Option<Scan> = None;
     // PLAIN is little-endian, as Arrow holds doubles on this machine.
     #[cfg(target_endian = "little")]
     let bytes = values.inner().as_slice();
@@ -429,6 +434,7 @@ pub(super) fn doubles(
         let levels = (scratch.len() - 4) as u32;
         scratch[..4].copy_from_slice(&levels.to_le_bytes());
         let plain = scratch.len() + page.len();
+        let doubles = &values[k * (PAGE_BYTES / 8)..][..rows];
         // A grid's column: its repeats written as such (repeats.rs).
         let pattern = pattern.map(|p| p.skip(k * (PAGE_BYTES / 8)));
         let mut by_pattern = pattern.map(|_| repeated.take());
@@ -436,13 +442,13 @@ pub(super) fn doubles(
             (Some(p), Some(out)) => {
                 out.clear();
                 out.resize(HEADROOM, 0);
-                repeats::compress((scratch, page), p, snappy, head, out)
-                    .then(|| out.len() - HEADROOM)
+                repeats::compress((scratch, doubles), p, snappy, (head, firsts), out)
+                    .map(|literals| (out.len() - HEADROOM, literals))
             }
             _ => None,
         };
-        let (buffer, len, pool) = match (written, by_pattern) {
-            (Some(len), Some(buffer)) => (buffer, len, &mut *repeated),
+        let (buffer, len, pool, page_scan) = match (written, by_pattern) {
+            (Some((len, literals)), Some(buffer)) => (buffer, len, &mut *repeated, Some(literals)),
             (_, unused) => {
                 if let Some(buffer) = unused {
                     repeated.give(buffer);
@@ -450,13 +456,18 @@ pub(super) fn doubles(
                 scratch.extend_from_slice(page);
                 let mut buffer = compressed.take();
                 let len = compress(snappy, &mut buffer, scratch)?;
-                (buffer, len, &mut *compressed)
+                let page_scan = pattern.map(|_| stats::scan(doubles));
+                (buffer, len, &mut *compressed, page_scan)
             }
         };
+        if let Some(page_scan) = page_scan {
+            column = Some(column.map_or(page_scan, |c| c.and(page_scan)));
+        }
         pool.give(pages.push(buffer, len, plain, rows, Encoding::PLAIN)?);
     }
     BUFFERS.set(buffers);
-    pages.finish(descr, Encoding::PLAIN, None).map(Some)
+    let chunk = pages.finish(descr, Encoding::PLAIN, None)?;
+    Ok(Some((chunk, column)))
 }
 
 /// Column `descr` (flat and optional) of `len` nulls, which parquet-rs
@@ -510,6 +521,8 @@ struct Buffers {
     repeated: Pool,
     /// The levels and first period of such a page, for Snappy.
     head: Vec<u8>,
+    /// The first values of its runs.
+    firsts: Vec<f64>,
     snappy: snap::raw::Encoder,
 }
 
@@ -520,6 +533,7 @@ impl Default for Buffers {
             compressed: Pool::default(),
             repeated: Pool::default(),
             head: Vec::new(),
+            firsts: Vec::new(),
             snappy: snap::raw::Encoder::new(),
         }
     }

@@ -21,6 +21,8 @@
 //! tests), and is at most a quarter longer (tested), shorter on the grid of
 //! docs/benchmarks.md.
 
+use super::stats::{Scan, scan};
+
 /// How a column of a product design repeats from its first row on: value
 /// `(first + i) / stride % count` of its axis at row `i`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -53,34 +55,38 @@ const VALUE: usize = 8;
 const SHORT_RUNS: usize = 64;
 
 /// Onto the end of `out`, the Snappy (raw) stream of `prefix` followed by
-/// `values` (the bytes of doubles, 8 each), which repeat as `pattern` says.
-/// False, with what was added to `out` of no use, if a repeat the pattern
-/// claims is not in the bytes, or if the pattern saves nothing (each value
-/// once in the page): Snappy's own compressor is the one to use then. A first period of
-/// short runs is compressed by `snappy` (through `scratch`), which finds
-/// what repeats inside it.
+/// `values` (as PLAIN holds them: little-endian), which repeat as `pattern`
+/// says, and the [`Scan`] of the values the stream holds as literals: every
+/// other value is a copy of one of them, checked, so that scan is the
+/// page's. None, with what was added to `out` of no use, if a repeat the
+/// pattern claims is not in the values, or if the pattern saves nothing
+/// (each value once in the page): Snappy's own compressor is the one to use
+/// then. A first period of short runs is compressed by `snappy` (through
+/// `scratch`), which finds what repeats inside it; a run's first value is
+/// gathered in `firsts`.
 pub(super) fn compress(
-    (prefix, values): (&[u8], &[u8]),
+    (prefix, doubles): (&[u8], &[f64]),
     pattern: Pattern,
     snappy: &mut snap::raw::Encoder,
-    scratch: &mut Vec<u8>,
+    (scratch, firsts): (&mut Vec<u8>, &mut Vec<f64>),
     out: &mut Vec<u8>,
-) -> bool {
+) -> Option<Scan> {
     let Pattern { stride, count, .. } = pattern;
-    if !values.len().is_multiple_of(VALUE) || stride == 0 || count == 0 {
-        return false;
+    if stride == 0 || count == 0 || cfg!(target_endian = "big") {
+        return None;
     }
-    let n = values.len() / VALUE;
+    let values = arrow_buffer::ToByteSlice::to_byte_slice(doubles);
+    let n = doubles.len();
     // Values of one period; none after it when it is longer than the page.
     let period = stride.saturating_mul(count);
     if stride < SHORT_RUNS && period >= n {
-        return false;
+        return None;
     }
     let head = period.min(n);
     // Everything after the first period repeats the period before.
     let back = head * VALUE;
     if head < n && values[back..] != values[..values.len() - back] {
-        return false;
+        return None;
     }
     let total = prefix.len() + values.len();
     let base = out.len();
@@ -88,7 +94,7 @@ pub(super) fn compress(
     // The start of the bytes not yet in the stream (a literal to come),
     // counted in the prefix and values together.
     let mut literal = prefix.len() + back;
-    if stride < SHORT_RUNS {
+    let literals = if stride < SHORT_RUNS {
         // Snappy's stream of the prefix and the first period, with the
         // whole page's length in place of theirs (a varint as long or
         // longer, put where theirs ends).
@@ -101,24 +107,25 @@ pub(super) fn compress(
         uleb128(&mut theirs, scratch.len() as u64);
         let at = length.len() - theirs.len();
         out.resize(base + at + snap::raw::max_compress_len(scratch.len()), 0);
-        let Ok(written) = snappy.compress(scratch, &mut out[base + at..]) else {
-            return false;
-        };
+        let written = snappy.compress(scratch, &mut out[base + at..]).ok()?;
         out.truncate(base + at + written);
         out[base..base + length.len()].copy_from_slice(&length);
+        scan(&doubles[..head])
     } else {
         uleb128(out, total as u64);
         literal = 0;
+        firsts.clear();
         // The page may start inside a run; the others start whole.
         let (mut i, mut into) = (0, pattern.first % stride);
         while i < head {
             let end = head.min(i.saturating_add(stride - into));
             into = 0;
+            firsts.push(doubles[i]);
             if end - i > 1 {
                 // The run's values after its first, each the same as the
                 // one before: the bytes equal themselves one value on.
                 if values[(i + 1) * VALUE..end * VALUE] != values[i * VALUE..(end - 1) * VALUE] {
-                    return false;
+                    return None;
                 }
                 stream.literal(out, literal, prefix.len() + (i + 1) * VALUE);
                 copy(out, VALUE, (end - i - 1) * VALUE);
@@ -126,14 +133,15 @@ pub(super) fn compress(
             }
             i = end;
         }
-    }
+        scan(firsts)
+    };
     if head < n {
         stream.literal(out, literal, prefix.len() + back);
         copy(out, back, values.len() - back);
         literal = total;
     }
     stream.literal(out, literal, total);
-    true
+    Some(literals)
 }
 
 /// The bytes a stream holds: the prefix, then the values.
@@ -225,23 +233,39 @@ pub(super) fn uleb128(out: &mut Vec<u8>, mut v: u64) {
 
 #[cfg(test)]
 mod tests {
-    use super::{Pattern, compress as compress_with};
+    use super::{Pattern, compress as compress_with, scan};
 
-    fn compress(prefix: &[u8], values: &[u8], pattern: Pattern, out: &mut Vec<u8>) -> bool {
+    /// A stream of `values` after `prefix` into `out`, if the pattern
+    /// holds; then the scan of its literals is the page's.
+    fn compress(prefix: &[u8], values: &[f64], pattern: Pattern, out: &mut Vec<u8>) -> bool {
         let mut snappy = snap::raw::Encoder::new();
         out.clear();
-        compress_with((prefix, values), pattern, &mut snappy, &mut Vec::new(), out)
+        let scratch = (&mut Vec::new(), &mut Vec::new());
+        let got = compress_with((prefix, values), pattern, &mut snappy, scratch, out);
+        if let Some(literals) = got {
+            assert_eq!(
+                literals,
+                scan(values),
+                "{pattern:?}, {} values",
+                values.len()
+            );
+        }
+        got.is_some()
     }
 
     /// Rows `first..first + n` of a column of `count` values a `stride`
-    /// rows each, as bytes: a grid axis from -10 to -100, as `--grid`
-    /// spaces it.
-    fn column(first: usize, n: usize, stride: usize, count: usize) -> Vec<u8> {
+    /// rows each: a grid axis from -10 to -100, as `--grid` spaces it.
+    fn column(first: usize, n: usize, stride: usize, count: usize) -> Vec<f64> {
         let (a, b) = (-10.0, -100.0);
         let value = |k: usize| a + (b - a) * k as f64 / (count.max(2) - 1) as f64;
         (first..first + n)
-            .flat_map(|i| value((i / stride) % count).to_le_bytes())
+            .map(|i| value((i / stride) % count))
             .collect()
+    }
+
+    /// The bytes of PLAIN doubles.
+    fn bytes(values: &[f64]) -> Vec<u8> {
+        values.iter().flat_map(|v| v.to_le_bytes()).collect()
     }
 
     /// Snappy's decoder gives back the prefix and the values, for every
@@ -274,11 +298,11 @@ mod tests {
                             .decompress_vec(&out)
                             .unwrap_or_else(|e| panic!("{pattern:?} n {n}: {e}"));
                         assert!(
-                            page[..8] == prefix && page[8..] == values,
+                            page[..8] == prefix && page[8..] == bytes(&values),
                             "{pattern:?} n {n}"
                         );
                         let snappy = snap::raw::Encoder::new()
-                            .compress_vec(&[&prefix[..], &values].concat())
+                            .compress_vec(&[&prefix[..], &bytes(&values)].concat())
                             .unwrap_or_else(|e| panic!("{e}"));
                         assert!(
                             out.len() <= snappy.len() + snappy.len() / 4 + 16,
@@ -303,13 +327,26 @@ mod tests {
             let page = decoder
                 .decompress_vec(&out)
                 .unwrap_or_else(|e| panic!("{e}"));
-            assert!(page == [prefix, &values].concat());
+            assert!(page == [prefix, &bytes(&values)].concat());
+        }
+        // The literals' scan where a value is not finite, or a zero is the
+        // least or the greatest (the compare does not tell -0 from +0).
+        for axis in [[-1.0, 0.0, 2.0], [1.0, f64::NAN, 3.0], [-0.0, 1.0, 2.0]] {
+            for stride in [1, 70] {
+                let values: Vec<f64> = (0..8192).map(|i| axis[(i / stride) % 3]).collect();
+                let pattern = Pattern {
+                    first: 0,
+                    stride,
+                    count: 3,
+                };
+                assert!(compress(&prefix, &values, pattern, &mut out));
+            }
         }
     }
 
-    /// A repeat the pattern claims and the bytes do not hold gives no
-    /// stream: a value changed inside a run, in a later period, or in the
-    /// last byte; a pattern off by a row; bytes that are not whole values.
+    /// A repeat the pattern claims and the values do not hold gives no
+    /// stream: a value changed inside a run, in a later period, or the
+    /// last; a pattern off by a row.
     #[test]
     fn a_claim_the_bytes_do_not_hold_gives_no_stream() {
         let pattern = Pattern {
@@ -320,18 +357,12 @@ mod tests {
         let values = column(10, 3000, 70, 5);
         let mut out = Vec::new();
         assert!(compress(&[], &values, pattern, &mut out));
-        for byte in [8 * 3 + 2, 8 * 2000, values.len() - 1] {
+        for value in [3, 2000, values.len() - 1] {
             let mut changed = values.clone();
-            changed[byte] ^= 1;
-            assert!(!compress(&[], &changed, pattern, &mut out), "byte {byte}");
+            changed[value] = f64::from_bits(changed[value].to_bits() ^ 1);
+            assert!(!compress(&[], &changed, pattern, &mut out), "value {value}");
         }
         assert!(!compress(&[], &values, pattern.skip(1), &mut out));
-        assert!(!compress(
-            &[],
-            &values[..values.len() - 3],
-            pattern,
-            &mut out
-        ));
         // Short runs: only the periods after the first are claimed.
         let short = Pattern {
             first: 0,
@@ -340,7 +371,7 @@ mod tests {
         };
         let mut values = column(0, 300, 2, 5);
         assert!(compress(&[], &values, short, &mut out));
-        values[8 * 200] ^= 1;
+        values[200] = f64::from_bits(values[200].to_bits() ^ 1);
         assert!(!compress(&[], &values, short, &mut out));
         let zero = Pattern {
             stride: 0,

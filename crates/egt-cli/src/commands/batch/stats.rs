@@ -30,6 +30,21 @@ pub(super) struct Scan {
     pub bounds: Option<(f64, f64)>,
 }
 
+impl Scan {
+    /// The scan of two parts of a column, from theirs.
+    pub fn and(self, other: Scan) -> Scan {
+        Scan {
+            finite: self.finite && other.finite,
+            // Each part's bounds are neither zero nor NaN: so are the
+            // least and the greatest of them.
+            bounds: match (self.bounds, other.bounds) {
+                (Some((a, b)), Some((c, d))) => Some((a.min(c), b.max(d))),
+                _ => None,
+            },
+        }
+    }
+}
+
 /// Sets the row-group statistics of a chunk (`close`), written with statistics off,
 /// to those parquet-rs computes for `array` at `EnabledStatistics::Chunk`:
 /// min, max, null and NaN counts, and the definition levels' histogram.
@@ -299,7 +314,7 @@ mod tests {
                 columns.push(array);
                 known.push(Known {
                     bounds,
-                    pattern: None,
+                    ..Known::default()
                 });
             }
             columns.push(Arc::new(Float64Array::from(values.clone())));
@@ -471,5 +486,109 @@ mod tests {
             egt.len(),
             parquet.len()
         );
+    }
+
+    /// A grid's column, compressed and scanned by egt from its repeats
+    /// (repeats.rs: only the values its streams hold as literals are read
+    /// for its bounds), has parquet-rs's statistics and values: axes with a
+    /// zero at an end, -0, a NaN (the column's nulls then, which
+    /// parquet-rs writes), plain values, and more values than a page; a
+    /// value a row, runs of 100 and runs longer than a page (its pages'
+    /// bounds differ); blocks of one page and a part, of a few rows, and
+    /// starting inside a run.
+    #[test]
+    fn a_grids_columns_have_parquets_statistics() {
+        use super::super::repeats::Pattern;
+        use parquet::file::reader::FileReader;
+        // The last axis's values a row each are longer than a page:
+        // Snappy's compressor takes those pages, and they are scanned.
+        let long: Vec<f64> = (0..10_000).map(|k| 7.0 - k as f64 * 0.001).collect();
+        let axes: [&[f64]; 6] = [
+            &[-1.0, -2.5, 3.0],
+            &[0.0, 1.0, 2.0],
+            &[-0.0, -1.0],
+            &[1.0, f64::NAN, 2.0],
+            &[4.0, 5.0, f64::INFINITY],
+            &long,
+        ];
+        let blocks = [(0, 9000), (9000, 5), (9005, 20_000)];
+        for axis in axes {
+            for stride in [1, 100, 5000, 20_000] {
+                let file = |by: NumberStatistics| {
+                    let fields = vec![
+                        Field::new("row", DataType::UInt64, false),
+                        Field::new("x", DataType::Float64, true),
+                    ];
+                    let (encoder, mut sink) = columnar_file(BatchOutput::Parquet, fields, 0, by)
+                        .unwrap_or_else(|e| panic!("{e}"));
+                    let mut out = Vec::new();
+                    for (index, &(first, len)) in blocks.iter().enumerate() {
+                        let values: Vec<f64> = (first..first + len)
+                            .map(|i| axis[(i / stride) % axis.len()])
+                            .collect();
+                        // As `Encoder::encode` builds the column.
+                        let (column, known): (ArrayRef, _) = match by {
+                            NumberStatistics::Egt => (
+                                Arc::new(Float64Array::new(values.into(), None)),
+                                Known {
+                                    pattern: Some(Pattern {
+                                        first,
+                                        stride,
+                                        count: axis.len(),
+                                    }),
+                                    unscanned: true,
+                                    ..Known::default()
+                                },
+                            ),
+                            NumberStatistics::Parquet => {
+                                let (column, bounds) = doubles(values.into(), None);
+                                let known = Known {
+                                    bounds,
+                                    ..Known::default()
+                                };
+                                (column, known)
+                            }
+                        };
+                        let rows = RowNumbers::Run {
+                            first: first as u64,
+                            len,
+                        };
+                        let known = [Known::default(), known];
+                        let encoded = encoder
+                            .record_batch(rows, vec![column], &known, index)
+                            .unwrap_or_else(|e| panic!("block {index}: {e}"));
+                        sink.append(encoded, &mut out)
+                            .unwrap_or_else(|e| panic!("block {index}: {e}"));
+                    }
+                    sink.finish(&mut out).unwrap_or_else(|e| panic!("{e}"));
+                    bytes::Bytes::from(out)
+                };
+                let (egt, parquet) = (file(NumberStatistics::Egt), file(NumberStatistics::Parquet));
+                let read = |file: bytes::Bytes| {
+                    let reader = parquet::file::serialized_reader::SerializedFileReader::new(file)
+                        .unwrap_or_else(|e| panic!("{e}"));
+                    let groups = reader.metadata().row_groups().to_vec();
+                    let stats: Vec<_> = groups
+                        .iter()
+                        .map(|g| g.column(1).statistics().cloned())
+                        .collect();
+                    stats
+                };
+                let case = format!("axis {axis:?}, stride {stride}");
+                assert_eq!(read(egt.clone()), read(parquet.clone()), "{case}");
+                let values = |file: bytes::Bytes| {
+                    let reader = parquet::arrow::arrow_reader::ParquetRecordBatchReader::try_new(
+                        file,
+                        1 << 20,
+                    )
+                    .unwrap_or_else(|e| panic!("{e}"));
+                    let batches: Vec<_> = reader
+                        .map(|b| b.unwrap_or_else(|e| panic!("{e}")))
+                        .collect();
+                    batches
+                };
+                assert_eq!(values(egt), values(parquet), "{case}");
+            }
+        }
     }
 }
