@@ -21,7 +21,7 @@
 //! tests), and is at most a quarter longer (tested), shorter on the grid of
 //! docs/benchmarks.md.
 
-use super::stats::{Scan, scan};
+use super::stats::{Scan, same_bits, scan};
 
 /// How a column of a product design repeats from its first row on: value
 /// `(first + i) / stride % count` of its axis at row `i`.
@@ -85,7 +85,7 @@ pub(super) fn compress(
     let head = period.min(n);
     // Everything after the first period repeats the period before.
     let back = head * VALUE;
-    if head < n && values[back..] != values[..values.len() - back] {
+    if head < n && !same_bits(&doubles[head..], &doubles[..n - head]) {
         return None;
     }
     let total = prefix.len() + values.len();
@@ -124,7 +124,7 @@ pub(super) fn compress(
             if end - i > 1 {
                 // The run's values after its first, each the same as the
                 // one before: the bytes equal themselves one value on.
-                if values[(i + 1) * VALUE..end * VALUE] != values[i * VALUE..(end - 1) * VALUE] {
+                if !same_bits(&doubles[i + 1..end], &doubles[i..end - 1]) {
                     return None;
                 }
                 stream.literal(out, literal, prefix.len() + (i + 1) * VALUE);
@@ -345,24 +345,29 @@ mod tests {
     }
 
     /// A repeat the pattern claims and the values do not hold gives no
-    /// stream: a value changed inside a run, in a later period, or the
-    /// last; a pattern off by a row.
+    /// stream: a value changed inside a run, at the end of the first two
+    /// runs (the page starts 10 rows into the first), in a later period, or
+    /// the last, with and without a period in the page; a pattern off by a
+    /// row.
     #[test]
     fn a_claim_the_bytes_do_not_hold_gives_no_stream() {
-        let pattern = Pattern {
-            first: 10,
-            stride: 70,
-            count: 5,
-        };
-        let values = column(10, 3000, 70, 5);
         let mut out = Vec::new();
-        assert!(compress(&[], &values, pattern, &mut out));
-        for value in [3, 2000, values.len() - 1] {
-            let mut changed = values.clone();
-            changed[value] = f64::from_bits(changed[value].to_bits() ^ 1);
-            assert!(!compress(&[], &changed, pattern, &mut out), "value {value}");
+        for count in [5, 1000] {
+            let pattern = Pattern {
+                first: 10,
+                stride: 70,
+                count,
+            };
+            let values = column(10, 3000, 70, count);
+            assert!(compress(&[], &values, pattern, &mut out));
+            for value in [3, 59, 129, 2000, values.len() - 1] {
+                let mut changed = values.clone();
+                changed[value] = f64::from_bits(changed[value].to_bits() ^ 1);
+                let wrong = compress(&[], &changed, pattern, &mut out);
+                assert!(!wrong, "count {count}, value {value}");
+            }
+            assert!(!compress(&[], &values, pattern.skip(1), &mut out));
         }
-        assert!(!compress(&[], &values, pattern.skip(1), &mut out));
         // Short runs: only the periods after the first are claimed.
         let short = Pattern {
             first: 0,
@@ -373,10 +378,7 @@ mod tests {
         assert!(compress(&[], &values, short, &mut out));
         values[200] = f64::from_bits(values[200].to_bits() ^ 1);
         assert!(!compress(&[], &values, short, &mut out));
-        let zero = Pattern {
-            stride: 0,
-            ..pattern
-        };
+        let zero = Pattern { stride: 0, ..short };
         assert!(!compress(&[], &values, zero, &mut out));
     }
 }

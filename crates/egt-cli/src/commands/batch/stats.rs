@@ -246,6 +246,46 @@ impl pulp::WithSimd for Largest<'_> {
     }
 }
 
+/// Whether `a` and `b` hold the same doubles bit for bit (so -0 is not 0,
+/// and a NaN is its own bits), compared as wide as the machine compares
+/// without stopping at the first difference: libc's `memcmp`, which does,
+/// was 3.7 % of a one-thread 10^7-row batch checking a grid's repeats.
+pub(super) fn same_bits(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len() && pulp::Arch::new().dispatch(SameBits(a, b))
+}
+
+/// [`same_bits`] as a [`pulp::WithSimd`]: the differences' bits gathered in
+/// [`REGISTERS`] registers.
+struct SameBits<'a>(&'a [f64], &'a [f64]);
+
+impl pulp::WithSimd for SameBits<'_> {
+    type Output = bool;
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, simd: S) -> bool {
+        let a: &[u64] = pulp::bytemuck::cast_slice(self.0);
+        let b: &[u64] = pulp::bytemuck::cast_slice(self.1);
+        let ((va, ta), (vb, tb)) = (S::as_simd_u64s(a), S::as_simd_u64s(b));
+        let mut diff = [simd.splat_u64s(0); REGISTERS];
+        let ((ga, ra), (gb, rb)) = (va.as_chunks::<REGISTERS>(), vb.as_chunks::<REGISTERS>());
+        for (x, y) in ga.iter().zip(gb) {
+            for k in 0..REGISTERS {
+                diff[k] = simd.or_u64s(diff[k], simd.xor_u64s(x[k], y[k]));
+            }
+        }
+        for (k, (&x, &y)) in ra.iter().zip(rb).enumerate() {
+            diff[k] = simd.or_u64s(diff[k], simd.xor_u64s(x, y));
+        }
+        let mut any = ta.iter().zip(tb).fold(0, |d, (x, y)| d | (x ^ y));
+        for d in diff {
+            let mut out = [0u64; 8];
+            let n = std::mem::size_of::<S::u64s>() / 8;
+            simd.partial_store_u64s(&mut out[..n], d);
+            any |= out[..n].iter().fold(0, |d, x| d | x);
+        }
+        any == 0
+    }
+}
+
 /// Min and max in IEEE 754 total order of the values present, NaNs left out
 /// and counted; when every value present is NaN, the least and greatest NaN
 /// (parquet-rs's rule). None when no value is present.
@@ -345,15 +385,15 @@ mod tests {
         }
     }
 
-    /// The scan and the largest value give the same answers compiled for
-    /// every instruction set the machine has (the files' test runs only the
-    /// one dispatched to), and a plain fold's, on columns of every length up
-    /// to 80
+    /// The scan, the largest value and the bitwise comparison give the same
+    /// answers compiled for every instruction set the machine has (the
+    /// files' test runs only the one dispatched to), and a plain fold's, on
+    /// columns of every length up to 80
     /// with NaNs of either sign, infinities and zeros of either sign placed
     /// at random.
     #[test]
     fn the_scan_agrees_on_every_instruction_set() {
-        use super::{Largest, Scan, Scanning, largest, scan};
+        use super::{Largest, SameBits, Scan, Scanning, largest, same_bits, scan};
         use pulp::WithSimd;
         let mut next = random_bits(0x9e37_79b9_7f4a_7c15);
         let odd = [
@@ -405,6 +445,26 @@ mod tests {
                     largest == max,
                     "{set}, case {case}: {largest} for {values:?}"
                 );
+            }
+            // The values against themselves, and with one value's bit
+            // changed (the sign's too).
+            let mut other = values.clone();
+            let mut got = vec![("dispatched", same_bits(&values, &other))];
+            if len > 0 {
+                let (at, bit) = ((next() % len as u64) as usize, next() % 64);
+                other[at] = f64::from_bits(other[at].to_bits() ^ (1 << bit));
+                got.push(("dispatched, a bit", !same_bits(&values, &other)));
+                let scalar = SameBits(&values, &other).with_simd(pulp::Scalar);
+                got.push(("scalar, a bit", !scalar));
+                if let Some(simd) = pulp::x86::V3::try_new() {
+                    got.push(("AVX2, a bit", !SameBits(&values, &other).with_simd(simd)));
+                }
+                if let Some(simd) = pulp::x86::V4::try_new() {
+                    got.push(("AVX-512, a bit", !SameBits(&values, &other).with_simd(simd)));
+                }
+            }
+            for (set, right) in got {
+                assert!(right, "{set}, case {case}: {values:?}");
             }
         }
     }
