@@ -136,6 +136,8 @@
 //! assert!(t2 > t1 && t1 > 0.0);
 //! ```
 
+use std::sync::atomic::{AtomicUsize, Ordering};
+
 use rayon::prelude::*;
 
 use crate::error::{AnalysisError, Error, Result};
@@ -932,7 +934,7 @@ impl BatchPlan {
             return Vec::new();
         }
         let inputs = params.chunks(rows).map(|c| (c, false)).collect();
-        self.run_inputs(threads, inputs, rows, out)
+        self.run_inputs(threads, inputs, rows, out, &AtomicUsize::new(0))
     }
 
     /// [`BatchPlan::run_columns_with`] with each parameter column given
@@ -954,6 +956,40 @@ impl BatchPlan {
         params: &[Column<'_>],
         rows: usize,
         out: &mut [f64],
+    ) -> Vec<RowError> {
+        self.column_set(threads, params, rows, out, &AtomicUsize::new(0))
+    }
+
+    /// [`BatchPlan::run_column_set`], and whether every row's `cond.*`
+    /// values are at most `COND_WARN` / 2, so that no row is warned about:
+    /// true when the straight-line program, with condition bounds, solved
+    /// every row (a row it leaves, which is estimated or refused, or a block
+    /// another path solves, makes it false). A caller that warns about a
+    /// large condition number need not read those columns then.
+    ///
+    /// # Panics
+    /// As [`BatchPlan::run_column_set`].
+    pub fn run_column_set_bounded(
+        &self,
+        threads: Threads,
+        params: &[Column<'_>],
+        rows: usize,
+        out: &mut [f64],
+    ) -> (Vec<RowError>, bool) {
+        let unbounded = AtomicUsize::new(0);
+        let errors = self.column_set(threads, params, rows, out, &unbounded);
+        (errors, unbounded.into_inner() == 0)
+    }
+
+    /// [`BatchPlan::run_column_set`], counting in `unbounded` the rows the
+    /// program did not solve.
+    fn column_set(
+        &self,
+        threads: Threads,
+        params: &[Column<'_>],
+        rows: usize,
+        out: &mut [f64],
+        unbounded: &AtomicUsize,
     ) -> Vec<RowError> {
         let (p, q) = (self.parameters.len(), self.names.len());
         assert_eq!(params.len(), p, "params is not a column for each parameter");
@@ -989,17 +1025,20 @@ impl BatchPlan {
                 }
             })
             .collect();
-        self.run_inputs(threads, inputs, rows, out)
+        self.run_inputs(threads, inputs, rows, out, unbounded)
     }
 
     /// [`BatchPlan::run_column_set`] of `inputs`: each parameter column
     /// whole (`(column, false)`) or, fixed, as long as a task (`true`).
+    /// `unbounded` counts the rows the straight-line program did not solve
+    /// ([`BatchPlan::run_column_set_bounded`]).
     fn run_inputs(
         &self,
         threads: Threads,
         inputs: Vec<(&[f64], bool)>,
         rows: usize,
         out: &mut [f64],
+        unbounded: &AtomicUsize,
     ) -> Vec<RowError> {
         let (p, q) = (self.parameters.len(), self.names.len());
         // Each task: its rows of every output column.
@@ -1026,14 +1065,19 @@ impl BatchPlan {
                 (c, false) => &c[first..first + n],
                 (c, true) => &c[..n],
             };
-            if self.linear_may(column, n) {
+            let linear = self.linear_may(column, n);
+            if !linear && self.program.is_some() && n >= LANES_MIN_ROWS {
+                let solved = w.eval_program_columns(lanes, column, &mut cols, first, &mut errors);
+                unbounded.fetch_add(n - solved, Ordering::Relaxed);
+                return errors;
+            }
+            // Not the program's rows: their `cond.*` may be anything.
+            unbounded.fetch_add(n, Ordering::Relaxed);
+            if linear {
                 // Column by column, as `eval_linear` would row by row.
                 if w.eval_linear_columns(lin, column, &mut cols, first, &mut errors) {
                     return errors;
                 }
-            } else if self.program.is_some() && n >= LANES_MIN_ROWS {
-                w.eval_program_columns(lanes, column, &mut cols, first, &mut errors);
-                return errors;
             }
             // Transposed into rows, solved as `run` does, and back, a
             // tile of TILE rows at a time: the tile's rows stay in L1
@@ -2023,6 +2067,69 @@ mod tests {
             let scale = a.iter().map(|v| v.abs()).fold(0.0, f64::max);
             for c in (0..nq).filter(|c| !conds.contains(c)) {
                 assert!((a[c] - b[c]).abs() <= 1e-13 * scale, "row {r} column {c}");
+            }
+        }
+    }
+
+    /// `run_column_set_bounded` vouches for a block only when the program
+    /// solved every row, and then every row's `cond.*` is at most
+    /// `COND_WARN` / 2: a row near the lock of Fig. 3 (past the warning) in
+    /// the third task of the block makes it false, and so does a plan
+    /// without condition bounds (no program); on the calling thread and on
+    /// the pool alike.
+    #[test]
+    fn a_block_is_bounded_only_when_the_program_solved_every_row() {
+        use crate::numerics::linalg::COND_WARN;
+        let text = include_str!("../../../examples/fig3_example61.toml");
+        let t = Train::from_str(text, Format::Toml, "fig3").unwrap_or_else(|e| panic!("{e}"));
+        let spec =
+            BatchSpec::from_analysis(&t, Compute::Dynamics).unwrap_or_else(|e| panic!("{e}"));
+        let plain = BatchPlan::new(&t, &spec).unwrap_or_else(|e| panic!("{e}"));
+        let bounded = plain.clone().with_condition_bounds(true);
+        assert!(bounded.has_program() && !plain.has_program());
+        let col = |name: &str| plain.parameter(name).unwrap_or_else(|| panic!("no {name}"));
+        let (g1, g2) = (col("ratio.G1"), col("ratio.G2"));
+        let t1 = plain.base()[g1];
+        let rows = 600;
+        let ratios: Vec<f64> = (0..rows).map(|r| t1 * (1.0 + 0.001 * r as f64)).collect();
+        let mut near = ratios.clone();
+        near[550] = t1;
+        let lock = (1.0 + 1e-10) / t1;
+        for threads in [Threads::Calling, Threads::Pool] {
+            for (p, g1s, at_550, vouched) in [
+                (&bounded, &ratios, None, true),
+                (&bounded, &near, Some(lock), false),
+                (&plain, &ratios, None, false),
+            ] {
+                let g2s: Vec<f64> = (0..rows)
+                    .map(|r| match at_550 {
+                        Some(v) if r == 550 => v,
+                        _ => p.base()[g2],
+                    })
+                    .collect();
+                let columns: Vec<Column<'_>> = (0..p.parameters().len())
+                    .map(|k| match k {
+                        k if k == g1 => Column::Rows(g1s),
+                        k if k == g2 => Column::Rows(&g2s),
+                        k => Column::Every(p.base()[k]),
+                    })
+                    .collect();
+                let mut out = vec![0.0; rows * p.outputs().len()];
+                let (errors, said) = p.run_column_set_bounded(threads, &columns, rows, &mut out);
+                assert!(errors.is_empty(), "{errors:?}");
+                let locked = at_550.is_some();
+                assert_eq!(said, vouched, "{threads:?}, near the lock: {locked}");
+                let worst = |r: usize| {
+                    (p.condition_columns().iter())
+                        .map(|&c| out[c * rows + r])
+                        .fold(0.0, f64::max)
+                };
+                if said {
+                    assert!((0..rows).all(|r| worst(r) <= COND_WARN / 2.0));
+                }
+                if locked {
+                    assert!(worst(550) > COND_WARN, "{}", worst(550));
+                }
             }
         }
     }

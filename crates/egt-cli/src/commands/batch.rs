@@ -850,18 +850,21 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
         };
         // `run` writes every output of every row (NaN on failed rows).
         results.resize(len * nq, 0.0);
-        let errors = if varied_only {
+        // `bounded`: every row's condition numbers are known to be below
+        // the warning's (the compiled program, with bounds, solved every
+        // row), so that the block's warnings need no scan.
+        let (errors, bounded) = if varied_only {
             let columns: Vec<Column<'_>> = (base.iter().zip(&slot))
                 .map(|(&v, j)| match *j {
                     Some(j) => Column::Rows(&params[j * len..][..len]),
                     None => Column::Every(v),
                 })
                 .collect();
-            plan.run_column_set(within, &columns, len, results)
+            plan.run_column_set_bounded(within, &columns, len, results)
         } else if by_columns {
-            plan.run_columns_with(within, params, results)
+            (plan.run_columns_with(within, params, results), false)
         } else {
-            plan.run_with(within, params, results)
+            (plan.run_with(within, params, results), false)
         };
         // Most blocks have no failed row: a buffer of the same length is
         // cleared only where the last block set it (a block's 16 384
@@ -925,6 +928,7 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
                     positions: (&cols.positions, sel),
                     messages,
                     any_failed: !failed_rows.is_empty(),
+                    bounded,
                 },
             )?,
             None => Encoded::Text(format_text(
@@ -1359,6 +1363,9 @@ struct Block<'a> {
     messages: &'a [Option<String>],
     /// Some of `messages` are set.
     any_failed: bool,
+    /// Every row's condition numbers are below the warning's
+    /// ([`egt_core::batch::BatchPlan::run_column_set_bounded`]).
+    bounded: bool,
 }
 
 /// Parquet or Arrow IPC output: the CSV's columns, typed (row as an
@@ -1652,7 +1659,8 @@ impl Encoder {
         }
         // Most blocks have no row past the warning's limit: a scan of the
         // condition columns finds so, with no test row by row.
-        let warned = (plan.condition_columns().iter()).any(|&c| results.any_above(c, COND_WARN));
+        let warned = !b.bounded
+            && (plan.condition_columns().iter()).any(|&c| results.any_above(c, COND_WARN));
         columns.push(if warned {
             texts(len, |r| {
                 if failed(r) {
