@@ -425,14 +425,9 @@ pub(super) fn doubles(
         .collect::<Vec<u8>>();
     for (k, page) in bytes.chunks(PAGE_BYTES).enumerate() {
         let rows = page.len() / 8;
-        // The definition levels (version 1: their length first), one RLE
-        // run of 1s; then the values.
+        // The definition levels, every one 1; then the values.
         scratch.clear();
-        scratch.extend_from_slice(&[0; 4]);
-        uleb128(scratch, (rows as u64) << 1);
-        scratch.push(1);
-        let levels = (scratch.len() - 4) as u32;
-        scratch[..4].copy_from_slice(&levels.to_le_bytes());
+        definition_levels(scratch, rows, 1);
         let plain = scratch.len() + page.len();
         let doubles = &values[k * (PAGE_BYTES / 8)..][..rows];
         // A grid's column: its repeats written as such (repeats.rs).
@@ -488,11 +483,8 @@ pub(super) fn nulls(
     if len == 0 || !flat_optional || !one_page {
         return Ok(None);
     }
-    let mut plain = vec![0; 4];
-    uleb128(&mut plain, (len as u64) << 1);
-    plain.push(0);
-    let levels = (plain.len() - 4) as u32;
-    plain[..4].copy_from_slice(&levels.to_le_bytes());
+    let mut plain = Vec::new();
+    definition_levels(&mut plain, len, 0);
     let mut buffer = Arc::default();
     let compressed = compress(&mut snap::raw::Encoder::new(), &mut buffer, &plain)?;
     let mut pages = Pages::default();
@@ -504,6 +496,17 @@ pub(super) fn nulls(
         pages: pages.pages,
         close,
     }))
+}
+
+/// The definition levels of a flat optional column's data page (version 1:
+/// their length first), `rows` of them all `level` (0 or 1): one RLE run.
+fn definition_levels(out: &mut Vec<u8>, rows: usize, level: u8) {
+    let start = out.len();
+    out.extend_from_slice(&[0; 4]);
+    uleb128(out, (rows as u64) << 1);
+    out.push(level);
+    let len = (out.len() - start - 4) as u32;
+    out[start..start + 4].copy_from_slice(&len.to_le_bytes());
 }
 
 /// A thread's buffers for the pages of a chunk, kept from chunk to chunk

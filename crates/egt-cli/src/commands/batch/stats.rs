@@ -137,6 +137,7 @@ pub(super) fn scan(values: &[f64]) -> Scan {
 /// of compares waits less on the one before (one register each, the loop
 /// was bound by the compares' latency; as arrays of doubles left to the
 /// vectoriser, the accumulators were kept on the stack).
+#[derive(Clone, Copy)]
 struct Scanning<'a>(&'a [f64]);
 
 /// Registers an accumulator of [`Scanning`]: three accumulators, twelve of
@@ -210,6 +211,7 @@ pub(super) fn largest(values: &[f64]) -> f64 {
 
 /// [`largest`] as a [`pulp::WithSimd`]: an accumulator of [`REGISTERS`]
 /// registers, as [`Scanning`]'s.
+#[derive(Clone, Copy)]
 struct Largest<'a>(&'a [f64]);
 
 impl pulp::WithSimd for Largest<'_> {
@@ -256,6 +258,7 @@ pub(super) fn same_bits(a: &[f64], b: &[f64]) -> bool {
 
 /// [`same_bits`] as a [`pulp::WithSimd`]: the differences' bits gathered in
 /// [`REGISTERS`] registers.
+#[derive(Clone, Copy)]
 struct SameBits<'a>(&'a [f64], &'a [f64]);
 
 impl pulp::WithSimd for SameBits<'_> {
@@ -385,16 +388,27 @@ mod tests {
         }
     }
 
+    /// `work` compiled for each instruction set the machine has, and its
+    /// answers.
+    fn on_every_set<W: pulp::WithSimd + Copy>(work: W) -> Vec<(&'static str, W::Output)> {
+        let mut got = vec![("scalar", work.with_simd(pulp::Scalar))];
+        if let Some(simd) = pulp::x86::V3::try_new() {
+            got.push(("AVX2", work.with_simd(simd)));
+        }
+        if let Some(simd) = pulp::x86::V4::try_new() {
+            got.push(("AVX-512", work.with_simd(simd)));
+        }
+        got
+    }
+
     /// The scan, the largest value and the bitwise comparison give the same
     /// answers compiled for every instruction set the machine has (the
     /// files' test runs only the one dispatched to), and a plain fold's, on
-    /// columns of every length up to 80
-    /// with NaNs of either sign, infinities and zeros of either sign placed
-    /// at random.
+    /// columns of every length up to 80 with NaNs of either sign,
+    /// infinities and zeros of either sign placed at random.
     #[test]
     fn the_scan_agrees_on_every_instruction_set() {
         use super::{Largest, SameBits, Scan, Scanning, largest, same_bits, scan};
-        use pulp::WithSimd;
         let mut next = random_bits(0x9e37_79b9_7f4a_7c15);
         let odd = [
             f64::NAN,
@@ -420,26 +434,14 @@ mod tests {
                 finite,
                 bounds: plain.then_some((min, max)),
             };
-            let mut got = vec![("dispatched", scan(&values))];
-            got.push(("scalar", Scanning(&values).with_simd(pulp::Scalar)));
-            if let Some(simd) = pulp::x86::V3::try_new() {
-                got.push(("AVX2", Scanning(&values).with_simd(simd)));
-            }
-            if let Some(simd) = pulp::x86::V4::try_new() {
-                got.push(("AVX-512", Scanning(&values).with_simd(simd)));
-            }
+            let mut got = on_every_set(Scanning(&values));
+            got.push(("dispatched", scan(&values)));
             for (set, scan) in got {
                 assert_eq!(scan, expected, "{set}, case {case}: {values:?}");
             }
             // The largest, NaNs left out (-inf if nothing else).
-            let mut got = vec![("dispatched", largest(&values))];
-            got.push(("scalar", Largest(&values).with_simd(pulp::Scalar)));
-            if let Some(simd) = pulp::x86::V3::try_new() {
-                got.push(("AVX2", Largest(&values).with_simd(simd)));
-            }
-            if let Some(simd) = pulp::x86::V4::try_new() {
-                got.push(("AVX-512", Largest(&values).with_simd(simd)));
-            }
+            let mut got = on_every_set(Largest(&values));
+            got.push(("dispatched", largest(&values)));
             for (set, largest) in got {
                 assert!(
                     largest == max,
@@ -449,22 +451,19 @@ mod tests {
             // The values against themselves, and with one value's bit
             // changed (the sign's too).
             let mut other = values.clone();
-            let mut got = vec![("dispatched", same_bits(&values, &other))];
+            let mut got = on_every_set(SameBits(&values, &other));
+            got.push(("dispatched", same_bits(&values, &other)));
+            for (set, same) in got {
+                assert!(same, "{set}, case {case}: {values:?}");
+            }
             if len > 0 {
                 let (at, bit) = ((next() % len as u64) as usize, next() % 64);
                 other[at] = f64::from_bits(other[at].to_bits() ^ (1 << bit));
-                got.push(("dispatched, a bit", !same_bits(&values, &other)));
-                let scalar = SameBits(&values, &other).with_simd(pulp::Scalar);
-                got.push(("scalar, a bit", !scalar));
-                if let Some(simd) = pulp::x86::V3::try_new() {
-                    got.push(("AVX2, a bit", !SameBits(&values, &other).with_simd(simd)));
+                let mut got = on_every_set(SameBits(&values, &other));
+                got.push(("dispatched", same_bits(&values, &other)));
+                for (set, same) in got {
+                    assert!(!same, "{set}, case {case}, bit {bit} of {at}: {values:?}");
                 }
-                if let Some(simd) = pulp::x86::V4::try_new() {
-                    got.push(("AVX-512, a bit", !SameBits(&values, &other).with_simd(simd)));
-                }
-            }
-            for (set, right) in got {
-                assert!(right, "{set}, case {case}: {values:?}");
             }
         }
     }
