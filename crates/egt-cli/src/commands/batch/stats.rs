@@ -132,6 +132,21 @@ pub(super) fn scan(values: &[f64]) -> Scan {
     pulp::Arch::new().dispatch(Scanning(values))
 }
 
+/// `take(k, v)` for each vector `v` of `head` in order, `k` the register
+/// of [`REGISTERS`] it goes to, in turn.
+#[inline(always)]
+fn in_turn<V: Copy>(head: &[V], mut take: impl FnMut(usize, V)) {
+    let (groups, rest) = head.as_chunks::<REGISTERS>();
+    for group in groups {
+        for (k, &v) in group.iter().enumerate() {
+            take(k, v);
+        }
+    }
+    for (k, &v) in rest.iter().enumerate() {
+        take(k, v);
+    }
+}
+
 /// [`scan`] as a [`pulp::WithSimd`], compiled for each instruction set.
 /// Each accumulator is [`REGISTERS`] registers, so that a register's chain
 /// of compares waits less on the one before (one register each, the loop
@@ -155,20 +170,12 @@ impl pulp::WithSimd for Scanning<'_> {
         let mut odd = [simd.splat_f64s(0.0); REGISTERS];
         let zero = simd.splat_f64s(0.0);
         // A compare and a select: a NaN never replaces a bound.
-        let mut take = |k: usize, v: S::f64s| {
+        let take = |k: usize, v: S::f64s| {
             lo[k] = simd.select_f64s(simd.less_than_f64s(v, lo[k]), v, lo[k]);
             hi[k] = simd.select_f64s(simd.greater_than_f64s(v, hi[k]), v, hi[k]);
             odd[k] = simd.add_f64s(odd[k], simd.mul_f64s(v, zero));
         };
-        let (groups, rest) = head.as_chunks::<REGISTERS>();
-        for group in groups {
-            for (k, &v) in group.iter().enumerate() {
-                take(k, v);
-            }
-        }
-        for (k, &v) in rest.iter().enumerate() {
-            take(k, v);
-        }
+        in_turn(head, take);
         let (mut min, mut max, mut sum) = (f64::INFINITY, f64::NEG_INFINITY, 0.0);
         let lanes = |v: S::f64s| {
             let mut out = [0.0; 8];
@@ -220,18 +227,10 @@ impl pulp::WithSimd for Largest<'_> {
     fn with_simd<S: pulp::Simd>(self, simd: S) -> f64 {
         let (head, tail) = S::as_simd_f64s(self.0);
         let mut hi = [simd.splat_f64s(f64::NEG_INFINITY); REGISTERS];
-        let mut take = |k: usize, v: S::f64s| {
+        let take = |k: usize, v: S::f64s| {
             hi[k] = simd.select_f64s(simd.greater_than_f64s(v, hi[k]), v, hi[k]);
         };
-        let (groups, rest) = head.as_chunks::<REGISTERS>();
-        for group in groups {
-            for (k, &v) in group.iter().enumerate() {
-                take(k, v);
-            }
-        }
-        for (k, &v) in rest.iter().enumerate() {
-            take(k, v);
-        }
+        in_turn(head, take);
         let mut max = f64::NEG_INFINITY;
         for h in hi {
             let mut out = [f64::NEG_INFINITY; 8];
