@@ -61,12 +61,13 @@ use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
 use crate::analysis::dynamics::{DynamicsRequest, InverseDynamics};
-use crate::analysis::stability::{InertiaSplit, RK4_REAL_LIMIT, ReducedModel, num};
+use crate::analysis::stability::RK4_REAL_LIMIT;
 use crate::error::{AnalysisError, Error, Result, SpecErrorKind};
 use crate::model::mass::MassMatrix;
 use crate::model::train::{Curve, LinkId, Train};
 use crate::numerics::linalg::Lu;
 use crate::solve::kinematics::willis_residual;
+use crate::solve::reduced::{InertiaSplit, ReducedModel, num};
 
 /// Stop when a speed exceeds this [rad/s]: the solution has blown up.
 pub const DIVERGED_SPEED: f64 = 1e100;
