@@ -1,5 +1,14 @@
 #!/usr/bin/env python3
-"""Check that no module of egt-core imports a layer above its own.
+"""Check the layering of the workspace: egt-core's layers, the CLI's
+commands, and the bindings.
+
+1. No module of egt-core imports a layer above its own.
+2. No command of egt-cli (`commands/X.rs`, `commands/X/...`) imports another
+   command or `cli.rs`: `cli.rs` owns the grammar and the dispatch, the
+   commands share only `args`, `input`, `report` and `svg`.
+3. The Python bindings (egt-py) use the CLI only through `egt_cli::run` (the
+   wheel's `egt` command); the documents they return come from egt-views.
+4. egt-views (the JSON documents) depends on egt-core only.
 
 The layers of `crates/egt-core/src`, bottom to top (ARCHITECTURE.md):
 
@@ -20,7 +29,11 @@ import re
 import sys
 from pathlib import Path
 
-SRC = Path(__file__).resolve().parent.parent / "crates" / "egt-core" / "src"
+ROOT = Path(__file__).resolve().parent.parent
+SRC = ROOT / "crates" / "egt-core" / "src"
+CLI = ROOT / "crates" / "egt-cli" / "src"
+PY = ROOT / "crates" / "egt-py" / "src"
+VIEWS = ROOT / "crates" / "egt-views" / "src"
 
 LAYERS = {
     "error": 0,
@@ -76,6 +89,49 @@ def code_lines(text: str):
         yield n, line
 
 
+def cli_problems() -> list[str]:
+    """Commands that import another command or the grammar (`cli.rs`)."""
+    commands_dir = CLI / "commands"
+    names = {p.stem for p in commands_dir.iterdir() if p.suffix == ".rs" and p.stem != "mod"}
+    names |= {p.name for p in commands_dir.iterdir() if p.is_dir()}
+    bad = []
+    for path in sorted(commands_dir.rglob("*.rs")):
+        rel = path.relative_to(commands_dir)
+        own = rel.parts[0].removesuffix(".rs")
+        depth = len(rel.parts) - 1  # 0 for commands/X.rs, 1 for commands/X/Y.rs
+        for n, line in code_lines(path.read_text()):
+            where = f"egt-cli/src/commands/{rel}:{n}"
+            if re.search(r"\bcrate::cli\b", line):
+                bad.append(f"{where}: a command imports cli.rs: {line.strip()}")
+            for m in re.finditer(r"\bcrate::commands::(\w+)", line):
+                if m.group(1) != own:
+                    bad.append(f"{where}: command `{own}` imports command `{m.group(1)}`")
+            up = r"\bsuper::" + r"super::" * depth + r"(\w+)"
+            for m in re.finditer(up, line):
+                if m.group(1) in names and m.group(1) != own:
+                    bad.append(f"{where}: command `{own}` imports command `{m.group(1)}`")
+    return bad
+
+
+def bindings_problems() -> list[str]:
+    """Bindings that reach into the CLI beyond its entry point, and views
+    that depend on a front end."""
+    bad = []
+    for path in sorted(PY.rglob("*.rs")):
+        for n, line in code_lines(path.read_text()):
+            for m in re.finditer(r"\begt_cli::(\w+)", line):
+                if m.group(1) != "run":
+                    bad.append(
+                        f"egt-py/src/{path.relative_to(PY)}:{n}: the bindings use "
+                        f"egt_cli::{m.group(1)} (only egt_cli::run is theirs)"
+                    )
+    for path in sorted(VIEWS.rglob("*.rs")):
+        for n, line in code_lines(path.read_text()):
+            if re.search(r"\b(egt_cli|egt_py|pyo3|clap)\b", line):
+                bad.append(f"egt-views/src/{path.relative_to(VIEWS)}:{n}: depends on a front end")
+    return bad
+
+
 def main() -> int:
     exports = root_exports((SRC / "lib.rs").read_text())
     bad = []
@@ -95,10 +151,14 @@ def main() -> int:
                         f"{path.relative_to(SRC)}:{n}: layer `{name}` imports "
                         f"`{top}` above it: {line.strip()}"
                     )
+    bad += cli_problems() + bindings_problems()
     if bad:
-        print("layers.py: imports that run up a layer:", *bad, sep="\n  ")
+        print("layers.py: imports that break the layering:", *bad, sep="\n  ")
         return 1
-    print(f"layers.py: ok, no module of egt-core imports a layer above its own")
+    print(
+        "layers.py: ok: no module of egt-core imports a layer above its own; "
+        "no command imports another or cli.rs; the bindings use only egt_cli::run"
+    )
     return 0
 
 

@@ -1,12 +1,48 @@
-//! Argument groups and parsers that several commands share (loads, input
-//! speeds, torque curves, `LINK=VALUE` pairs), and their conversion into the
+//! Argument groups and parsers that several commands share (the spec and
+//! output formats, loads, input speeds, torque curves, `LINK=VALUE` pairs), and their conversion into the
 //! core's requests. The defaults themselves are decided in the core
 //! (`DynamicsRequest::resolve`, `SimulationRequest::resolve`).
 
+use std::path::PathBuf;
+
 use anyhow::Context;
+use clap::ValueEnum;
 use egt_core::model::train::Curve;
 use egt_core::numerics::exact::{self, Q};
 use egt_core::{DynamicsRequest, LinkId, LoadOverrides, MassMatrix, SpeedInput, Train};
+
+/// How results are printed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
+pub enum OutputFormat {
+    /// Aligned, readable tables.
+    #[default]
+    Table,
+    /// One JSON document (names, not ids; exact values as strings like "162/77").
+    Json,
+}
+
+/// The text format of a spec.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SpecFormat {
+    /// TOML.
+    Toml,
+    /// JSON.
+    Json,
+}
+
+/// Arguments shared by every command that reads a spec.
+#[derive(Debug, Clone, clap::Args)]
+pub struct SpecArgs {
+    /// The spec file (TOML or JSON), or `-` for standard input.
+    #[arg(value_name = "SPEC")]
+    pub spec: PathBuf,
+    /// Spec format; by default from the extension (`.json` is JSON), or sniffed on stdin.
+    #[arg(long, value_enum, value_name = "FORMAT")]
+    pub spec_format: Option<SpecFormat>,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = OutputFormat::Table)]
+    pub format: OutputFormat,
+}
 
 /// Loads, accelerations and driving links, from flags or the spec's `[analysis]`.
 #[derive(Debug, Clone, clap::Args)]

@@ -1,9 +1,10 @@
-//! Command-line definitions (clap derive). One enum variant per subcommand;
-//! each subcommand's arguments live beside its implementation in `commands/`.
+//! The command line's grammar and dispatch (clap derive): one enum variant
+//! per subcommand, whose arguments live beside its implementation in
+//! `commands/`, and the one match that runs it.
 
-use std::path::PathBuf;
+use std::io::Write;
 
-use clap::{Args, Parser, Subcommand, ValueEnum};
+use clap::{CommandFactory, Parser, Subcommand};
 
 use crate::commands;
 
@@ -17,7 +18,7 @@ pub struct Cli {
 }
 
 /// The subcommands. To add one: a file in `commands/`, a variant here and a
-/// line in `commands::run`.
+/// line in [`run`].
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Validate a spec: degree of freedom, topology checks, circuit table.
@@ -54,35 +55,41 @@ pub enum Command {
     Synth(commands::synth::Args),
 }
 
-/// How results are printed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
-pub enum OutputFormat {
-    /// Aligned, readable tables.
-    #[default]
-    Table,
-    /// One JSON document (names, not ids; exact values as strings like "162/77").
-    Json,
+/// Refuse, before any work, what cannot go to this stdout: a binary batch
+/// output (Parquet, Arrow) to a terminal.
+///
+/// # Errors
+/// A spec error naming `--output`.
+pub fn preflight(command: &Command, stdout_is_terminal: bool) -> anyhow::Result<()> {
+    match command {
+        Command::Batch(args) if stdout_is_terminal => {
+            commands::batch::refuse_binary_to_terminal(args)
+        }
+        _ => Ok(()),
+    }
 }
 
-/// The text format of a spec.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum SpecFormat {
-    /// TOML.
-    Toml,
-    /// JSON.
-    Json,
-}
-
-/// Arguments shared by every command that reads a spec.
-#[derive(Debug, Clone, Args)]
-pub struct SpecArgs {
-    /// The spec file (TOML or JSON), or `-` for standard input.
-    #[arg(value_name = "SPEC")]
-    pub spec: PathBuf,
-    /// Spec format; by default from the extension (`.json` is JSON), or sniffed on stdin.
-    #[arg(long, value_enum, value_name = "FORMAT")]
-    pub spec_format: Option<SpecFormat>,
-    /// Output format.
-    #[arg(long, value_enum, default_value_t = OutputFormat::Table)]
-    pub format: OutputFormat,
+/// Run one subcommand, writing its report to `out`.
+///
+/// # Errors
+/// Whatever the subcommand reports; `main` maps it to an exit code.
+pub fn run(command: &Command, out: &mut dyn Write) -> anyhow::Result<()> {
+    match command {
+        Command::Check(args) => commands::check::run(args, out),
+        Command::Circuits(args) => commands::circuits::run(args, out),
+        Command::Kinematics(args) => commands::kinematics::run(args, out),
+        Command::Dynamics(args) => commands::dynamics::run(args, out),
+        Command::Power(args) => commands::power::run(args, out),
+        Command::Shift(args) => commands::shift::run(args, out),
+        Command::ShiftSim(args) => commands::shift_sim::run(args, out),
+        Command::Graph(args) => commands::graph::run(args, out),
+        Command::Stability(args) => commands::stability::run(args, out),
+        Command::Simulate(args) => commands::simulate::run(args, out),
+        Command::Batch(args) => commands::batch::run(args, out),
+        Command::Schema(args) => commands::schema::run(args, out),
+        Command::Completions(args) => commands::completions::run(args, &mut Cli::command(), out),
+        Command::Man(args) => commands::completions::man(args, Cli::command(), out),
+        Command::Enumerate(args) => commands::enumerate::run(args, out),
+        Command::Synth(args) => commands::synth::run(args, out),
+    }
 }

@@ -8,7 +8,7 @@ use std::path::Path;
 use anyhow::Context;
 use egt_core::{Format, Train};
 
-use crate::cli::{SpecArgs, SpecFormat};
+use crate::args::{SpecArgs, SpecFormat};
 
 /// A validated train and the name its spec was read under.
 #[derive(Debug)]

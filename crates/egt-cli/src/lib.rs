@@ -10,7 +10,6 @@
 mod args;
 pub mod cli;
 pub mod commands;
-pub mod document;
 mod input;
 mod report;
 mod svg;
@@ -39,8 +38,8 @@ where
     };
     let terminal = io::IsTerminal::is_terminal(&io::stdout());
     let mut out = io::BufWriter::new(io::stdout().lock());
-    let result = commands::preflight(&cli.command, terminal)
-        .and_then(|()| commands::run(&cli.command, &mut out))
+    let result = cli::preflight(&cli.command, terminal)
+        .and_then(|()| cli::run(&cli.command, &mut out))
         .and_then(|()| Ok(out.flush()?));
     match result {
         Ok(()) => 0,

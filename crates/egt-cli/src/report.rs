@@ -5,8 +5,9 @@
 use std::io::{self, Write};
 
 use egt_core::Train;
-use egt_core::numerics::exact::{self, Q};
 use serde::Serialize;
+
+pub use egt_views::format::{exact, float, sci, value_of};
 
 /// Column alignment.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -90,52 +91,12 @@ impl Table {
     }
 }
 
-/// A float for a table: up to 6 decimals, trailing zeros dropped; scientific
-/// notation for very large or very small magnitudes.
-pub fn float(x: f64) -> String {
-    if !x.is_finite() {
-        return x.to_string();
-    }
-    if x == 0.0 {
-        return "0".to_string();
-    }
-    let a = x.abs();
-    if !(1e-4..1e9).contains(&a) {
-        return format!("{x:.6e}");
-    }
-    let s = format!("{x:.6}");
-    let s = s.trim_end_matches('0').trim_end_matches('.');
-    if s == "-0" {
-        "0".to_string()
-    } else {
-        s.to_string()
-    }
-}
-
-/// An exact rational as `p/q` (or `p`).
-pub fn exact(q: &Q) -> String {
-    exact::display(q)
-}
-
 /// Write `value` as pretty JSON followed by a newline.
 ///
 /// # Errors
 /// I/O errors (a closed pipe among them).
 pub fn json(out: &mut dyn Write, value: &impl Serialize) -> anyhow::Result<()> {
     json_document(out, &value_of(value)?)
-}
-
-/// A report as a JSON value, with the `version` field every report carries
-/// (so that stored results can be traced to the egt that wrote them).
-///
-/// # Errors
-/// A value serde cannot represent (none of the reports has one).
-pub fn value_of(value: &impl Serialize) -> serde_json::Result<serde_json::Value> {
-    let mut value = serde_json::to_value(value)?;
-    if let serde_json::Value::Object(map) = &mut value {
-        map.insert("version".into(), env!("CARGO_PKG_VERSION").into());
-    }
-    Ok(value)
 }
 
 /// Pretty JSON of a document as it is (the JSON Schema, which carries no version field).
@@ -163,19 +124,6 @@ pub fn title(train: &Train, source: &str) -> String {
         .map_or_else(|| source.to_string(), str::to_string)
 }
 
-/// Six significant digits, scientific when small or large.
-pub fn sci(v: f64) -> String {
-    if v == 0.0 {
-        return "0".into();
-    }
-    let a = v.abs();
-    if (1e-3..1e6).contains(&a) {
-        float(v)
-    } else {
-        format!("{v:.6e}")
-    }
-}
-
 /// A link name safe in a CSV header (quotes and commas replaced).
 pub fn csv_name(n: &str) -> String {
     n.chars()
@@ -189,18 +137,48 @@ pub fn csv_name(n: &str) -> String {
         .collect()
 }
 
+/// Write the circuit table, indented by `indent`.
+///
+/// # Errors
+/// I/O errors.
+pub fn circuit_table(
+    out: &mut dyn Write,
+    rows: &[egt_views::circuits::CircuitRow],
+    indent: usize,
+) -> io::Result<()> {
+    let mut t = Table::new(&[
+        "#m",
+        "gear pair",
+        "gear i",
+        "gear j",
+        "transfer vertex k",
+        "ratio tau",
+        "exact",
+        "levels i/j",
+    ])
+    .right(&[0, 5, 6]);
+    for r in rows {
+        t.row(vec![
+            format!("#{}", r.m),
+            r.gear_pair.clone(),
+            r.gear_i.clone(),
+            r.gear_j.clone(),
+            r.carrier.clone(),
+            match (&r.ratio_symbolic, r.ratio) {
+                (Some(sym), _) => sym.clone(),
+                (None, Some(x)) => float(x),
+                (None, None) => "?".to_string(),
+            },
+            r.ratio_exact.clone().unwrap_or_else(|| "-".to_string()),
+            format!("{}, {}", r.level_i, r.level_j),
+        ]);
+    }
+    t.write(out, indent)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn floats_are_short_and_signed_zero_is_plain() {
-        assert_eq!(float(2.0), "2");
-        assert_eq!(float(162.0 / 77.0), "2.103896");
-        assert_eq!(float(-0.0), "0");
-        assert_eq!(float(-1e-9), "-1.000000e-9");
-        assert_eq!(float(1e12), "1.000000e12");
-    }
 
     #[test]
     fn table_pads_and_right_aligns() {

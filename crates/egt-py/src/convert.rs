@@ -134,7 +134,7 @@ pub fn to_py<'py>(py: Python<'py>, value: &impl serde::Serialize) -> Result<Boun
     Ok(py.import("json")?.call_method1("loads", (text,))?)
 }
 
-/// A core result with the CLI's JSON document of it (`egt_cli::document`),
+/// A core result with the CLI's JSON document of it (`egt_views`),
 /// as the pair `[result, document]`: the Python result classes read the
 /// first and return the second from `to_dict()`, so that the CLI and Python
 /// give one shape.

@@ -17,15 +17,16 @@ mod transmission;
 
 use pyo3::prelude::*;
 
-/// The native part of the `egt` package.
 /// Run the `egt` command line with `args` (without the program name) and
 /// return its exit code; output goes to the process's stdout and stderr.
 /// The GIL is released while it runs.
+#[cfg(feature = "command")]
 #[pyfunction]
 fn cli(py: Python<'_>, args: Vec<String>) -> u8 {
     py.detach(|| egt_cli::run(std::iter::once("egt".to_string()).chain(args)))
 }
 
+/// The native part of the `egt` package.
 #[pymodule]
 fn _egt(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
@@ -39,6 +40,7 @@ fn _egt(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(motion::shift_sim, m)?)?;
     m.add_function(wrap_pyfunction!(transmission::gear, m)?)?;
     m.add_function(wrap_pyfunction!(transmission::shift_table, m)?)?;
+    #[cfg(feature = "command")]
     m.add_function(wrap_pyfunction!(cli, m)?)?;
     m.add_function(wrap_pyfunction!(atlas::atlas, m)?)?;
     m.add_function(wrap_pyfunction!(atlas::atlas_member, m)?)?;

@@ -57,7 +57,7 @@ pub fn stability<'py>(
                 .transpose()?,
         };
         let rep = t.stability(&req)?;
-        let doc = egt_cli::document::stability(t, &core.source, &rep);
+        let doc = egt_views::stability(t, &core.source, &rep);
         convert::documented(py, &rep, doc)
     })
 }
@@ -181,13 +181,7 @@ pub fn simulate<'py>(
             }
             (None, None) => (t.simulate(&req)?, Some(t.analysis().curves.clone())),
         };
-        let doc = egt_cli::document::simulation(
-            t,
-            &core.source,
-            &sim,
-            req.options.t_end,
-            used.as_deref(),
-        );
+        let doc = egt_views::simulation(t, &core.source, &sim, req.options.t_end, used.as_deref());
         convert::documented(py, &sim, doc)
     })
 }
@@ -269,7 +263,7 @@ pub fn shift_sim<'py>(
     };
     // The document is the run's serde form (and the version): one payload.
     guard(|| {
-        let doc = egt_cli::document::shift_simulation(&sim.run(&core.train)?)
+        let doc = egt_views::shift_simulation(&sim.run(&core.train)?)
             .map_err(|e| value_error(e.to_string()))?;
         to_py(py, &doc)
     })

@@ -10,7 +10,7 @@ use numpy::PyArray2;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use egt_cli::document;
+use egt_views as document;
 
 use crate::convert::{self, dmatrix, to_py};
 use crate::errors::{Result, guard, value_error};

@@ -19,7 +19,7 @@ pub fn gear<'py>(py: Python<'py>, core: &TrainCore, state: &str) -> Result<Bound
             .train
             .shift_table()
             .map_or(g.ratio > 0.0, |t| t.forward[g.index]);
-        convert::documented(py, &g, egt_cli::document::gear(&core.train, &g, forward))
+        convert::documented(py, &g, egt_views::gear(&core.train, &g, forward))
     })
 }
 
@@ -28,7 +28,7 @@ pub fn gear<'py>(py: Python<'py>, core: &TrainCore, state: &str) -> Result<Bound
 pub fn shift_table<'py>(py: Python<'py>, core: &TrainCore) -> Result<Bound<'py, PyAny>> {
     guard(|| {
         let table = core.train.shift_table()?;
-        let doc = egt_cli::document::shift(&core.train, &core.source, &table);
+        let doc = egt_views::shift(&core.train, &core.source, &table);
         convert::documented(py, &table, doc)
     })
 }

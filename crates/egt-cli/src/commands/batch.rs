@@ -21,7 +21,7 @@ use egt_core::{Error, Format, SpecErrorKind, Train};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
-use crate::cli::{OutputFormat, SpecArgs, SpecFormat};
+use crate::args::{OutputFormat, SpecArgs, SpecFormat};
 use crate::input;
 
 mod pages;

@@ -6,10 +6,10 @@ use std::io::Write;
 
 use serde::Serialize;
 
-use crate::cli::{OutputFormat, SpecArgs};
-use crate::commands::circuits::{self, CircuitRow};
+use crate::args::{OutputFormat, SpecArgs};
 use crate::input;
 use crate::report;
+use egt_views::circuits::{self, CircuitRow};
 
 /// Arguments of `egt check`.
 #[derive(Debug, Clone, clap::Args)]
@@ -73,7 +73,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
                 writeln!(out, "  ok  {c}")?;
             }
             writeln!(out, "fundamental circuits:")?;
-            circuits::write_table(out, &report.circuits, 2)?;
+            report::circuit_table(out, &report.circuits, 2)?;
             for w in &report.warnings {
                 writeln!(out, "warning: {w}")?;
             }

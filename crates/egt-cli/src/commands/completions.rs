@@ -1,13 +1,10 @@
 //! `egt completions SHELL` and `egt man`: shell completions and the man page,
-//! generated from the same clap definitions as the parser, so they never
-//! drift from the commands.
+//! generated from the same clap definitions as the parser (handed in by
+//! `cli.rs`), so they never drift from the commands.
 
 use std::io::Write;
 
-use clap::CommandFactory;
 use clap_complete::Shell;
-
-use crate::cli::Cli;
 
 /// Arguments of `egt completions`.
 #[derive(Debug, Clone, clap::Args)]
@@ -25,9 +22,8 @@ pub struct ManArgs {}
 ///
 /// # Errors
 /// I/O errors.
-pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
-    let mut cmd = Cli::command();
-    clap_complete::generate(args.shell, &mut cmd, "egt", out);
+pub fn run(args: &Args, cmd: &mut clap::Command, out: &mut dyn Write) -> anyhow::Result<()> {
+    clap_complete::generate(args.shell, cmd, "egt", out);
     Ok(())
 }
 
@@ -35,7 +31,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
 ///
 /// # Errors
 /// I/O errors.
-pub fn man(_args: &ManArgs, out: &mut dyn Write) -> anyhow::Result<()> {
-    clap_mangen::Man::new(Cli::command()).render(out)?;
+pub fn man(_args: &ManArgs, cmd: clap::Command, out: &mut dyn Write) -> anyhow::Result<()> {
+    clap_mangen::Man::new(cmd).render(out)?;
     Ok(())
 }

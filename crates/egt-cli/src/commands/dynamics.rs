@@ -7,11 +7,11 @@
 use std::io::Write;
 
 use anyhow::Context;
-use egt_core::{DynamicsRequest, InverseDynamics, LinkId, Train};
-use serde::Serialize;
+use egt_core::Train;
+use egt_views::dynamics::{Report, build};
 
 use crate::args::{LoadArgs, load_request, mass_if_needed};
-use crate::cli::{OutputFormat, SpecArgs};
+use crate::args::{OutputFormat, SpecArgs};
 use crate::input;
 use crate::report::{self, Table};
 
@@ -30,48 +30,6 @@ pub struct Args {
     #[arg(long, value_name = "LINK")]
     pub reduce_to: Option<String>,
 }
-
-#[derive(Debug, Serialize)]
-struct LinkRow {
-    name: String,
-    acceleration: f64,
-    torque: f64,
-    role: String,
-}
-
-#[derive(Debug, Serialize)]
-struct MeshRow {
-    pair: String,
-    gear_i: String,
-    gear_j: String,
-    carrier: String,
-    multiplier: f64,
-    torque_i: f64,
-    torque_j: f64,
-    torque_carrier: f64,
-    /// F_im and F_jm of eq. (11), summed over identical copies.
-    force: Option<[f64; 2]>,
-    /// The same per copy (per planet).
-    force_per_copy: Option<[f64; 2]>,
-    copies: u32,
-}
-
-#[derive(Debug, Serialize)]
-pub(crate) struct Report {
-    source: String,
-    name: Option<String>,
-    dof: usize,
-    static_analysis: bool,
-    links: Vec<LinkRow>,
-    driving_torques: Vec<(String, f64)>,
-    housing_torque: f64,
-    meshes: Vec<MeshRow>,
-    equivalent_inertia: Option<(String, f64)>,
-    reduced_mass_matrix: Option<(Vec<String>, Vec<Vec<f64>>)>,
-    conditions: [f64; 2],
-    warnings: Vec<String>,
-}
-
 /// Run `egt dynamics`.
 ///
 /// # Errors
@@ -104,110 +62,6 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         OutputFormat::Table => write_table(out, train, &loaded.source, &report),
     }
 }
-
-pub(crate) fn build(
-    train: &Train,
-    source: &str,
-    req: &DynamicsRequest,
-    r: &InverseDynamics,
-    reduce_to: Option<LinkId>,
-) -> Report {
-    let name = |l: LinkId| train.link_name(l).to_string();
-    let links = train
-        .links()
-        .iter()
-        .enumerate()
-        .map(|(i, l)| {
-            let id = LinkId::from_index(i);
-            let role = if id == train.frame() {
-                "frame (housing)"
-            } else if req.driving.contains(&id) {
-                "driving"
-            } else if req.torques.iter().any(|t| t.0 == id) {
-                "loaded"
-            } else {
-                ""
-            };
-            LinkRow {
-                name: l.name.clone(),
-                acceleration: r.acceleration[i],
-                torque: r.torque[i],
-                role: role.into(),
-            }
-        })
-        .collect();
-    let meshes = train
-        .circuits()
-        .iter()
-        .zip(train.gears())
-        .zip(&r.meshes)
-        .map(|((c, g), m)| {
-            let copies = train.link(c.gear_i).copies.max(train.link(c.gear_j).copies);
-            MeshRow {
-                pair: g.name.clone(),
-                gear_i: name(c.gear_i),
-                gear_j: name(c.gear_j),
-                carrier: name(c.carrier),
-                multiplier: m.multiplier,
-                torque_i: m.torque_i,
-                torque_j: m.torque_j,
-                torque_carrier: m.torque_carrier,
-                force: m.force,
-                force_per_copy: m
-                    .force
-                    .map(|[a, b]| [a / f64::from(copies), b / f64::from(copies)]),
-                copies,
-            }
-        })
-        .collect();
-    // Equivalent inertia / reduced mass matrix, when inertia data exists.
-    let has_inertia = train
-        .links()
-        .iter()
-        .any(|l| l.inertia.is_some() || l.mass.is_some());
-    let (mut equivalent_inertia, mut reduced_mass_matrix) = (None, None);
-    let mut warnings = r.warnings.clone();
-    if has_inertia {
-        if train.dof() == 1 {
-            let to = reduce_to.unwrap_or(req.driving[0]);
-            match train.equivalent_inertia(to) {
-                Ok(j) => equivalent_inertia = Some((name(to), j)),
-                Err(e) => warnings.push(format!("no equivalent inertia: {e}")),
-            }
-        } else {
-            match train.reduced_mass_matrix(&req.driving, &[]) {
-                Ok(m) => {
-                    reduced_mass_matrix = Some((
-                        req.driving.iter().map(|&l| name(l)).collect(),
-                        (0..m.nrows())
-                            .map(|i| (0..m.ncols()).map(|j| m[(i, j)]).collect())
-                            .collect(),
-                    ));
-                }
-                Err(e) => warnings.push(format!("no reduced mass matrix: {e}")),
-            }
-        }
-    }
-    Report {
-        source: source.to_string(),
-        name: train.name().map(str::to_string),
-        dof: train.dof(),
-        static_analysis: req.accelerations.iter().all(|a| a.1 == 0.0),
-        links,
-        driving_torques: r
-            .driving_torques
-            .iter()
-            .map(|&(l, t)| (name(l), t))
-            .collect(),
-        housing_torque: r.torque[train.frame().index()],
-        meshes,
-        equivalent_inertia,
-        reduced_mass_matrix,
-        conditions: r.conditions,
-        warnings,
-    }
-}
-
 fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> anyhow::Result<()> {
     let kind = if r.static_analysis {
         "static-force analysis"

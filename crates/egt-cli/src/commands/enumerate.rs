@@ -13,7 +13,7 @@ use egt_core::synthesis::{AtlasRequest, Fractionation, GraphLevel, enumerate_wit
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::args::parse_part;
-use crate::cli::{OutputFormat, SpecArgs};
+use crate::args::{OutputFormat, SpecArgs};
 use crate::input;
 
 /// Arguments of `egt enumerate`.

@@ -13,7 +13,7 @@ use egt_core::spec::ElementKind;
 use egt_core::{Edge, LinkId, Train};
 use serde::Serialize;
 
-use crate::cli::{OutputFormat, SpecArgs};
+use crate::args::{OutputFormat, SpecArgs};
 use crate::input;
 use crate::report;
 

@@ -7,13 +7,12 @@
 use std::io::Write;
 
 use anyhow::Context;
+use egt_core::Train;
 use egt_core::numerics::exact;
-use egt_core::{LinkId, SpeedInput, Speeds, Train};
-use num_traits::Zero;
-use serde::Serialize;
+use egt_views::kinematics::{Report, build};
 
 use crate::args::{InputArg, parse_input, speed_inputs};
-use crate::cli::{OutputFormat, SpecArgs};
+use crate::args::{OutputFormat, SpecArgs};
 use crate::input;
 use crate::report::{self, Table};
 
@@ -28,49 +27,6 @@ pub struct Args {
     #[arg(short, long = "input", value_name = "LINK=SPEED", value_parser = parse_input)]
     pub inputs: Vec<InputArg>,
 }
-
-#[derive(Debug, Serialize)]
-struct InputRow {
-    link: String,
-    speed: f64,
-    exact: String,
-}
-
-#[derive(Debug, Serialize)]
-struct LinkRow {
-    name: String,
-    frame: bool,
-    input: bool,
-    /// False for a planet without tooth count: its speed is unknown.
-    known: bool,
-    speed: Option<f64>,
-    exact: Option<String>,
-    /// 1-DOF trains: input speed / link speed (None where the link is at rest or unknown).
-    ratio: Option<f64>,
-    ratio_exact: Option<String>,
-}
-
-#[derive(Debug, Serialize)]
-struct RelativeRow {
-    link: String,
-    carrier: String,
-    speed: f64,
-    exact: Option<String>,
-}
-
-#[derive(Debug, Serialize)]
-pub(crate) struct Report {
-    source: String,
-    name: Option<String>,
-    dof: usize,
-    inputs: Vec<InputRow>,
-    links: Vec<LinkRow>,
-    relative: Vec<RelativeRow>,
-    residual: f64,
-    condition: f64,
-    warnings: Vec<String>,
-}
-
 /// Run `egt kinematics`.
 ///
 /// # Errors
@@ -98,75 +54,6 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         OutputFormat::Table => write_table(out, train, &loaded.source, &report),
     }
 }
-
-pub(crate) fn build(train: &Train, source: &str, inputs: &[SpeedInput], s: &Speeds) -> Report {
-    let one_dof = inputs.len() == 1;
-    let is_input = |l: LinkId| inputs.iter().any(|i| i.link == l);
-    let exact_of = |l: LinkId| s.exact.as_ref().map(|e| &e[l.index()]);
-    let links = train
-        .links()
-        .iter()
-        .enumerate()
-        .map(|(i, link)| {
-            let id = LinkId::from_index(i);
-            let known = s.known[i];
-            let speed = known.then_some(s.speed[i]);
-            let ex = exact_of(id).filter(|_| known);
-            let (ratio, ratio_exact) = if one_dof && known && id != train.frame() {
-                let inp = &inputs[0];
-                let ratio = (s.speed[i] != 0.0).then(|| inp.speed / s.speed[i]);
-                let ratio_exact = match (&inp.exact, ex) {
-                    (Some(a), Some(b)) if !b.is_zero() => Some(report::exact(&(a / b))),
-                    _ => None,
-                };
-                (ratio, ratio_exact)
-            } else {
-                (None, None)
-            };
-            LinkRow {
-                name: link.name.clone(),
-                frame: id == train.frame(),
-                input: is_input(id),
-                known,
-                speed,
-                exact: ex.map(report::exact),
-                ratio,
-                ratio_exact,
-            }
-        })
-        .collect();
-    Report {
-        source: source.to_string(),
-        name: train.name().map(str::to_string),
-        dof: train.dof(),
-        inputs: inputs
-            .iter()
-            .map(|i| InputRow {
-                link: train.link_name(i.link).to_string(),
-                speed: i.speed,
-                exact: i
-                    .exact
-                    .as_ref()
-                    .map_or_else(|| report::float(i.speed), report::exact),
-            })
-            .collect(),
-        links,
-        relative: s
-            .relative
-            .iter()
-            .map(|r| RelativeRow {
-                link: train.link_name(r.link).to_string(),
-                carrier: train.link_name(r.carrier).to_string(),
-                speed: r.speed,
-                exact: r.exact.as_ref().map(report::exact),
-            })
-            .collect(),
-        residual: s.residual,
-        condition: s.condition,
-        warnings: s.warnings.clone(),
-    }
-}
-
 fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> anyhow::Result<()> {
     let given: Vec<String> = r
         .inputs

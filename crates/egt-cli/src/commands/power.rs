@@ -6,12 +6,12 @@
 use std::io::Write;
 
 use anyhow::Context;
-use egt_core::analysis::power::{Driver, PowerFlow, PowerRequest};
-use egt_core::{LinkId, Train};
-use serde::Serialize;
+use egt_core::Train;
+use egt_core::analysis::power::PowerRequest;
+use egt_views::power::{Report, build};
 
 use crate::args::{InputArg, LoadArgs, load_request, mass_if_needed, parse_input, speed_inputs};
-use crate::cli::{OutputFormat, SpecArgs};
+use crate::args::{OutputFormat, SpecArgs};
 use crate::input;
 use crate::report::{self, Table};
 
@@ -29,47 +29,6 @@ pub struct Args {
     #[arg(long)]
     pub ideal: bool,
 }
-
-#[derive(Debug, Serialize)]
-struct LinkRow {
-    name: String,
-    speed: f64,
-    torque: f64,
-    external_power: f64,
-    inertial_power: f64,
-}
-
-#[derive(Debug, Serialize)]
-struct MeshRow {
-    pair: String,
-    carrier: String,
-    /// Power sent into the mesh by gear i, gear j and the carrier (absolute frame).
-    absolute: [f64; 3],
-    /// Rolling power in the carrier's frame.
-    rolling: f64,
-    driver: Option<String>,
-    efficiency: f64,
-    loss: f64,
-}
-
-#[derive(Debug, Serialize)]
-pub(crate) struct Report {
-    source: String,
-    name: Option<String>,
-    losses: bool,
-    links: Vec<LinkRow>,
-    meshes: Vec<MeshRow>,
-    input_power: f64,
-    output_power: f64,
-    loss: f64,
-    kinetic_rate: f64,
-    efficiency: Option<f64>,
-    circulation_ratio: f64,
-    circulating_meshes: Vec<String>,
-    circulating_shafts: Vec<String>,
-    warnings: Vec<String>,
-}
-
 /// Run `egt power`.
 ///
 /// # Errors
@@ -94,64 +53,6 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         OutputFormat::Table => write_table(out, train, &loaded.source, &report),
     }
 }
-
-pub(crate) fn build(train: &Train, source: &str, pf: &PowerFlow, losses: bool) -> Report {
-    let name = |l: LinkId| train.link_name(l).to_string();
-    let links = pf
-        .links
-        .iter()
-        .map(|l| LinkRow {
-            name: name(l.link),
-            speed: pf.speeds.speed[l.link.index()],
-            torque: pf.dynamics.torque[l.link.index()],
-            external_power: l.external,
-            inertial_power: l.inertial,
-        })
-        .collect();
-    let meshes = pf
-        .meshes
-        .iter()
-        .map(|m| {
-            let c = &train.circuits()[m.gear.index()];
-            MeshRow {
-                pair: train.gears()[m.gear.index()].name.clone(),
-                carrier: name(c.carrier),
-                absolute: m.absolute,
-                rolling: m.rolling,
-                driver: match m.driver {
-                    Driver::GearI => Some(name(c.gear_i)),
-                    Driver::GearJ => Some(name(c.gear_j)),
-                    Driver::None => None,
-                },
-                efficiency: m.efficiency,
-                loss: m.loss,
-            }
-        })
-        .collect();
-    let (cm, cs) = pf.circulating.clone().unwrap_or_default();
-    let mut warnings = pf.notes.clone();
-    warnings.extend(pf.dynamics.warnings.iter().cloned());
-    Report {
-        source: source.to_string(),
-        name: train.name().map(str::to_string),
-        losses,
-        links,
-        meshes,
-        input_power: pf.input_power,
-        output_power: pf.output_power,
-        loss: pf.loss,
-        kinetic_rate: pf.kinetic_rate,
-        efficiency: pf.efficiency,
-        circulation_ratio: pf.circulation_ratio,
-        circulating_meshes: cm
-            .iter()
-            .map(|g| train.gears()[g.index()].name.clone())
-            .collect(),
-        circulating_shafts: cs.iter().map(|&l| name(l)).collect(),
-        warnings,
-    }
-}
-
 fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> anyhow::Result<()> {
     let f = report::float;
     let kind = if r.losses {

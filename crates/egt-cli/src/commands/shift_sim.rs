@@ -15,7 +15,7 @@ use egt_core::shift_dynamics::{
     Capacity, FrictionLaw, InputTorque, ShiftMethod, ShiftResult, ShiftSim,
 };
 
-use crate::cli::{OutputFormat, SpecArgs};
+use crate::args::{OutputFormat, SpecArgs};
 use crate::input;
 use crate::report::{self, Table};
 use crate::svg::{GAP, Line, PLOT_H, Panel, TOP, legend, panel};
@@ -50,7 +50,7 @@ pub struct Args {
     pub spec: PathBuf,
     /// Spec format; by default from the extension.
     #[arg(long, value_enum, value_name = "FORMAT")]
-    pub spec_format: Option<crate::cli::SpecFormat>,
+    pub spec_format: Option<crate::args::SpecFormat>,
     /// Output format.
     #[arg(long, value_enum, default_value_t = ShiftFormat::Table)]
     pub format: ShiftFormat,

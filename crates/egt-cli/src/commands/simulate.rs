@@ -10,15 +10,13 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use egt_core::model::train::Curve;
 use egt_core::{
-    LinearCurves, LinkId, Method, ReducedDynamics, Simulation, SimulationOverrides,
-    SimulationRequest, Train,
+    LinearCurves, Method, ReducedDynamics, SimulationOverrides, SimulationRequest, Train,
 };
-use serde::Serialize;
+use egt_views::simulation::{MeshOut, Report, build, equilibrium};
 
 use crate::args::{ModelArgs, curves, parse_pair, resolve_pairs};
-use crate::cli::{OutputFormat, SpecArgs, SpecFormat};
+use crate::args::{OutputFormat, SpecArgs, SpecFormat};
 use crate::input;
 use crate::report::{self, Table};
 
@@ -81,52 +79,6 @@ pub struct Args {
     #[arg(long)]
     pub reactions: bool,
 }
-
-#[derive(Debug, Serialize)]
-struct SampleOut {
-    t: f64,
-    speeds: Vec<f64>,
-    drift: f64,
-    energy: f64,
-    work: f64,
-    power: f64,
-}
-
-#[derive(Debug, Serialize)]
-pub(crate) struct MeshOut {
-    gear: String,
-    multiplier: f64,
-    torque_i: f64,
-    torque_j: f64,
-    torque_carrier: f64,
-}
-
-#[derive(Debug, Serialize)]
-pub(crate) struct Report {
-    source: String,
-    name: Option<String>,
-    dof: usize,
-    method: Method,
-    dt: f64,
-    t_end: f64,
-    steps: usize,
-    eigenvalues: Vec<f64>,
-    rk4_step_limit: Option<f64>,
-    max_drift: f64,
-    energy_error: f64,
-    newton_iterations: usize,
-    diverged: Option<egt_core::motion::simulate::Divergence>,
-    /// The equilibrium of the curves (link speeds), when it is unique.
-    equilibrium: Option<Vec<f64>>,
-    /// Growth rate of the deviation from the equilibrium over the second half.
-    observed_rate: Option<f64>,
-    /// Link names, in the order of every `speeds` array.
-    links: Vec<String>,
-    reactions: Option<Vec<MeshOut>>,
-    warnings: Vec<String>,
-    samples: Vec<SampleOut>,
-}
-
 /// Run `egt simulate`.
 ///
 /// # Errors
@@ -237,84 +189,6 @@ fn request(train: &Train, args: &Args) -> anyhow::Result<SimulationRequest> {
         }
         e => anyhow::Error::new(e),
     })
-}
-
-impl Report {
-    /// Indices of the links to plot (every link but the frame).
-    fn links_plotted(&self, train: &Train) -> Vec<LinkId> {
-        (0..self.links.len())
-            .map(LinkId::from_index)
-            .filter(|&l| l != train.frame())
-            .collect()
-    }
-}
-
-/// The equilibrium of the curves (link speeds, when unique), to plot and to
-/// measure the deviation against, and the observed growth rate of that
-/// deviation over the second half of the run.
-pub(crate) fn equilibrium(
-    train: &Train,
-    curves: &[Curve],
-    sim: &Simulation,
-) -> (Option<Vec<f64>>, Option<f64>) {
-    if curves.is_empty() {
-        return (None, None);
-    }
-    let equilibrium = train
-        .automatic_coordinates()
-        .and_then(|coords| train.reduced_model(&coords, curves))
-        .ok()
-        .and_then(|m| m.equilibrium().ok())
-        .map(|(e, _)| e);
-    let observed_rate = equilibrium.as_ref().and_then(|e| {
-        let mass = train.mass_matrix().ok()?;
-        let half = sim.samples.last()?.t / 2.0;
-        sim.growth_rate(train, &mass, e, half)
-    });
-    (equilibrium, observed_rate)
-}
-
-pub(crate) fn build(
-    train: &Train,
-    source: &str,
-    sim: &Simulation,
-    t_end: f64,
-    equilibrium: Option<Vec<f64>>,
-    observed_rate: Option<f64>,
-    reactions: Option<Vec<MeshOut>>,
-) -> Report {
-    Report {
-        source: source.to_string(),
-        name: train.name().map(str::to_string),
-        dof: train.dof(),
-        method: sim.method,
-        dt: sim.dt,
-        t_end,
-        steps: sim.steps,
-        eigenvalues: sim.eigenvalues.clone(),
-        rk4_step_limit: sim.rk4_step_limit,
-        max_drift: sim.max_drift,
-        energy_error: sim.energy_error,
-        newton_iterations: sim.newton_iterations,
-        diverged: sim.diverged.clone(),
-        equilibrium,
-        observed_rate,
-        links: train.links().iter().map(|l| l.name.clone()).collect(),
-        reactions,
-        warnings: sim.warnings.clone(),
-        samples: sim
-            .samples
-            .iter()
-            .map(|s| SampleOut {
-                t: s.t,
-                speeds: s.speed.clone(),
-                drift: s.drift,
-                energy: s.energy,
-                work: s.work,
-                power: s.power,
-            })
-            .collect(),
-    }
 }
 
 fn write_csv(out: &mut dyn Write, train: &Train, r: &Report) -> anyhow::Result<()> {

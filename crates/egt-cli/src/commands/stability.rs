@@ -8,12 +8,11 @@
 use std::io::Write;
 
 use anyhow::Context;
-use egt_core::numerics::linalg::matrix_rows;
-use egt_core::{LinkId, StabilityReport, StabilityRequest, Train};
-use serde::Serialize;
+use egt_core::{StabilityRequest, Train};
+use egt_views::stability::{Report, build};
 
 use crate::args::{ModelArgs, curves, parse_pair, resolve_pairs};
-use crate::cli::{OutputFormat, SpecArgs};
+use crate::args::{OutputFormat, SpecArgs};
 use crate::input;
 use crate::report::{self, Table};
 
@@ -33,72 +32,6 @@ pub struct Args {
     #[arg(short, long = "input", value_name = "LINK=SPEED", value_parser = parse_pair)]
     pub inputs: Vec<(String, f64)>,
 }
-
-#[derive(Debug, Serialize)]
-struct LinkValue {
-    link: String,
-    value: f64,
-}
-
-#[derive(Debug, Serialize)]
-struct ModeOut {
-    eigenvalue: f64,
-    time_constant: Option<f64>,
-    /// The mode in the driving coordinates (largest link speed 1).
-    coordinates: Vec<LinkValue>,
-    /// Every link's speed in the mode.
-    speeds: Vec<LinkValue>,
-}
-
-#[derive(Debug, Serialize)]
-struct MasslessOut {
-    links: Vec<String>,
-    slope: f64,
-    speeds: Vec<LinkValue>,
-}
-
-#[derive(Debug, Serialize)]
-struct OperatingOut {
-    source: egt_core::analysis::stability::OperatingSource,
-    speeds: Vec<LinkValue>,
-    torques: Vec<LinkValue>,
-    /// V^T T per driving link: zero at a steady state.
-    reduced_torque: Vec<LinkValue>,
-    residual: f64,
-    steady: bool,
-    equilibrium: Option<Vec<LinkValue>>,
-}
-
-#[derive(Debug, Serialize)]
-pub(crate) struct Report {
-    source: String,
-    name: Option<String>,
-    dof: usize,
-    coordinates: Vec<String>,
-    coordinate_source: egt_core::CoordinateSource,
-    gamma_condition: f64,
-    orthogonality: f64,
-    /// [V] (eq. 23): one row per link (the frame's is zero), one column per driving link.
-    velocity: Vec<Vec<f64>>,
-    links: Vec<String>,
-    /// V^T M V (eq. 25).
-    mass: Vec<Vec<f64>>,
-    /// V^T diag(K) V (eq. 26-27).
-    slope: Vec<Vec<f64>>,
-    operating: OperatingOut,
-    eigenvalues: Vec<f64>,
-    modes: Vec<ModeOut>,
-    massless: Vec<MasslessOut>,
-    verdict: egt_core::Verdict,
-    reason: String,
-    margin: f64,
-    tolerance: f64,
-    rk4_step_limit: Option<f64>,
-    stiffness: Option<f64>,
-    eigen_residual: f64,
-    warnings: Vec<String>,
-}
-
 /// Run `egt stability`.
 ///
 /// # Errors
@@ -129,93 +62,6 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         OutputFormat::Table => write_table(out, train, &loaded.source, &report),
     }
 }
-
-fn values(train: &Train, v: &[f64], skip_frame: bool) -> Vec<LinkValue> {
-    v.iter()
-        .enumerate()
-        .filter(|(l, _)| !(skip_frame && LinkId::from_index(*l) == train.frame()))
-        .map(|(l, &value)| LinkValue {
-            link: train.link_name(LinkId::from_index(l)).to_string(),
-            value,
-        })
-        .collect()
-}
-
-pub(crate) fn build(train: &Train, source: &str, rep: &StabilityReport) -> Report {
-    let m = &rep.model;
-    let st = &rep.stability;
-    let op = &rep.operating;
-    let names: Vec<String> = m
-        .coordinates
-        .iter()
-        .map(|&l| train.link_name(l).to_string())
-        .collect();
-    let per_coord = |v: &[f64]| -> Vec<LinkValue> {
-        names
-            .iter()
-            .zip(v)
-            .map(|(n, &value)| LinkValue {
-                link: n.clone(),
-                value,
-            })
-            .collect()
-    };
-    Report {
-        source: source.to_string(),
-        name: train.name().map(str::to_string),
-        dof: m.dof(),
-        coordinates: names.clone(),
-        coordinate_source: m.source,
-        gamma_condition: m.gamma_condition,
-        orthogonality: m.orthogonality,
-        velocity: matrix_rows(&m.velocity),
-        links: train.links().iter().map(|l| l.name.clone()).collect(),
-        mass: matrix_rows(&m.mass),
-        slope: matrix_rows(&m.slope),
-        operating: OperatingOut {
-            source: op.source,
-            speeds: values(train, &op.speed, true),
-            torques: values(train, &op.torque, true),
-            reduced_torque: per_coord(&op.reduced_torque),
-            residual: op.residual,
-            steady: op.steady,
-            equilibrium: op.equilibrium.as_ref().map(|e| values(train, e, true)),
-        },
-        eigenvalues: st.eigenvalues.clone(),
-        modes: st
-            .modes
-            .iter()
-            .map(|md| ModeOut {
-                eigenvalue: md.eigenvalue,
-                time_constant: md.time_constant,
-                coordinates: per_coord(&md.coordinates),
-                speeds: values(train, &md.speeds, true),
-            })
-            .collect(),
-        massless: st
-            .massless
-            .iter()
-            .map(|d| MasslessOut {
-                links: d
-                    .links
-                    .iter()
-                    .map(|&l| train.link_name(l).to_string())
-                    .collect(),
-                slope: d.slope,
-                speeds: values(train, &d.speeds, true),
-            })
-            .collect(),
-        verdict: st.verdict,
-        reason: st.reason.clone(),
-        margin: st.margin,
-        tolerance: st.tolerance,
-        rk4_step_limit: st.rk4_step_limit,
-        stiffness: st.stiffness,
-        eigen_residual: st.residual,
-        warnings: rep.warnings.clone(),
-    }
-}
-
 fn square(
     out: &mut dyn Write,
     label: &str,

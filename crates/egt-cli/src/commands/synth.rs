@@ -22,7 +22,7 @@ use serde::Serialize;
 const PROGRESS_PARTS: usize = 32;
 
 use crate::args::parse_part;
-use crate::cli::{OutputFormat, SpecFormat};
+use crate::args::{OutputFormat, SpecFormat};
 use crate::input::{is_stdin, read_text};
 use crate::report::{self, Table};
 
@@ -194,7 +194,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
             let table = train
                 .shift_table()
                 .with_context(|| format!("{name}: gear table"))?;
-            r.shift = Some(crate::document::shift(&train, &name, &table)?);
+            r.shift = Some(egt_views::shift(&train, &name, &table)?);
         }
         rows.push(r);
     }

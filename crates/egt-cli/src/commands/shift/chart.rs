@@ -6,8 +6,8 @@
 
 use std::fmt::Write as _;
 
-use super::Report;
 use crate::svg::{PALETTE, esc, fmt_tick, ticks};
+use egt_views::shift::{GearRow, Report};
 
 const WIDTH: f64 = 980.0;
 const LEFT: f64 = 70.0;
@@ -124,7 +124,7 @@ pub fn svg(r: &Report) -> String {
                 .collect()
         })
         .unwrap_or_default();
-    let speed = |g: &super::GearRow, link: &str| {
+    let speed = |g: &GearRow, link: &str| {
         g.speeds
             .iter()
             .find(|x| x.link == link)
