@@ -224,3 +224,52 @@ fn a_stiff_shift_says_when_the_explicit_method_is_held_back() {
     let table = egt(&args, None);
     assert!(table.stdout.contains("stiff from t ="), "{}", table.stdout);
 }
+
+/// `--torque-table` (which panicked inside clap before it was one value): a
+/// flat table is the constant torque, so the run must be the same shift.
+#[test]
+fn a_flat_torque_table_is_the_constant_torque() {
+    let constant = run(&with(&["--format", "json"]));
+    assert_eq!(constant.code, 0, "{}", constant.stderr);
+    let table: Vec<String> = UPSHIFT
+        .iter()
+        .map(|s| s.to_string())
+        .map(|s| {
+            if s == "--input-torque" {
+                "--torque-table".into()
+            } else {
+                s
+            }
+        })
+        .map(|s| {
+            if s == "300" {
+                "0:300,1000:300".into()
+            } else {
+                s
+            }
+        })
+        .chain(["--format".into(), "json".into()])
+        .collect();
+    let flat = run(&table);
+    assert_eq!(flat.code, 0, "{}", flat.stderr);
+    let a: Value = serde_json::from_str(&constant.stdout).expect("json");
+    let b: Value = serde_json::from_str(&flat.stdout).expect("json");
+    for key in ["lock_time", "shift_time"] {
+        let (x, y) = (a[key].as_f64().expect(key), b[key].as_f64().expect(key));
+        assert!((x - y).abs() <= 1e-12 * x.abs(), "{key}: {x} against {y}");
+    }
+    // A malformed table is a usage error naming the flag, not a panic.
+    let bad: Vec<String> = table
+        .iter()
+        .map(|s| {
+            if s == "0:300,1000:300" {
+                "0:300,1000".into()
+            } else {
+                s.clone()
+            }
+        })
+        .collect();
+    let r = run(&bad);
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("--torque-table"), "{}", r.stderr);
+}

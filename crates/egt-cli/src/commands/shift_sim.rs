@@ -73,7 +73,7 @@ pub struct Args {
     pub input_torque: Option<f64>,
     /// Input torque over input speed, `W:T,W:T,...` [rad/s : N m], linear between points.
     #[arg(long, value_name = "TABLE", value_parser = parse_table)]
-    pub torque_table: Option<Vec<(f64, f64)>>,
+    pub torque_table: Option<TorqueTable>,
     /// Road load at the output, `C0,C1,C2`: c0 sgn(w) + c1 w + c2 w|w| [N m].
     #[arg(long, value_name = "C0,C1,C2", value_parser = parse_three, default_value = "0,0,0")]
     pub road_load: [f64; 3],
@@ -150,10 +150,17 @@ fn parse_capacity(s: &str) -> Result<Capacity, String> {
     }
 }
 
-fn parse_table(s: &str) -> Result<Vec<(f64, f64)>, String> {
+/// The points of `--torque-table`, one flag value. (A bare `Vec` here would
+/// tell clap that the flag takes many values of one point each, and its
+/// parser's `Vec` would then not be the type clap stores: a panic.)
+#[derive(Debug, Clone, PartialEq)]
+pub struct TorqueTable(pub Vec<(f64, f64)>);
+
+fn parse_table(s: &str) -> Result<TorqueTable, String> {
     s.split(',')
         .map(|p| numbers(p, 2, ':').map(|v| (v[0], v[1])))
-        .collect()
+        .collect::<Result<_, _>>()
+        .map(TorqueTable)
 }
 
 /// Runs `egt shift-sim`.
@@ -172,7 +179,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         to: args.to.clone(),
         input_speed: args.input_speed,
         input_torque: match (&args.torque_table, args.input_torque) {
-            (Some(t), _) => InputTorque::Table(t.clone()),
+            (Some(t), _) => InputTorque::Table(t.0.clone()),
             (None, t) => InputTorque::Constant(t.unwrap_or_default()),
         },
         road_load: args.road_load,
