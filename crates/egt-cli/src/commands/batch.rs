@@ -24,10 +24,7 @@ use rayon::prelude::*;
 use crate::cli::{OutputFormat, SpecArgs, SpecFormat};
 use crate::input;
 
-mod pages;
-mod repeats;
 mod rows;
-mod stats;
 
 /// Scenarios solved and written per block (bounds memory; output streams per block).
 const BLOCK: usize = 1 << 14;
@@ -310,30 +307,6 @@ impl Rows {
         }
     }
 
-    /// How parameter column `c` repeats in a grid or zip: row `i` holds
-    /// value `(i / stride) % count` of its axis, as (stride, count). None
-    /// for a `--rows` file, or a column the design does not set.
-    fn pattern(&self, c: usize) -> Option<(usize, usize)> {
-        let Rows::Product { zipped, axes, .. } = self else {
-            return None;
-        };
-        // As `fill` sets them, the last it sets: the last axis first, then
-        // the zipped arrays.
-        let (mut stride, mut last) = (1usize, None);
-        for (col, vals) in axes.iter().rev() {
-            if *col == c {
-                last = Some((stride, vals.len()));
-            }
-            stride = stride.saturating_mul(vals.len());
-        }
-        for (col, vals) in zipped {
-            if *col == c {
-                last = Some((stride, vals.len()));
-            }
-        }
-        last
-    }
-
     /// Rows `start..start + len` of a grid or zip into `params`, column-major
     /// (`len` rows a column) or row-major (`width` columns a row), as
     /// [`Rows::set`] gives them: each varied column is filled in runs of
@@ -575,9 +548,6 @@ type Outcome = (usize, usize, Option<String>);
 
 fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::Result<Outcome> {
     let threads = batch_threads(args.threads);
-    if threads > 1 && !args.list {
-        wake_cores(threads - 1);
-    }
     let spec = SpecArgs {
         spec: args.spec.clone().unwrap_or_else(|| PathBuf::from("-")),
         spec_format: args.spec_format,
@@ -906,8 +876,6 @@ fn run_one_spec(args: &Args, compute: Compute, out: &mut dyn Write) -> anyhow::R
                 &Block {
                     index: i,
                     first_row: base_row,
-                    design: &design.rows,
-                    design_row: start,
                     state: state.as_deref(),
                     varied: &design.varied,
                     varied_only,
@@ -1202,26 +1170,6 @@ fn batch_threads(requested: Option<usize>) -> usize {
     egt_core::batch::worker_threads(asked).0
 }
 
-/// Start `n` threads that end at once, so that the cores a batch's helper
-/// threads are about to run on are awake when they start: done before the
-/// spec is read and its program compiled (about 0.7 ms), it costs tens of
-/// microseconds. On the 2-core KVM guest of docs/benchmarks.md ("The writer
-/// solves too"), a thread started on a core idle for a while ran only 1 to
-/// 4 ms later; after such a start, most helpers ran within 0.1 ms.
-///
-/// This thread starts one; that one starts the others, so that a machine of
-/// many cores does not spend this thread's time on them. (A thread that
-/// cannot be started wakes nothing, and costs nothing.)
-fn wake_cores(n: usize) {
-    if n > 0 {
-        let _ = std::thread::Builder::new().spawn(move || {
-            for _ in 1..n {
-                let _ = std::thread::Builder::new().spawn(|| {});
-            }
-        });
-    }
-}
-
 /// Size rayon's global pool to `--threads`, where the global pool is about
 /// to work (parsing `--rows`, a lone block, `--specs` lines) rather than at
 /// the start: built, its idle threads would spin beside the block tasks.
@@ -1254,41 +1202,9 @@ enum Encoded {
     /// JSON Lines or CSV text.
     Text(Vec<String>),
     /// Parquet column chunks of one row group, in the schema's order.
-    Parquet(Vec<Piece>),
+    Parquet(Vec<parquet::arrow::arrow_writer::ArrowColumnChunk>),
     /// One Arrow record batch.
     Arrow(arrow_array::RecordBatch),
-}
-
-/// A Parquet column chunk, encoded by parquet-rs's Arrow writer or by egt.
-enum Piece {
-    Arrow(parquet::arrow::arrow_writer::ArrowColumnChunk),
-    Egt(pages::Chunk),
-}
-
-/// A block's row numbers.
-enum RowNumbers {
-    /// `first`, `first + 1`, ...: `len` of them (a block of a wide batch).
-    Run { first: u64, len: usize },
-    /// Given one by one (the long form, where a spec line's rows repeat).
-    Listed(arrow_array::UInt64Array),
-}
-
-impl RowNumbers {
-    fn len(&self) -> usize {
-        match self {
-            RowNumbers::Run { len, .. } => *len,
-            RowNumbers::Listed(rows) => arrow_array::Array::len(rows),
-        }
-    }
-
-    fn array(self) -> arrow_array::ArrayRef {
-        std::sync::Arc::new(match self {
-            RowNumbers::Run { first, len } => {
-                arrow_array::UInt64Array::from_iter_values(first..first + len as u64)
-            }
-            RowNumbers::Listed(rows) => rows,
-        })
-    }
 }
 
 /// A block's parameters or results, row- or column-major.
@@ -1332,10 +1248,9 @@ impl Matrix<'_> {
     /// Whether a row's value in column `c` is above `limit`.
     fn any_above(&self, c: usize, limit: f64) -> bool {
         if self.columns {
-            // The largest value by a float compare, as wide as the machine
-            // compares (a NaN is never above; an early exit would not
-            // vectorise, and the usual block has no such row).
-            stats::largest(&self.data[c * self.rows..][..self.rows]) > limit
+            self.data[c * self.rows..][..self.rows]
+                .iter()
+                .any(|&x| x > limit)
         } else {
             (self.data[c..].iter().step_by(self.width))
                 .take(self.rows)
@@ -1349,9 +1264,6 @@ struct Block<'a> {
     /// Its place among all blocks (the Parquet row group's index).
     index: usize,
     first_row: usize,
-    /// The design, and the row of it the block starts at.
-    design: &'a Rows,
-    design_row: usize,
     state: Option<&'a str>,
     varied: &'a [(String, usize)],
     /// `params` holds the varied columns only, in `varied`'s order.
@@ -1392,7 +1304,8 @@ fn columnar(
     }
     fields.push(Field::new("warning", DataType::Utf8, true));
     fields.push(Field::new("error", DataType::Utf8, true));
-    columnar_file(kind, fields, header.len(), NumberStatistics::Egt)
+    let parameters: Vec<&str> = varied.iter().map(|v| v.0.as_str()).collect();
+    columnar_file(kind, fields, header.len(), &parameters)
 }
 
 /// The CSV's long form of `--specs` (one row per output of each line),
@@ -1406,86 +1319,75 @@ fn long_columnar(kind: BatchOutput) -> anyhow::Result<(Encoder, Sink)> {
         Field::new("value", DataType::Float64, true),
         Field::new("error", DataType::Utf8, true),
     ];
-    columnar_file(kind, fields, 0, NumberStatistics::Egt)
+    columnar_file(kind, fields, 0, &[])
 }
 
-/// Who computes the row-group statistics of a Parquet file's numbers (the
-/// doubles and the row numbers).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum NumberStatistics {
-    /// egt, after parquet-rs encoded the column with statistics off
-    /// ([`stats`]: the same values; the doubles' min and max vectorised on
-    /// every x86-64, the row numbers' the first and the last).
-    Egt,
-    /// parquet-rs, at `EnabledStatistics::Chunk` (the reference the tests
-    /// compare egt's files with).
-    #[cfg_attr(not(test), allow(dead_code))]
-    Parquet,
+/// The data page size limit of a Parquet file: a page of doubles holds
+/// this many bytes of values, 8 192 values. (A block's column is 512 KiB,
+/// and the writer's page buffers grow by doubling up to the page; with
+/// pages smaller than the default 1 MiB they stay small: docs/benchmarks.md.)
+const PAGE_BYTES: usize = 64 * 1024;
+
+/// parquet-rs's settings for a file of the columns of `schema`, of which
+/// `parameters` are a design's varied parameters (measured on a 10^6-row
+/// grid of a 6-link chain, 2 threads):
+/// - Snappy, but not for the solver's doubles, which it hardly shrinks
+///   (a computed double's low bits are noise) and spends time on;
+/// - a varied parameter's column plain, and Snappy-compressed: a grid's or
+///   a zip's values repeat (in runs, or in short cycles), which Snappy
+///   finds. (Dictionary-encoded, the file was 15 % smaller, but hashing
+///   every value took a fifth more CPU time.)
+/// - the row numbers delta-encoded (they count up by one: a few bytes a
+///   page);
+/// - pages of 64 KiB rather than the default 1 MiB (the writer's page
+///   buffers grow by doubling up to the page; with smaller pages they stay
+///   small), and at most a block's rows;
+/// - the numbers' statistics the row group's, not each page's: a row group
+///   is a block (65 536 rows).
+fn parquet_properties(
+    schema: &arrow_schema::Schema,
+    parameters: &[&str],
+) -> parquet::file::properties::WriterProperties {
+    use arrow_schema::DataType;
+    use parquet::basic::{Compression, Encoding};
+    use parquet::file::properties::{EnabledStatistics, WriterProperties, WriterVersion};
+    use parquet::schema::types::ColumnPath;
+    let mut props = WriterProperties::builder()
+        .set_writer_version(WriterVersion::PARQUET_1_0)
+        .set_data_page_size_limit(PAGE_BYTES)
+        .set_data_page_row_count_limit(COLUMNAR_BLOCK)
+        .set_compression(Compression::SNAPPY)
+        .set_dictionary_enabled(false)
+        .set_column_encoding(ColumnPath::from("row"), Encoding::DELTA_BINARY_PACKED);
+    for field in schema.fields() {
+        let path = || ColumnPath::from(field.name().as_str());
+        if let DataType::Float64 | DataType::UInt64 = field.data_type() {
+            props = props.set_column_statistics_enabled(path(), EnabledStatistics::Chunk);
+        }
+        if field.data_type() == &DataType::Float64 && !parameters.contains(&field.name().as_str()) {
+            props = props.set_column_compression(path(), Compression::UNCOMPRESSED);
+        }
+    }
+    props.build()
 }
 
 /// An encoder and a sink for the columns `fields` (`outputs` of them the
-/// solver's).
+/// solver's, `parameters` a design's varied parameters).
 fn columnar_file(
     kind: BatchOutput,
     fields: Vec<arrow_schema::Field>,
     outputs: usize,
-    numbers: NumberStatistics,
+    parameters: &[&str],
 ) -> anyhow::Result<(Encoder, Sink)> {
-    use parquet::file::properties::EnabledStatistics;
-    use parquet::schema::types::ColumnPath;
     let schema = std::sync::Arc::new(arrow_schema::Schema::new(fields));
     let (factory, sink) = if kind == BatchOutput::Parquet {
-        // Doubles from a solve rarely repeat: no dictionary pages. The row
-        // numbers count up by one: delta-encoded, they take a few bytes a
-        // page, where Snappy spent more time on them than on any other
-        // column and left half of their bytes (docs/benchmarks.md).
-        // Pages of 64 KiB rather than the default 1 MiB: the writer's page
-        // buffers grow by doubling up to the page; with smaller pages they
-        // stay small (with blocks of 16 384 rows, of 128 KiB a column, the
-        // allocator committed 28.6 MiB instead of 36.6, and 10^6 rows on 2
-        // threads ran about 5 % faster; docs/benchmarks.md).
-        // The numbers' statistics are the row group's, not the page's: a
-        // row group is a block (65 536 rows, eight pages a double column,
-        // one of row numbers).
-        // Pages of version 1, their sizes and the compression set here are
-        // those egt writes its own chunks with (pages.rs).
-        let mut props = parquet::file::properties::WriterProperties::builder()
-            .set_writer_version(parquet::file::properties::WriterVersion::PARQUET_1_0)
-            .set_data_page_size_limit(pages::PAGE_BYTES)
-            .set_data_page_row_count_limit(pages::PAGE_ROWS)
-            .set_compression(pages::COMPRESSION)
-            .set_dictionary_enabled(false)
-            .set_column_encoding(
-                ColumnPath::from("row"),
-                parquet::basic::Encoding::DELTA_BINARY_PACKED,
-            );
-        let level = match numbers {
-            NumberStatistics::Egt => EnabledStatistics::None,
-            NumberStatistics::Parquet => EnabledStatistics::Chunk,
-        };
-        for field in schema.fields() {
-            if let arrow_schema::DataType::Float64 | arrow_schema::DataType::UInt64 =
-                field.data_type()
-            {
-                props = props
-                    .set_column_statistics_enabled(ColumnPath::from(field.name().as_str()), level);
-            }
-        }
-        let props = props.build();
+        let props = parquet_properties(&schema, parameters);
         // The Arrow writer adds the Arrow schema to the file's metadata;
         // its lower half lets row groups be encoded in parallel.
-        let (writer, factory) = parquet::arrow::ArrowWriter::try_new(
-            pages::Splice::default(),
-            schema.clone(),
-            Some(props),
-        )?
-        .into_serialized_writer()?;
-        let columns = writer.schema_descr().columns().to_vec();
-        let rest = arrow_schema::Schema::new(schema.fields()[1..].to_vec());
-        (
-            Some((factory, columns, rest.into())),
-            Sink::Parquet(Box::new(writer)),
-        )
+        let (writer, factory) =
+            parquet::arrow::ArrowWriter::try_new(Vec::new(), schema.clone(), Some(props))?
+                .into_serialized_writer()?;
+        (Some(factory), Sink::Parquet(Box::new(writer)))
     } else {
         let writer = arrow_ipc::writer::FileWriter::try_new(Vec::new(), &schema)?;
         (None, Sink::Arrow(Box::new(writer)))
@@ -1494,8 +1396,6 @@ fn columnar_file(
         schema,
         outputs,
         factory,
-        numbers,
-        nulls: std::sync::Mutex::default(),
         null_arrays: std::sync::Mutex::default(),
     };
     Ok((encoder, sink))
@@ -1506,35 +1406,21 @@ struct Encoder {
     schema: arrow_schema::SchemaRef,
     /// Output columns (after row, state and the varied parameters).
     outputs: usize,
-    /// Parquet's column writers, the file's columns, and the schema of the
-    /// columns after the row numbers (for a block whose row numbers egt
-    /// writes). None for Arrow IPC.
-    factory: Option<(
-        parquet::arrow::arrow_writer::ArrowRowGroupWriterFactory,
-        Vec<parquet::schema::types::ColumnDescPtr>,
-        arrow_schema::SchemaRef,
-    )>,
-    /// Who computes the numbers' statistics (Parquet).
-    numbers: NumberStatistics,
-    /// Columns of nulls only (a block without warnings or errors), as
-    /// parquet-rs wrote them once for a column and a length: by (column,
-    /// rows). Such a chunk is the same in every block ([`Encoder::nulls`]).
-    nulls: std::sync::Mutex<Vec<((usize, usize), pages::Chunk)>>,
+    /// Parquet's column writers, for each row group. None for Arrow IPC.
+    factory: Option<parquet::arrow::arrow_writer::ArrowRowGroupWriterFactory>,
     /// Arrays of nulls only, of a type and a length ([`Encoder::null_column`]).
     null_arrays: std::sync::Mutex<Vec<arrow_array::ArrayRef>>,
 }
 
 /// A column of doubles, null where a value is not finite or its row
 /// `failed` (None when no row of the block did; no null buffer when there
-/// are no nulls), and its min and max when it has no nulls and the pass
-/// that looked for them found those (Parquet's statistics, [`stats`]).
+/// are no nulls).
 fn doubles(
     values: arrow_buffer::ScalarBuffer<f64>,
     failed: Option<&[Option<String>]>,
-) -> (arrow_array::ArrayRef, Option<(f64, f64)>) {
+) -> arrow_array::ArrayRef {
     let missing = |r: usize| failed.is_some_and(|f| f[r].is_some()) || !values[r].is_finite();
-    let scan = stats::scan(&values);
-    let nulls = (failed.is_some() || !scan.finite)
+    let nulls = (failed.is_some() || !values.iter().all(|v| v.is_finite()))
         .then(|| {
             (0..values.len())
                 .map(|r| !missing(r))
@@ -1552,22 +1438,7 @@ fn doubles(
             .into(),
         None => values,
     };
-    let known = scan.bounds.filter(|_| nulls.is_none());
-    let array = arrow_array::Float64Array::new(values, nulls);
-    (std::sync::Arc::new(array), known)
-}
-
-/// What a block's double column is known to hold before it is encoded.
-#[derive(Clone, Copy, Default)]
-struct Known {
-    /// Its min and max, where it has no nulls and they were found
-    /// ([`doubles`]).
-    bounds: Option<(f64, f64)>,
-    /// How its values repeat: a grid's or zip's parameter column.
-    pattern: Option<repeats::Pattern>,
-    /// Not scanned yet, for its bounds or for values that are not finite
-    /// (to be nulls): a grid's column, which egt's chunk scans.
-    unscanned: bool,
+    std::sync::Arc::new(arrow_array::Float64Array::new(values, nulls))
 }
 
 /// A column of optional texts: all null without building one by one when
@@ -1591,50 +1462,23 @@ impl Encoder {
     }
 
     fn encode(&self, plan: &BatchPlan, b: &Block<'_>) -> anyhow::Result<Encoded> {
-        use arrow_array::{ArrayRef, StringArray};
+        use arrow_array::{ArrayRef, StringArray, UInt64Array};
         use std::sync::Arc;
         let (params, results) = (b.params, b.results);
         let len = b.messages.len();
-        let rows = RowNumbers::Run {
-            first: b.first_row as u64,
-            len,
-        };
-        // The columns after the row numbers.
         let mut columns: Vec<ArrayRef> = Vec::with_capacity(self.schema.fields().len());
+        let first = b.first_row as u64;
+        columns.push(Arc::new(UInt64Array::from_iter_values(
+            first..first + len as u64,
+        )));
         if let Some(s) = b.state {
             columns.push(Arc::new(StringArray::from_iter_values(
                 std::iter::repeat_n(s, len),
             )));
         }
-        // The doubles' bounds found while building them, by column of the
-        // schema.
-        let mut known = vec![Known::default(); 1 + columns.len()];
-        // A grid's column is scanned while egt compresses it, where it does
-        // (`record_batch`): only its literals need to be read.
-        let unscanned = self.factory.is_some() && self.numbers == NumberStatistics::Egt;
         for (j, &(_, c)) in b.varied.iter().enumerate() {
             let values = params.column(if b.varied_only { j } else { c });
-            let pattern = (b.design.pattern(c)).map(|(stride, count)| repeats::Pattern {
-                first: b.design_row,
-                stride,
-                count,
-            });
-            if pattern.is_some() && unscanned {
-                columns.push(Arc::new(arrow_array::Float64Array::new(values, None)));
-                known.push(Known {
-                    bounds: None,
-                    pattern,
-                    unscanned: true,
-                });
-                continue;
-            }
-            let (column, bounds) = doubles(values, None);
-            columns.push(column);
-            known.push(Known {
-                bounds,
-                pattern,
-                unscanned: false,
-            });
+            columns.push(doubles(values, None));
         }
         let failed = |r: usize| b.messages[r].is_some();
         let any_failed = b.any_failed.then_some(b.messages);
@@ -1644,17 +1488,9 @@ impl Encoder {
             source[pos] = Some(i);
         }
         for src in source {
-            let (column, bounds) = match src {
+            columns.push(match src {
                 Some(i) => doubles(results.column(i), any_failed),
-                None => (
-                    self.null_column(&arrow_schema::DataType::Float64, len),
-                    None,
-                ),
-            };
-            columns.push(column);
-            known.push(Known {
-                bounds,
-                ..Known::default()
+                None => self.null_column(&arrow_schema::DataType::Float64, len),
             });
         }
         // Most blocks have no row past the warning's limit: a scan of the
@@ -1679,7 +1515,7 @@ impl Encoder {
         } else {
             self.null_column(&arrow_schema::DataType::Utf8, len)
         });
-        self.record_batch(rows, columns, &known, b.index)
+        self.record_batch(columns, b.index)
     }
 
     /// An array of `len` nulls of type `of`, one for every block of that
@@ -1696,153 +1532,34 @@ impl Encoder {
         array
     }
 
-    /// Column `column` of `len` nulls, as parquet-rs wrote it for an
-    /// earlier block ([`Encoder::keep_nulls`]), if it did.
-    fn nulls(&self, column: usize, len: usize) -> Option<pages::Chunk> {
-        let kept = self.nulls.lock().ok()?;
-        let found = kept.iter().find(|(key, _)| *key == (column, len));
-        found.map(|(_, chunk)| chunk.clone())
-    }
-
-    /// Keep column `column` of `len` nulls, which parquet-rs wrote with
-    /// metadata `close`, for the blocks to come: its pages are egt's
-    /// ([`pages::nulls`]), the same bytes (a test compares the files), and
-    /// its metadata parquet-rs's.
-    fn keep_nulls(
-        &self,
-        column: usize,
-        len: usize,
-        close: &parquet::column::writer::ColumnCloseResult,
-        descr: &parquet::schema::types::ColumnDescPtr,
-    ) -> anyhow::Result<()> {
-        let Some(chunk) = pages::nulls(descr, len, close.clone())? else {
-            return Ok(());
-        };
-        if let Ok(mut kept) = self.nulls.lock()
-            && !kept.iter().any(|(key, _)| *key == (column, len))
-        {
-            kept.push(((column, len), chunk));
-        }
-        Ok(())
-    }
-
-    /// The row numbers and the other columns, in the schema's order, as one
-    /// Arrow record batch, or as the Parquet column chunks of row group
-    /// `index`.
-    /// `known`: by column of the schema, what is known of a double column
-    /// without nulls, where already found ([`doubles`]).
+    /// The columns, in the schema's order, as one Arrow record batch, or
+    /// as the Parquet column chunks of row group `index` (encoded by
+    /// parquet-rs's column writers).
     fn record_batch(
         &self,
-        rows: RowNumbers,
-        others: Vec<arrow_array::ArrayRef>,
-        known: &[Known],
+        columns: Vec<arrow_array::ArrayRef>,
         index: usize,
     ) -> anyhow::Result<Encoded> {
-        let whole = |rows: RowNumbers, mut others: Vec<arrow_array::ArrayRef>| {
-            others.insert(0, rows.array());
-            arrow_array::RecordBatch::try_new(self.schema.clone(), others)
+        let batch = arrow_array::RecordBatch::try_new(self.schema.clone(), columns)?;
+        let Some(factory) = &self.factory else {
+            return Ok(Encoded::Arrow(batch));
         };
-        let Some((factory, descriptors, rest)) = &self.factory else {
-            return Ok(Encoded::Arrow(whole(rows, others)?));
-        };
+        let writers = factory.create_column_writers(index)?;
         // Every column is flat: one leaf, so one writer, a column.
         anyhow::ensure!(
-            descriptors.len() == self.schema.fields().len(),
+            writers.len() == batch.num_columns(),
             "a nested Parquet column"
         );
-        // parquet-rs's writers, made when a column first needs one (a
-        // block whose chunks are all egt's needs none).
-        let mut writers: Vec<Option<_>> = Vec::new();
-        let mut writer = |column: usize| {
-            if writers.is_empty() {
-                writers = (factory.create_column_writers(index)?.into_iter())
-                    .map(Some)
-                    .collect();
-                anyhow::ensure!(
-                    writers.len() == descriptors.len(),
-                    "a nested Parquet column"
-                );
-            }
-            let w = writers.get_mut(column).and_then(Option::take);
-            w.ok_or_else(|| anyhow::anyhow!("no Parquet writer for column {column}"))
-        };
-        let egt = self.numbers == NumberStatistics::Egt;
-        let mut pieces = Vec::with_capacity(descriptors.len());
-        // The row numbers of a wide block, encoded by egt (pages.rs).
-        let own = match (egt, &rows) {
-            (true, &RowNumbers::Run { first, len }) => {
-                pages::row_numbers(&descriptors[0], first, len)?
-            }
-            _ => None,
-        };
-        let (columns, skipped) = match own {
-            Some(chunk) => {
-                pieces.push(Piece::Egt(chunk));
-                let options =
-                    arrow_array::RecordBatchOptions::new().with_row_count(Some(rows.len()));
-                let batch =
-                    arrow_array::RecordBatch::try_new_with_options(rest.clone(), others, &options)?;
-                (batch, 1)
-            }
-            None => (whole(rows, others)?, 0),
-        };
-        let fields = &self.schema.fields()[skipped..];
-        for (c, (array, field)) in (columns.columns().iter().zip(fields)).enumerate() {
-            let column = skipped + c;
-            let len = arrow_array::Array::len(array);
-            let nulls = egt && len > 0 && arrow_array::Array::null_count(array) == len;
-            if nulls && let Some(chunk) = self.nulls(column, len) {
-                pieces.push(Piece::Egt(chunk));
-                continue;
-            }
-            let Known {
-                mut bounds,
-                pattern,
-                unscanned,
-            } = known.get(column).copied().unwrap_or_default();
-            let mut doubles = array.as_any().downcast_ref::<arrow_array::Float64Array>();
-            // A double column without nulls, encoded by egt (pages.rs); a
-            // grid's, not scanned, scanned there.
-            if let Some(d) = doubles.filter(|d| egt && arrow_array::Array::null_count(*d) == 0)
-                && let Some((mut chunk, literals)) =
-                    pages::doubles(&descriptors[column], d.values(), pattern)?
-                && (!unscanned || literals.is_some_and(|l| l.finite))
-            {
-                if unscanned {
-                    bounds = literals.and_then(|l| l.bounds);
-                }
-                stats::set_double_statistics(chunk.close_mut(), d, bounds)?;
-                pieces.push(Piece::Egt(chunk));
-                continue;
-            }
-            // A grid's column not scanned, with a value that is not finite
-            // (a null) or too long for egt's chunk: as `doubles` makes it.
-            let rescanned;
-            let mut array = array;
-            if unscanned && let Some(d) = doubles {
-                rescanned = self::doubles(d.values().clone(), None);
-                (array, bounds) = (&rescanned.0, rescanned.1);
-                doubles = array.as_any().downcast_ref::<arrow_array::Float64Array>();
-            }
-            let mut writer = writer(column)?;
+        let mut chunks = Vec::with_capacity(writers.len());
+        for ((mut writer, array), field) in
+            (writers.into_iter().zip(batch.columns())).zip(self.schema.fields())
+        {
             for leaf in parquet::arrow::arrow_writer::compute_leaves(field, array)? {
                 writer.write(&leaf)?;
             }
-            let mut chunk = writer.close()?;
-            if egt {
-                let any = array.as_any();
-                if let Some(doubles) = doubles {
-                    stats::set_double_statistics(chunk.close_mut(), doubles, bounds)?;
-                } else if let Some(rows) = any.downcast_ref::<arrow_array::UInt64Array>() {
-                    stats::set_row_statistics(chunk.close_mut(), rows)?;
-                }
-            }
-            if nulls {
-                self.keep_nulls(column, len, chunk.close(), &descriptors[column])?;
-            }
-            pieces.push(Piece::Arrow(chunk));
+            chunks.push(writer.close()?);
         }
-        Ok(Encoded::Parquet(pieces))
+        Ok(Encoded::Parquet(chunks))
     }
 }
 
@@ -1850,7 +1567,7 @@ impl Encoder {
 /// drained to the output after every block, so memory stays one wave of
 /// blocks whatever the batch.
 enum Sink {
-    Parquet(Box<parquet::file::writer::SerializedFileWriter<pages::Splice>>),
+    Parquet(Box<parquet::file::writer::SerializedFileWriter<Vec<u8>>>),
     Arrow(Box<arrow_ipc::writer::FileWriter<Vec<u8>>>),
 }
 
@@ -1858,32 +1575,16 @@ impl Sink {
     /// Append an encoded block and pass the bytes written so far on to `out`.
     fn append(&mut self, encoded: Encoded, out: &mut dyn Write) -> anyhow::Result<()> {
         let bytes = match (self, encoded) {
-            (Sink::Parquet(w), Encoded::Parquet(pieces)) => {
-                // Where egt's chunks go: the chunks of a row group follow
-                // one another from where the file is.
-                let mut at = w.bytes_written() as u64;
-                for piece in &pieces {
-                    let len = match piece {
-                        Piece::Arrow(chunk) => chunk.close().metadata.compressed_size() as u64,
-                        Piece::Egt(chunk) => {
-                            w.inner_mut().hole(at, chunk.len())?;
-                            chunk.len()
-                        }
-                    };
-                    at += len;
-                }
-                let mut own = Vec::new();
+            (Sink::Parquet(w), Encoded::Parquet(chunks)) => {
                 let mut group = w.next_row_group()?;
-                for piece in pieces {
-                    match piece {
-                        Piece::Arrow(chunk) => chunk.append_to_row_group(&mut group)?,
-                        Piece::Egt(chunk) => own.push(chunk.append_to_row_group(&mut group)?),
-                    }
+                for chunk in chunks {
+                    chunk.append_to_row_group(&mut group)?;
                 }
                 group.close()?;
+                // (The writer counts the bytes it wrote, not those its
+                // buffer holds: the buffer may be drained.)
                 w.flush()?;
-                w.inner_mut().drain(&own, out)?;
-                return Ok(());
+                w.inner_mut()
             }
             (Sink::Arrow(w), Encoded::Arrow(batch)) => {
                 w.write(&batch)?;
@@ -1899,10 +1600,7 @@ impl Sink {
     /// Write the footer.
     fn finish(self, out: &mut dyn Write) -> anyhow::Result<()> {
         let bytes = match self {
-            Sink::Parquet(w) => {
-                w.into_inner()?.drain(&[], out)?;
-                return Ok(());
-            }
+            Sink::Parquet(w) => w.into_inner()?,
             Sink::Arrow(mut w) => {
                 w.finish()?;
                 w.into_inner()?
@@ -2273,13 +1971,13 @@ fn long_block(
         }
     }
     let columns: Vec<ArrayRef> = vec![
+        Arc::new(UInt64Array::from(row)),
         Arc::new(StringArray::from(name)),
         Arc::new(StringArray::from(quantity)),
         Arc::new(Float64Array::from(value)),
         Arc::new(StringArray::from(error)),
     ];
-    let rows = RowNumbers::Listed(UInt64Array::from(row));
-    encoder.record_batch(rows, columns, &[], b)
+    encoder.record_batch(columns, b)
 }
 
 /// Parse, validate, prepare and solve one spec line.
