@@ -96,6 +96,8 @@ def cli_problems() -> list[str]:
     names |= {p.name for p in commands_dir.iterdir() if p.is_dir()}
     bad = []
     for path in sorted(commands_dir.rglob("*.rs")):
+        if path.name == "tests.rs" or path.name.endswith("_tests.rs"):
+            continue  # test modules may parse whole command lines
         rel = path.relative_to(commands_dir)
         own = rel.parts[0].removesuffix(".rs")
         depth = len(rel.parts) - 1  # 0 for commands/X.rs, 1 for commands/X/Y.rs

@@ -1,11 +1,10 @@
 """`egt batch`'s Parquet files read by another implementation: Apache Arrow's
 C++ reader (pyarrow) finds the CSV's cells in them, and row-group statistics
-that agree with the values. egt writes some of the file's pages itself
-(the row numbers, the doubles without nulls, a grid's columns compressed
-from their repeats, columns of nulls) and splices them into parquet-rs's
-file; the Rust tests compare those with parquet-rs's own bytes or decode
-them with the `snap` crate, these with a reader that shares no code with
-any of them."""
+that agree with the values. parquet-rs writes the files, with egt's
+settings (Snappy but for the solver's doubles, a grid's columns
+dictionary-encoded, the row numbers delta-encoded, columns of nulls); the
+Rust tests read them back with parquet-rs, these with a reader that shares
+no code with it."""
 
 from __future__ import annotations
 
@@ -26,9 +25,8 @@ ROOT = Path(__file__).resolve().parents[3]
 CASES = {
     # Two row groups of 65 536 rows (the last shorter), every output; the
     # first ratio is Fig. 3's lock (tau_2 = 1 / tau_1), so the first row
-    # group's outputs have nulls (parquet-rs's pages) and the other none
-    # (egt's). The grid's columns are Snappy streams egt writes from their
-    # repeats (runs of 1 000 rows; a period of 1 000 rows).
+    # group's outputs have nulls and the other none. The grid's columns are
+    # dictionary-encoded (runs of 1 000 rows; a period of 1 000 rows).
     "grid": (["examples/fig3_example61.toml", "--grid", "torque.4=-10:-100:100", "--grid", "ratio.G2=-1.5:-2.5:1000"], 1),
     # Through the lock of Fig. 3: rows refused (nulls) and warned.
     "lock": (["examples/fig3_example61.toml", "--grid", "ratio.G2=-1.5000001:-1.4999999:21"], 1),
@@ -69,8 +67,7 @@ def test_parquet_read_by_arrow_cpp_holds_the_csv_cells(case: str) -> None:
     if case == "lock":
         assert table.column("error").null_count < table.num_rows
         assert table.column("warning").null_count < table.num_rows
-    # Numbers were written, not only nulls: by egt's pages where a block's
-    # column has none.
+    # Numbers were written, not only nulls.
     outputs = [n for n in table.column_names if n not in ("row", "state", "warning", "error")]
     assert all(table.column(n).null_count < table.num_rows for n in outputs)
 
@@ -80,7 +77,7 @@ def test_parquet_statistics_agree_with_the_values(case: str) -> None:
     """Every number column's null count, and the row numbers' min and max.
     A double's min and max are compared where pyarrow reads them: pyarrow 26
     does not, under the IEEE 754 total order parquet-rs 60 declares for
-    every double column (the Rust tests compare them with parquet-rs's)."""
+    every double column (parquet-rs computes them)."""
     parquet = pq.ParquetFile(io.BytesIO(batch(case, "parquet")))
     meta = parquet.metadata
     names = parquet.schema_arrow.names

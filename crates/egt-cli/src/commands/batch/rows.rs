@@ -109,7 +109,7 @@ fn read_line<'a>(
     for (name, v) in entries.iter() {
         let c = plan
             .parameter(name)
-            .ok_or_else(|| super::unknown(plan, name, "--rows").to_string())?;
+            .ok_or_else(|| super::design::unknown(plan, name, "--rows").to_string())?;
         let x = v
             .as_f64()
             .ok_or_else(|| format!("`{name}` is not a number"))?;
@@ -234,7 +234,10 @@ mod tests {
         map.iter()
             .map(|(name, v)| {
                 let c = plan.parameter(name).ok_or_else(|| {
-                    format!("{at}: {}", super::super::unknown(plan, name, "--rows"))
+                    format!(
+                        "{at}: {}",
+                        super::super::design::unknown(plan, name, "--rows")
+                    )
                 })?;
                 let x = v
                     .as_f64()
