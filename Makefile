@@ -77,10 +77,10 @@ clean: ## Remove build outputs and the virtualenv
 	rm -rf $(VENV)
 
 FUZZ_SECONDS ?= 30
-FUZZ_TARGETS := spec adjacency input_value
+FUZZ_TARGETS := spec adjacency input_value program
 
 .PHONY: fuzz-seed fuzz-smoke
-fuzz-seed: ## Seed fuzz/corpus/* from examples/ (specs, adjacency strings, input values)
+fuzz-seed: ## Seed fuzz/corpus/* from examples/ (specs, adjacency strings, input values) and a few trains for the program target
 	bash fuzz/seed-corpus.sh
 
 # The CI run: coverage-guided libFuzzer on the pinned stable toolchain
