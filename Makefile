@@ -20,11 +20,12 @@ demo: ## Run egt on a bundled example: topology checks, circuit table, speeds
 
 test: test-rust test-python ## Run every test (Rust and Python)
 
-test-rust: ## Rust unit, integration, CLI and doc tests; the core's again as released (optimised: the SIMD lanes and the compiled programs as shipped)
+test-rust: ## Rust unit, integration, CLI and doc tests; the core's again as released (optimised: the SIMD lanes and the compiled programs as shipped) and without the jit feature (the interpreted program)
 	cargo fetch --locked || cargo fetch
 	cargo test --workspace --all-targets
 	cargo test --workspace --doc
-	cargo test --release -p egt-core --lib --test core
+	cargo test --release -p egt-core --features jit --lib --test core
+	cargo test -p egt-core --lib --test core
 
 $(VENV)/.ready: crates/egt-py/requirements-dev.txt
 	$(PYTHON) -m venv $(VENV)
@@ -55,18 +56,19 @@ test-python: wheel ## Python tests against the built wheel (pytest, warnings as 
 fmt: ## Format the Rust code
 	cargo fmt --all
 
-lint: ## Clippy, format check, the core's docs (no broken links, no missing docs) and the minimum Rust version
+lint: ## Clippy (the workspace, and egt-core alone without the jit feature), format check, the core's docs (no broken links, no missing docs) and the minimum Rust version
 	cargo fmt --all -- --check
 	cargo clippy --workspace --all-targets -- -D warnings
+	cargo clippy -p egt-core --all-targets -- -D warnings
 	RUSTDOCFLAGS="-D warnings" cargo doc -p egt-core --no-deps
 	python3 scripts/msrv.py
 	python3 scripts/layers.py
 
 bench: ## Benchmarks by phase and train size, 3 to 30 links (divan, short settings; see docs/benchmarks.md)
-	cargo bench -p egt-core --bench scenarios -- --sample-count 20 --min-time 0.05
+	cargo bench -p egt-core --features jit --bench scenarios -- --sample-count 20 --min-time 0.05
 
 chart: venv ## Re-measure Rust, SymPy and NumPy side by side; redraw docs/img/speed_accuracy.svg and the docs' tables
-	cargo run --release --quiet -p egt-core --example speed_accuracy -- target/speed_accuracy
+	cargo run --release --quiet -p egt-core --features jit --example speed_accuracy -- target/speed_accuracy
 	$(VPY) bench/routes.py target/speed_accuracy
 	$(VPY) bench/chart.py target/speed_accuracy docs/img/speed_accuracy.svg docs/benchmarks.md docs/accuracy.md
 
@@ -75,10 +77,10 @@ clean: ## Remove build outputs and the virtualenv
 	rm -rf $(VENV)
 
 FUZZ_SECONDS ?= 30
-FUZZ_TARGETS := spec adjacency input_value
+FUZZ_TARGETS := spec adjacency input_value program
 
 .PHONY: fuzz-seed fuzz-smoke
-fuzz-seed: ## Seed fuzz/corpus/* from examples/ (specs, adjacency strings, input values)
+fuzz-seed: ## Seed fuzz/corpus/* from examples/ (specs, adjacency strings, input values) and a few trains for the program target
 	bash fuzz/seed-corpus.sh
 
 # The CI run: coverage-guided libFuzzer on the pinned stable toolchain

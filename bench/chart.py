@@ -242,8 +242,6 @@ def summary(rust: dict[str, Any], python: dict[str, Any], data: dict[str, list[t
         like = next((m for m in size["methods"] if m["method"] == "egt columns, their outputs"), {})
         ops = like.get("operations")
         how = {True: ", compiled", False: ", interpreted"}.get(like.get("compiled"), "")
-        if like.get("instructions"):
-            how = f", compiled to {like['instructions']}"
         lines.append(
             f"| {links} | {fmt_time(el)} | {f'{ops}{how}' if ops is not None else '–'} | {fmt_time(floor)} | {fmt_ratio(el, floor)} "
             f"| {fmt_time(t('numpy-batch', links))} | {fmt_ratio(t('numpy-batch', links), el)} "

@@ -1,15 +1,15 @@
 //! Fuzz target: a whole spec (TOML or JSON, by the first byte) through parsing,
 //! validation and every analysis the spec's `[analysis]` table can drive:
 //! kinematics, inverse dynamics and power (as the batch plan builds them,
-//! and with condition bounds, by the straight-line program, each code the
-//! machine has against the interpreter, bit for bit, and with every other
+//! and with condition bounds, by the straight-line program, compiled where
+//! the machine runs the code against interpreted, bit for bit, and with every other
 //! parameter column given as one value against the matrix written out),
 //! stability and the shift table. Any error is fine; a panic, an abort,
 //! compiled code that disagrees with the interpreter, or fixed columns that
 //! change a number are bugs.
 #![no_main]
 
-use egt_core::batch::{BatchPlan, BatchSpec, Column, Threads};
+use egt_core::batch::{BatchPlan, BatchSpec, Column, Executor, Threads};
 use egt_core::solve::prepared::Compute;
 use egt_core::{Format, Train};
 use libfuzzer_sys::fuzz_target;
@@ -35,13 +35,11 @@ fuzz_target!(|data: &[u8]| {
                 let mut out = vec![0.0; 64 * plan.outputs().len()];
                 let _ = plan.run_columns(&rows, &mut out);
                 let _ = plan.run(&rows, &mut out);
-                // Every code the machine has, and the interpreter: the same
-                // bits and the same refused rows.
+                // Compiled (where the machine runs the code) and
+                // interpreted: the same bits and the same refused rows.
                 let mut first: Option<(Vec<f64>, Vec<usize>)> = None;
-                for code in [None, Some("AVX2"), Some("AVX-512")] {
-                    let Ok(p) = plan.clone().with_program_instructions(code) else {
-                        continue;
-                    };
+                for code in [Executor::Interpreted, Executor::Auto] {
+                    let p = plan.clone().with_executor(code);
                     let mut out = vec![0.0; 64 * p.outputs().len()];
                     let failed: Vec<usize> = p
                         .run_columns(&rows, &mut out)

@@ -12,7 +12,7 @@ use std::hint::black_box;
 
 use divan::Bencher;
 use divan::counter::ItemsCount;
-use egt_core::batch::{BatchPlan, BatchSpec};
+use egt_core::batch::{BatchPlan, BatchSpec, Executor};
 use egt_core::solve::prepared::Compute;
 use egt_core::{Format, Train, parse_spec};
 
@@ -128,13 +128,23 @@ fn sweep_rows(p: &BatchPlan, rows: usize, ratio_ulps: bool) -> Vec<f64> {
 /// (with `bounds`, condition estimates only where bounds cannot show a row
 /// well-conditioned).
 fn sweep(b: Bencher, t: &Train, ratio_ulps: bool, bounds: bool) {
-    sweep_layout(b, t, ratio_ulps, bounds, false);
+    sweep_layout(b, t, ratio_ulps, bounds, false, Executor::Auto);
 }
 
-/// [`sweep`] with the matrices column-major or not (`BatchPlan::run_columns`).
-fn sweep_layout(b: Bencher, t: &Train, ratio_ulps: bool, bounds: bool, columns: bool) {
+/// [`sweep`] with the matrices column-major or not (`BatchPlan::run_columns`),
+/// the straight-line program (with bounds) run by `executor`.
+fn sweep_layout(
+    b: Bencher,
+    t: &Train,
+    ratio_ulps: bool,
+    bounds: bool,
+    columns: bool,
+    executor: Executor,
+) {
     const ROWS: usize = 10_000;
-    let p = plan(t, Compute::Dynamics).with_condition_bounds(bounds);
+    let p = plan(t, Compute::Dynamics)
+        .with_condition_bounds(bounds)
+        .with_executor(executor);
     let mut params = sweep_rows(&p, ROWS, ratio_ulps);
     let np = p.parameters().len();
     if columns {
@@ -230,10 +240,20 @@ macro_rules! phases {
                 sweep(b, &build(&$make(links)), true, true);
             }
 
-            /// The same, column-major (`BatchPlan::run_columns`).
+            /// The same, column-major (`BatchPlan::run_columns`): the
+            /// straight-line program compiled (with the `jit` feature, where
+            /// the machine runs the code).
             #[divan::bench(args = $sizes)]
             fn sweep_bounded_ratios_columns(b: Bencher, links: usize) {
-                sweep_layout(b, &build(&$make(links)), true, true, true);
+                let t = build(&$make(links));
+                sweep_layout(b, &t, true, true, true, Executor::Auto);
+            }
+
+            /// The same with the program interpreted (`Executor::Interpreted`).
+            #[divan::bench(args = $sizes)]
+            fn sweep_bounded_ratios_columns_interpreted(b: Bencher, links: usize) {
+                let t = build(&$make(links));
+                sweep_layout(b, &t, true, true, true, Executor::Interpreted);
             }
         }
     };

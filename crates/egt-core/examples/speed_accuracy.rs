@@ -5,7 +5,8 @@
 //! accuracy sweeps on ill-conditioned trains; and the problems as JSON for the
 //! SymPy and NumPy routes (`bench/routes.py`), which the chart puts beside these.
 //!
-//! Usage: `cargo run --release -p egt-core --example speed_accuracy -- OUT_DIR`
+//! Usage: `cargo run --release -p egt-core --features jit --example speed_accuracy -- OUT_DIR`
+//! (without `--features jit` the batch program is interpreted)
 
 use std::fmt::Write as _;
 use std::hint::black_box;
@@ -243,7 +244,6 @@ fn main() {
                     "method": route, "seconds": seconds, "error": max,
                     "operations": plan.program_operations(),
                     "compiled": plan.program_compiled(),
-                    "instructions": plan.program_instructions(),
                     "errors": {"speeds": worst(|e| e.speeds), "accelerations": worst(|e| e.accelerations),
                                "multipliers": worst(|e| e.multipliers), "torques": worst(|e| e.torques)},
                 }));

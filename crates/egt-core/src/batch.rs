@@ -77,7 +77,9 @@
 //! warning or error. The program's numbers differ from the row-by-row
 //! solve's by rounding only (another order of the same operations; tested
 //! within 1e-12 of the row's largest output); the rows warned about or
-//! refused are the same (tested).
+//! refused are the same (tested). With the `jit` feature, the program runs
+//! as machine code compiled for the train where the machine has AVX-512 or
+//! AVX2, with the same numbers bit for bit ([`Executor`]).
 //!
 //! ```
 //! use egt_core::batch::{BatchPlan, BatchSpec};
@@ -288,6 +290,20 @@ pub struct RowError {
     pub error: Error,
 }
 
+/// How a [`BatchPlan`]'s straight-line program runs
+/// ([`BatchPlan::with_executor`]); every executor gives the same numbers,
+/// bit for bit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Executor {
+    /// Compiled to machine code for the train where the `jit` feature is
+    /// on and the machine runs the code ([`BatchPlan::program_compiled`]
+    /// says whether it does), else interpreted.
+    #[default]
+    Auto,
+    /// Interpreted, whatever the build and the machine.
+    Interpreted,
+}
+
 /// A train prepared for batch evaluation. `Sync`, and immutable but for
 /// the buffers it keeps from a call on the calling thread for the next
 /// (which change no number).
@@ -318,6 +334,8 @@ pub struct BatchPlan {
     /// With bounds, the straight-line program of the train (see
     /// `solve/prepared/tape.rs`), when the base row factors.
     program: Option<Program>,
+    /// How the program runs.
+    executor: Executor,
     /// A call's buffers, kept for the next call on a calling thread.
     spares: Spares,
 }
@@ -451,6 +469,7 @@ impl BatchPlan {
             forces,
             bounds: false,
             program: None,
+            executor: Executor::Auto,
             spares: Spares::default(),
         };
         plan.choose((0..plan.all.len()).collect());
@@ -637,6 +656,10 @@ impl BatchPlan {
                 )
             })
             .flatten()
+            .map(|p| match self.executor {
+                Executor::Auto => p.compile(),
+                Executor::Interpreted => p,
+            })
     }
 
     /// Whether rows are solved by the straight-line program (see
@@ -655,61 +678,22 @@ impl BatchPlan {
     }
 
     /// Whether the straight-line program runs as machine code compiled for
-    /// this train (x86-64 with AVX-512F and DQ, or AVX2, BMI2 and FMA;
-    /// `EGT_JIT=0` turns it off), rather than interpreted. The numbers are
-    /// the same, bit for bit.
+    /// this train ([`Executor::Auto`] with the `jit` feature, on x86-64 with
+    /// AVX-512F and DQ or AVX2, BMI2 and FMA; `EGT_JIT=0` turns it off),
+    /// rather than interpreted. The numbers are the same, bit for bit.
     pub fn program_compiled(&self) -> bool {
         self.program.as_ref().is_some_and(Program::compiled)
     }
 
-    /// The vector instructions of the compiled program: `"AVX-512"` or
-    /// `"AVX2"` (`EGT_JIT=avx2` asks for AVX2 where AVX-512 would run), or
-    /// None where the program is interpreted or there is none.
-    pub fn program_instructions(&self) -> Option<&'static str> {
-        use crate::solve::prepared::Isa;
-        self.program.as_ref()?.isa().map(|isa| match isa {
-            Isa::Avx512 => "AVX-512",
-            Isa::Avx2 => "AVX2",
-        })
-    }
-
-    /// The same plan with its straight-line program run as `instructions`
-    /// code (`"AVX-512"` or `"AVX2"`, as [`BatchPlan::program_instructions`]
-    /// names them) or, with None, interpreted: to compare or time the codes
-    /// on one machine. Every code gives the same numbers, bit for bit.
-    /// [`BatchPlan::with_outputs`] and [`BatchPlan::with_condition_bounds`]
-    /// rebuild the program with this machine's code: choose after them.
-    ///
-    /// # Errors
-    /// An unknown name, a code this machine does not run, or a plan without
-    /// a program ([`BatchPlan::has_program`]), each naming `instructions`.
-    pub fn with_program_instructions(mut self, instructions: Option<&str>) -> Result<Self> {
-        use crate::solve::prepared::Isa;
-        let invalid = |message: String| Error::invalid("instructions", message);
-        let isa = match instructions {
-            None => None,
-            Some("AVX-512") => Some(Isa::Avx512),
-            Some("AVX2") => Some(Isa::Avx2),
-            Some(other) => {
-                return Err(invalid(format!(
-                    "`{other}` is not an instruction set: \"AVX-512\", \"AVX2\" or none"
-                )));
-            }
-        };
-        let Some(program) = self.program.take() else {
-            return Err(invalid(
-                "the plan has no straight-line program (see with_condition_bounds)".into(),
-            ));
-        };
-        let program = program.with_code(isa);
-        if program.isa() != isa {
-            let name = instructions.unwrap_or_default();
-            return Err(invalid(format!(
-                "{name} code does not run on this machine (or the program is too long for it)"
-            )));
+    /// The same plan with its straight-line program (if any) run by
+    /// `executor`: to compare or time them on one machine. Every executor
+    /// gives the same numbers, bit for bit.
+    pub fn with_executor(mut self, executor: Executor) -> Self {
+        if executor != self.executor {
+            self.executor = executor;
+            self.reprogram();
         }
-        self.program = Some(program);
-        Ok(self)
+        self
     }
 
     /// The length of the straight-line program (operations and checks),
@@ -1974,6 +1958,7 @@ mod families;
 #[cfg(test)]
 mod tests {
     use super::*;
+    #[cfg(feature = "jit")]
     use crate::solve::prepared::Isa;
     use crate::{Format, Train};
 
@@ -2141,6 +2126,8 @@ mod tests {
     /// and Fig. 5 (kinematics and dynamics, every output and a choice), and
     /// every gear state of the 8HP70. On a machine without AVX-512 there is
     /// no code, and the test says so by failing only where there should be.
+    /// (With the `jit` feature only: without it there is no code.)
+    #[cfg(feature = "jit")]
     #[test]
     fn compiled_and_interpreted_programs_agree_bit_for_bit() {
         // The instruction sets this machine runs, detected here rather than
@@ -2247,6 +2234,7 @@ mod tests {
 
     /// The rows of `plan` on its compiled program, and on `interpreted`: the
     /// same bits, errors and valid rows.
+    #[cfg(feature = "jit")]
     fn compare(name: &str, p: &BatchPlan, interpreted: &BatchPlan) {
         // 512 rows: the output columns start at one offset modulo 4 KiB, so
         // a plan of more than 12 outputs writes them through the slots.

@@ -736,3 +736,47 @@ impl TransmissionError {
         }
     }
 }
+
+/// Why a search cannot run. Each variant names the offending field.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum DesignError {
+    /// `sets.<name>` is not a planetary set of the base train.
+    #[error("sets.{0}: no simple planetary set of that name in the base train")]
+    UnknownSet(String),
+    /// `targets.ratios.<state>` is not a gear state of the base train.
+    #[error("targets.ratios.{0}: no gear state of that name in the base train")]
+    UnknownState(String),
+    /// A field has an impossible value.
+    #[error("{field}: {message}")]
+    Invalid {
+        /// The field.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The base train or a candidate failed egt's own analysis.
+    #[error(transparent)]
+    Egt(#[from] Error),
+}
+
+/// A design error as one of egt's typed errors (so the CLI's exit codes,
+/// JSON error codes and Python's exceptions cover it): the base train's and
+/// candidates' own errors as they are; a field, set or state of the search
+/// spec as a spec error naming it (exit 2).
+impl From<DesignError> for Error {
+    fn from(e: DesignError) -> Self {
+        match e {
+            DesignError::Egt(e) => e,
+            DesignError::UnknownSet(name) => Error::invalid(
+                format!("sets.{name}"),
+                "no simple planetary set of that name in the base train",
+            ),
+            DesignError::UnknownState(name) => Error::invalid(
+                format!("targets.ratios.{name}"),
+                "no gear state of that name in the base train",
+            ),
+            DesignError::Invalid { field, message } => Error::invalid(field, message),
+        }
+    }
+}

@@ -82,6 +82,8 @@
 //! ```
 
 #![deny(missing_docs)]
+// The compiled batch program (feature `jit`) is the crate's only `unsafe`.
+#![cfg_attr(not(feature = "jit"), forbid(unsafe_code))]
 
 // The unit tests share the generated train families of `lab/`, which name
 // the crate as its users do.

@@ -2,8 +2,8 @@
 `BatchPlan.run(params, threads=1)` on the 6-link chain (dynamics with
 condition bounds), a new sun-planet ratio in every row, the matrix C- or
 Fortran-ordered, or no matrix: `plan.run({"ratio.P1/sun-planet": r})`, the
-other columns at the base row's values. Prints how rows are solved (`plan.program`: "AVX-512",
-"AVX2" or "interpreted"), microseconds a call and nanoseconds a row, best
+other columns at the base row's values. Prints how rows are solved (`plan.program`: "compiled"
+or "interpreted"), microseconds a call and nanoseconds a row, best
 of 5. Run it with `EGT_JIT=avx2` or `EGT_JIT=0` in the environment to time
 the AVX2 code or the interpreter on the same machine.
 

@@ -9,7 +9,7 @@
 //! The one NaN a valid row could carry, `power.efficiency` without input
 //! power, is written as 0.0 too (documented in `egt.BatchResult`).
 
-use egt_core::batch::{BatchPlan, BatchSpec, Column, Threads};
+use egt_core::batch::{BatchPlan, BatchSpec, Column, Executor, Threads};
 use egt_core::solve::prepared::Compute;
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -50,13 +50,13 @@ fn compute_of(s: &str) -> Result<Compute> {
 /// elements are added to `engaged`. `condition_bounds`: see
 /// [`BatchPlan::with_condition_bounds`] (None: [`BatchPlan::bounds_serve`]
 /// of `outputs`, as `egt batch --columns`); `outputs`: see
-/// [`BatchPlan::with_outputs`]; `program`: the straight-line program's code,
-/// `"AVX-512"`, `"AVX2"` or `"interpreted"` (None: the machine's best; see
-/// [`BatchPlan::with_program_instructions`]).
+/// [`BatchPlan::with_outputs`]; `executor`: how the straight-line program
+/// runs, `"auto"` (compiled where the machine runs the code) or
+/// `"interpreted"` (see [`BatchPlan::with_executor`]).
 // One argument per Python keyword.
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
-#[pyo3(signature = (core, compute, inputs = None, accelerated = None, driving = None, engaged = Vec::new(), gear_state = None, condition_bounds = None, outputs = None, program = None))]
+#[pyo3(signature = (core, compute, inputs = None, accelerated = None, driving = None, engaged = Vec::new(), gear_state = None, condition_bounds = None, outputs = None, executor = "auto"))]
 pub fn batch_plan(
     core: &TrainCore,
     compute: &str,
@@ -67,16 +67,15 @@ pub fn batch_plan(
     gear_state: Option<String>,
     condition_bounds: Option<bool>,
     outputs: Option<Vec<String>>,
-    program: Option<String>,
+    executor: &str,
 ) -> Result<BatchPlanCore> {
     let compute = compute_of(compute)?;
-    let instructions = match program.as_deref() {
-        None => None,
-        Some("interpreted") => Some(None),
-        Some(code @ ("AVX-512" | "AVX2")) => Some(Some(code)),
-        Some(other) => {
+    let executor = match executor {
+        "auto" => Executor::Auto,
+        "interpreted" => Executor::Interpreted,
+        other => {
             return Err(value_error(format!(
-                "program must be \"AVX-512\", \"AVX2\" or \"interpreted\", got {other:?}"
+                "executor must be \"auto\" or \"interpreted\", got {other:?}"
             )));
         }
     };
@@ -110,14 +109,7 @@ pub fn batch_plan(
         if let Some(names) = &outputs {
             plan = plan.with_outputs(names)?;
         }
-        let mut plan = plan.with_condition_bounds(bounds);
-        if let Some(code) = instructions {
-            // The core names its argument `instructions`; Python's is `program`.
-            plan = plan.with_program_instructions(code).map_err(|e| match e {
-                egt_core::Error::Spec { kind, .. } => egt_core::Error::spec("program", kind),
-                other => other,
-            })?;
-        }
+        let plan = plan.with_executor(executor).with_condition_bounds(bounds);
         Ok(BatchPlanCore { plan })
     })
 }
@@ -136,15 +128,19 @@ impl BatchPlanCore {
         self.plan.outputs().to_vec()
     }
 
-    /// The plan's straight-line program: `"AVX-512"` or `"AVX2"` (compiled
-    /// for the train), `"interpreted"`, or None (no program: rows are
+    /// The plan's straight-line program: `"compiled"` (to machine code for
+    /// the train), `"interpreted"`, or None (no program: rows are
     /// solved in SIMD groups of eight). Rows that vary only loads, speeds
     /// or accelerations share one factorisation instead, whatever this says.
     #[getter]
     fn program(&self) -> Option<&'static str> {
         self.plan
             .has_program()
-            .then(|| self.plan.program_instructions().unwrap_or("interpreted"))
+            .then_some(if self.plan.program_compiled() {
+                "compiled"
+            } else {
+                "interpreted"
+            })
     }
 
     /// The spec's own parameter values (NaN where the spec gives none).

@@ -24,52 +24,10 @@ use num_rational::Ratio;
 use serde::{Deserialize, Serialize};
 
 use super::spec::{Constraints, SetRange, SynthSpec};
+pub use crate::error::DesignError;
+use crate::model::equations::willis_row;
 use crate::model::train::Train;
 use crate::spec::{PlanetaryKind, Spec};
-
-/// Why a search cannot run. Each variant names the offending field.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum DesignError {
-    /// `sets.<name>` is not a planetary set of the base train.
-    #[error("sets.{0}: no simple planetary set of that name in the base train")]
-    UnknownSet(String),
-    /// `targets.ratios.<state>` is not a gear state of the base train.
-    #[error("targets.ratios.{0}: no gear state of that name in the base train")]
-    UnknownState(String),
-    /// A field has an impossible value.
-    #[error("{field}: {message}")]
-    Invalid {
-        /// The field.
-        field: String,
-        /// What is wrong.
-        message: String,
-    },
-    /// The base train or a candidate failed egt's own analysis.
-    #[error(transparent)]
-    Egt(#[from] crate::Error),
-}
-
-/// A design error as one of egt's typed errors (so the CLI's exit codes,
-/// JSON error codes and Python's exceptions cover it): the base train's and
-/// candidates' own errors as they are; a field, set or state of the search
-/// spec as a spec error naming it (exit 2).
-impl From<DesignError> for crate::Error {
-    fn from(e: DesignError) -> Self {
-        match e {
-            DesignError::Egt(e) => e,
-            DesignError::UnknownSet(name) => crate::Error::invalid(
-                format!("sets.{name}"),
-                "no simple planetary set of that name in the base train",
-            ),
-            DesignError::UnknownState(name) => crate::Error::invalid(
-                format!("targets.ratios.{name}"),
-                "no gear state of that name in the base train",
-            ),
-            DesignError::Invalid { field, message } => crate::Error::invalid(field, message),
-        }
-    }
-}
 
 /// One way to build a set: sun, ring and planet teeth (and for a Ravigneaux
 /// set the large sun and the short pinion).
@@ -602,10 +560,10 @@ fn states(
         let mut marks = Vec::new();
         for (i, &(_, s, r, c, k, sign)) in willis.iter().enumerate() {
             let mut row = vec![0.0; n];
-            let k = if k.is_nan() { 0.0 } else { sign * k };
-            row[s] += 1.0;
-            row[r] += k;
-            row[c] -= 1.0 + k;
+            let [ws, wr, wc] = searched_willis(if k.is_nan() { 0.0 } else { sign * k });
+            row[s] += ws;
+            row[r] += wr;
+            row[c] += wc;
             if let Some(d) = dim_of[i] {
                 marks.push((d, rows.len(), s, r, c));
             }
@@ -665,13 +623,20 @@ fn states(
     Ok(states)
 }
 
-/// Write a searched Willis row w_s + k w_r - (1 + k) w_c = 0 (k signed) into
-/// row `row` of `a`.
+/// A searched Willis row w_s + k w_r - (1 + k) w_c = 0 (k signed): eq. (2)'s
+/// row with tau = -k (the ratio of the sun to the ring with the carrier
+/// held), the coefficients of (w_s, w_r, w_c).
+fn searched_willis(k: f64) -> [f64; 3] {
+    willis_row(-k)
+}
+
+/// Write a searched Willis row ([`searched_willis`]) into row `row` of `a`.
 fn willis_into(a: &mut DMatrix<f64>, (row, s, r, c): (usize, usize, usize, usize), k: f64) {
+    let [ws, wr, wc] = searched_willis(k);
     a.row_mut(row).fill(0.0);
-    a[(row, s)] += 1.0;
-    a[(row, r)] += k;
-    a[(row, c)] -= 1.0 + k;
+    a[(row, s)] += ws;
+    a[(row, r)] += wr;
+    a[(row, c)] += wc;
 }
 
 /// Whether every gear state's system is regular for generic ratios (two

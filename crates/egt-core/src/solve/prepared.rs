@@ -18,7 +18,9 @@
 
 use std::ops::Range;
 
+#[cfg(feature = "jit")]
 mod jit;
+#[cfg(all(test, feature = "jit"))]
 pub(crate) use jit::Isa;
 mod lanes;
 mod tape;

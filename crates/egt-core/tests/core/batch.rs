@@ -3,7 +3,7 @@
 //! `Train::power_flow` give for a train written with that row's values;
 //! parallel runs equal row-by-row runs; bad rows are reported and the rest go on.
 
-use egt_core::batch::{BatchPlan, Threads};
+use egt_core::batch::{BatchPlan, Executor, Threads};
 use egt_core::solve::prepared::Compute;
 use egt_core::{AnalysisError, Error, LinkId, Train};
 use proptest::prelude::*;
@@ -856,11 +856,12 @@ fn condition_bounds_change_only_small_conditions() {
     );
 }
 
-/// The straight-line program runs as any code the machine has, or
-/// interpreted, with the same bits; a code it lacks, an unknown name and a
-/// plan without a program are refused naming `instructions`.
+/// The straight-line program runs compiled (`Executor::Auto`, with the
+/// `jit` feature on a machine with AVX-512 or AVX2) or interpreted, with the
+/// same bits and the same refused rows; a plan without a program takes
+/// either executor and has no compiled program.
 #[test]
-fn the_program_runs_as_every_code_the_machine_has_with_the_same_bits() {
+fn the_program_runs_compiled_or_interpreted_with_the_same_bits() {
     let t = train(&crate::lab::families::planetary_chain(3));
     let p = plan(&t, Compute::Dynamics).with_condition_bounds(true);
     let (np, nq) = (p.parameters().len(), p.outputs().len());
@@ -875,69 +876,54 @@ fn the_program_runs_as_every_code_the_machine_has_with_the_same_bits() {
         columns[ratio * rows + r] = -0.5 - 0.4 * (r as f64 / rows as f64);
     }
     columns[ratio * rows + 17] = 0.0;
-    #[cfg(target_arch = "x86_64")]
-    let runs = [
-        (
-            Some("AVX-512"),
-            std::arch::is_x86_feature_detected!("avx512f")
-                && std::arch::is_x86_feature_detected!("avx512dq"),
-        ),
-        (
-            Some("AVX2"),
-            std::arch::is_x86_feature_detected!("avx2")
-                && std::arch::is_x86_feature_detected!("bmi2"),
-        ),
-        (None, true),
-    ];
-    #[cfg(not(target_arch = "x86_64"))]
-    let runs = [
-        (Some("AVX-512"), false),
-        (Some("AVX2"), false),
-        (None, true),
-    ];
-    let mut results: Vec<(Option<&str>, Vec<f64>, Vec<usize>)> = Vec::new();
-    for (code, runs) in runs {
-        match p.clone().with_program_instructions(code) {
-            Ok(q) => {
-                assert!(runs, "{code:?} code where it does not run");
-                assert_eq!(q.program_instructions(), code);
-                let mut out = vec![0.0; rows * nq];
-                let failed = q
-                    .run_columns(&columns, &mut out)
-                    .iter()
-                    .map(|e| e.row)
-                    .collect();
-                results.push((code, out, failed));
-            }
-            Err(e) => {
-                assert!(!runs, "{code:?}: {e}");
-                let text = e.to_string();
-                assert!(
-                    text.contains("instructions") && text.contains("does not run on this machine"),
-                    "{text}"
-                );
-            }
-        }
+    // Compiled where the build has the JIT and the machine runs its code.
+    #[cfg(all(feature = "jit", target_arch = "x86_64"))]
+    let compiles = std::env::var("EGT_JIT").as_deref() != Ok("0")
+        && (std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("bmi2")
+            && std::arch::is_x86_feature_detected!("fma")
+            || std::arch::is_x86_feature_detected!("avx512f")
+                && std::arch::is_x86_feature_detected!("avx512dq"));
+    #[cfg(not(all(feature = "jit", target_arch = "x86_64")))]
+    let compiles = false;
+    let mut results: Vec<(Executor, Vec<f64>, Vec<usize>)> = Vec::new();
+    for executor in [Executor::Interpreted, Executor::Auto] {
+        let q = p.clone().with_executor(executor);
+        assert!(q.has_program(), "{executor:?}");
+        assert_eq!(
+            q.program_compiled(),
+            executor == Executor::Auto && compiles,
+            "{executor:?}"
+        );
+        let mut out = vec![0.0; rows * nq];
+        let failed = q
+            .run_columns(&columns, &mut out)
+            .iter()
+            .map(|e| e.row)
+            .collect();
+        results.push((executor, out, failed));
     }
     let (_, first, failed) = &results[0];
     assert_eq!(failed, &vec![17], "the zero ratio's row refused");
-    for (code, out, f) in &results[1..] {
-        assert_eq!(f, failed, "{code:?}");
+    for (executor, out, f) in &results[1..] {
+        assert_eq!(f, failed, "{executor:?}");
         for (i, (a, b)) in out.iter().zip(first).enumerate() {
             assert!(
                 a.to_bits() == b.to_bits(),
-                "{code:?} cell {i}: {a} against {b}"
+                "{executor:?} cell {i}: {a} against {b}"
             );
         }
     }
-    let err = |r: Result<BatchPlan, Error>| r.err().map(|e| e.to_string()).unwrap_or_default();
-    let unknown = err(p.clone().with_program_instructions(Some("SSE2")));
-    assert!(
-        unknown.contains("instructions") && unknown.contains("`SSE2` is not an instruction set"),
-        "{unknown}"
-    );
-    let none = err(plan(&t, Compute::Dynamics).with_program_instructions(None));
-    assert!(none.contains("no straight-line program"), "{none}");
+    // Back and forth: the executor is the plan's, kept through the outputs'
+    // choice and the bounds.
+    let back = p
+        .clone()
+        .with_executor(Executor::Interpreted)
+        .with_condition_bounds(false)
+        .with_condition_bounds(true);
+    assert!(back.has_program() && !back.program_compiled());
+    let none = plan(&t, Compute::Dynamics).with_executor(Executor::Interpreted);
+    assert!(!none.has_program() && !none.program_compiled());
 }
 
 /// `BatchPlan::run_column_set` with some columns given as one value for

@@ -228,9 +228,10 @@ class BatchPlan:
 
     @property
     def program(self) -> Optional[str]:
-        """The plan's straight-line program: ``"AVX-512"`` or ``"AVX2"``
-        (compiled to machine code for the train), ``"interpreted"`` (another
-        machine, or ``EGT_JIT=0``), or None (no program: rows are solved in
+        """The plan's straight-line program: ``"compiled"`` (to machine code
+        for the train), ``"interpreted"`` (``executor="interpreted"``, a
+        machine without AVX-512 or AVX2, or ``EGT_JIT=0``), or None (no
+        program: rows are solved in
         SIMD groups of eight; see ``condition_bounds`` in
         :meth:`egt.Train.batch`). Rows that vary only loads, speeds or
         accelerations share one factorisation instead, whatever this says."""

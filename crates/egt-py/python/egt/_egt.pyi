@@ -137,7 +137,7 @@ def batch_plan(
     gear_state: Optional[str] = None,
     condition_bounds: Optional[bool] = None,
     outputs: Optional[List[str]] = None,
-    program: Optional[str] = None,
+    executor: str = "auto",
 ) -> BatchPlanCore: ...
 
 _Curve = Tuple[str, float, float, float]

@@ -457,7 +457,7 @@ class Train:
         gear_state: Optional[str] = None,
         condition_bounds: Optional[bool] = None,
         outputs: Optional[Sequence[str]] = None,
-        program: Optional[str] = None,
+        executor: str = "auto",
     ) -> BatchPlan:
         """Prepare the train for many scenarios (``compute``: ``"kinematics"``,
         ``"dynamics"`` or ``"power"``).
@@ -486,12 +486,11 @@ class Train:
         without it lists them); with ``condition_bounds`` the straight-line
         program then drops every operation they do not need. The rows that
         fail and the chosen columns' numbers do not change.
-        ``program``: the code the straight-line program runs as,
-        ``"AVX-512"``, ``"AVX2"`` or ``"interpreted"``, to compare or time
-        the codes on one machine (every code gives the same numbers, bit for
-        bit); default (None): the machine's best. A code the machine does not
-        run, or a plan without a program, raises :class:`egt.SpecError` at
-        ``program``. See :class:`egt.BatchPlan`.
+        ``executor``: how the straight-line program runs, ``"auto"`` (the
+        default: compiled to machine code for the train where the machine has
+        AVX-512 or AVX2) or ``"interpreted"``, to compare or time them on
+        one machine (both give the same numbers, bit for bit; a plan without
+        a program takes either). See :class:`egt.BatchPlan`.
         """
         args = (
             compute,
@@ -502,7 +501,7 @@ class Train:
             None if gear_state is None else str(gear_state),
             None if condition_bounds is None else bool(condition_bounds),
             None if outputs is None else _names(outputs, "outputs"),
-            None if program is None else str(program),
+            str(executor),
         )
         core = batch_plan(self._core, *args)
         # The recipe (this train and the arguments) makes the plan pickle, so

@@ -169,6 +169,7 @@ impl Code {
     }
 
     /// The instructions the code uses.
+    #[cfg(test)]
     pub(crate) fn isa(&self) -> Isa {
         self.inner.isa
     }

@@ -27,13 +27,15 @@
 //! operations; tested within 1e-12 of the largest output, and against exact
 //! rationals in the accuracy harness).
 //!
-//! Where the machine has AVX-512 or AVX2, the program also runs as machine
-//! code compiled for the train (see [`super::jit`]): the same operations in the
-//! same order, with the values kept in registers, giving the same numbers
-//! and the same checks bit for bit. The finiteness checks are sums (one for
+//! With the `jit` feature, where the machine has AVX-512 or AVX2, the
+//! program also runs as machine code compiled for the train (see
+//! `super::jit`): the same operations in the same order, with the values
+//! kept in registers, giving the same numbers and the same checks bit for
+//! bit. The finiteness checks are sums (one for
 //! the parameters, one for the results): a sum is finite when every term is,
 //! unless it overflows, and such a row is left to the lanes.
 
+#[cfg(feature = "jit")]
 use super::jit::{GOOD, MASK_BYTES, MASKS, MOVING};
 use super::{Compute, PreparedTrain};
 use crate::model::equations::willis_row;
@@ -160,6 +162,7 @@ pub(crate) struct Program {
     /// `0..cols.end`.
     cols: Columns,
     /// The operations as machine code, where this machine runs it.
+    #[cfg(feature = "jit")]
     code: Option<super::jit::Code>,
 }
 
@@ -176,6 +179,7 @@ pub(crate) struct ProgramWorkspace {
     moving: [bool; BLOCK],
     arch: pulp::Arch,
     /// The compiled code's pointer table.
+    #[cfg(feature = "jit")]
     io: Vec<usize>,
 }
 
@@ -781,10 +785,10 @@ impl PreparedTrain {
             statics,
             needs,
             cols,
+            #[cfg(feature = "jit")]
             code: None,
         };
         program.allocate(b.next as usize);
-        program.compile();
         Some(program)
     }
 }
@@ -795,13 +799,38 @@ impl Program {
         self.ops.len()
     }
 
-    /// Whether the operations run as machine code (see [`super::jit`]).
+    /// Whether the operations run as machine code (see `super::jit`).
+    #[cfg(feature = "jit")]
     pub(crate) fn compiled(&self) -> bool {
         self.code.is_some()
     }
 
+    /// Whether the operations run as machine code: never without the `jit`
+    /// feature.
+    #[cfg(not(feature = "jit"))]
+    pub(crate) fn compiled(&self) -> bool {
+        false
+    }
+
+    /// The same program with its operations as machine code, where this
+    /// machine runs it: the parameters' and the outputs' slots are the ones
+    /// read back.
+    #[cfg(feature = "jit")]
+    pub(crate) fn compile(mut self) -> Self {
+        self.code = super::jit::Code::compile(&self.ops, self.slots, self.cols, &self.outputs);
+        self
+    }
+
+    /// The same program, interpreted: no machine code without the `jit`
+    /// feature.
+    #[cfg(not(feature = "jit"))]
+    pub(crate) fn compile(self) -> Self {
+        self
+    }
+
     /// The same program compiled with `isa` (interpreted where this machine
     /// does not run it, or with None).
+    #[cfg(all(test, feature = "jit"))]
     pub(crate) fn with_code(mut self, isa: Option<super::jit::Isa>) -> Self {
         self.code = isa.and_then(|isa| {
             super::jit::Code::compile_for(isa, &self.ops, self.slots, self.cols, &self.outputs)
@@ -810,14 +839,9 @@ impl Program {
     }
 
     /// The instructions the program's code uses, if compiled.
+    #[cfg(all(test, feature = "jit"))]
     pub(crate) fn isa(&self) -> Option<super::jit::Isa> {
         self.code.as_ref().map(super::jit::Code::isa)
-    }
-
-    /// The operations as machine code, where this machine runs it: the
-    /// parameters' and the outputs' slots are the ones read back.
-    fn compile(&mut self) {
-        self.code = super::jit::Code::compile(&self.ops, self.slots, self.cols, &self.outputs);
     }
 
     /// Drop the operations nothing reads, then give each result a slot that
@@ -933,6 +957,7 @@ impl Program {
             all_valid: false,
             moving: [false; BLOCK],
             arch: pulp::Arch::new(),
+            #[cfg(feature = "jit")]
             io: Vec::new(),
         }
     }
@@ -985,30 +1010,33 @@ impl Program {
         (at, to): (usize, usize),
         crowded: bool,
     ) {
-        match &self.code {
-            Some(code) if to - at == BLOCK => {
-                let mut masks = [0u8; MASKS * MASK_BYTES];
-                let in_place = super::jit::InPlace {
-                    column: &column,
-                    out: (!crowded).then_some(&mut *out),
-                    at,
-                };
-                code.run(&mut w.vals, &mut masks, &mut w.io, Some(in_place));
-                self.finish(w, &masks, BLOCK);
-                if crowded {
-                    self.write_columns(w, out, at, to);
-                } else {
-                    self.write_statics(w, out, at, to);
-                }
-            }
-            _ => {
-                self.run_columns(w, |k| &column(k)[at..to]);
+        #[cfg(feature = "jit")]
+        if let Some(code) = &self.code
+            && to - at == BLOCK
+        {
+            let mut masks = [0u8; MASKS * MASK_BYTES];
+            let in_place = super::jit::InPlace {
+                column: &column,
+                out: (!crowded).then_some(&mut *out),
+                at,
+            };
+            code.run(&mut w.vals, &mut masks, &mut w.io, Some(in_place));
+            self.finish(w, &masks, BLOCK);
+            if crowded {
                 self.write_columns(w, out, at, to);
+            } else {
+                self.write_statics(w, out, at, to);
             }
+            return;
         }
+        #[cfg(not(feature = "jit"))]
+        let _ = crowded;
+        self.run_columns(w, |k| &column(k)[at..to]);
+        self.write_columns(w, out, at, to);
     }
 
     /// Each row's validity and motion from the compiled code's masks.
+    #[cfg(feature = "jit")]
     fn finish(&self, w: &mut ProgramWorkspace, masks: &[u8; MASKS * MASK_BYTES], count: usize) {
         const { assert!(BLOCK == 64, "a block's rows are the bits of a u64") };
         let word = |m: usize| {
@@ -1038,6 +1066,7 @@ impl Program {
     /// The parameter rules on the loaded columns, the operations, and each
     /// row's validity.
     fn check_and_run(&self, w: &mut ProgramWorkspace, count: usize) {
+        #[cfg(feature = "jit")]
         if let Some(code) = &self.code {
             let mut masks = [0u8; MASKS * MASK_BYTES];
             code.run(&mut w.vals, &mut masks, &mut w.io, None);
