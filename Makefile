@@ -64,13 +64,13 @@ lint: ## Clippy (the workspace, and egt-core alone without the jit feature), for
 	python3 scripts/msrv.py
 	python3 scripts/layers.py
 
-bench: ## Benchmarks by phase and train size, 3 to 30 links (divan, short settings; see docs/benchmarks.md)
+bench: ## Benchmarks by phase and train size, 3 to 30 links (divan, short settings; see docs/performance.md)
 	cargo bench -p egt-core --features jit --bench scenarios -- --sample-count 20 --min-time 0.05
 
 chart: venv ## Re-measure Rust, SymPy and NumPy side by side; redraw docs/img/speed_accuracy.svg and the docs' tables
 	cargo run --release --quiet -p egt-core --features jit --example speed_accuracy -- target/speed_accuracy
 	$(VPY) bench/routes.py target/speed_accuracy
-	$(VPY) bench/chart.py target/speed_accuracy docs/img/speed_accuracy.svg docs/benchmarks.md docs/accuracy.md
+	$(VPY) bench/chart.py target/speed_accuracy docs/img/speed_accuracy.svg docs/performance.md docs/accuracy.md
 
 clean: ## Remove build outputs and the virtualenv
 	cargo clean

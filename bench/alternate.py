@@ -12,7 +12,7 @@ environment variable as `env NAME=VALUE CMD ...`.
 Processes are started with `os.posix_spawn` and reaped with `os.waitpid`,
 timed around both: no pipe, no shell, no Python `subprocess` bookkeeping,
 so the figure is close to the process's own life (about 0.05 ms more than a
-C program timing the same way, on the AMD EPYC host of docs/benchmarks.md).
+C program timing the same way, on the AMD EPYC host of docs/performance.md (history: git log -p -- docs/benchmarks.md)).
 Used for `egt batch`'s end-to-end figures there.
 """
 

@@ -4,7 +4,7 @@ Reads OUT_DIR/rust.json (the `speed_accuracy` example) and OUT_DIR/python.json
 (bench/routes.py), writes the SVG chart (time per scenario against relative
 error, one point per method and train size, and the flop floor), and replaces
 the text between the `<!-- speed-accuracy:begin/end -->` markers of
-docs/benchmarks.md and between `<!-- sweeps:begin/end -->` of docs/accuracy.md.
+docs/performance.md and between `<!-- sweeps:begin/end -->` of docs/accuracy.md.
 No plotting library: the SVG is written directly, so the figure depends only
 on the measurements. Run by `make chart`.
 """

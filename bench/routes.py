@@ -4,7 +4,7 @@ each timed per scenario and compared with the exact rational solution.
 
 Reads OUT_DIR/problems.json (written by the `speed_accuracy` example: the
 prepared structure of each train, its parameter values and the exact solution)
-and writes OUT_DIR/python.json. Run by `make chart`; see docs/benchmarks.md.
+and writes OUT_DIR/python.json. Run by `make chart`; see docs/performance.md (history: git log -p -- docs/benchmarks.md).
 
 Routes:
   numpy        one scenario at a time: fill the matrices, np.linalg.solve x3

@@ -12,7 +12,7 @@ and applied torques vary, by the strongest Python routes:
 Reads target/speed_accuracy/problems.json (`make chart` writes it) and prints
 ns per scenario per route and train size, on one thread (OMP/OpenBLAS
 threads set to 1). Compare with `cargo bench -p egt-core --bench scenarios --
-chain::sweep_loads` (docs/benchmarks.md).
+chain::sweep_loads` (docs/performance.md (history: git log -p -- docs/benchmarks.md)).
 
     OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 .venv/bin/python bench/sweep.py
 """

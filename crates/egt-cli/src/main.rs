@@ -6,7 +6,7 @@ use std::process::ExitCode;
 // mimalloc keeps freed memory for reuse within each thread. `egt batch`
 // builds and frees its Arrow columns and Parquet page buffers block after
 // block; under glibc's malloc those buffers went back to the kernel and
-// came back as page faults every block (docs/benchmarks.md, "Batch
+// came back as page faults every block (docs/performance.md (history: git log -p -- docs/benchmarks.md), "Batch
 // screening": 10^6 rows to Parquet 15-30 % faster).
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;

@@ -5,7 +5,7 @@
 //! eigenvalues of Fig. 5's two-motor train); plus batch throughput on all cores. Sizes run from 3 to 30 links over two generated
 //! families (planetary chains, nests) and the bundled examples.
 //!
-//! `make bench` runs this with short settings; docs/benchmarks.md has the numbers.
+//! `make bench` runs this with short settings; docs/performance.md (history: git log -p -- docs/benchmarks.md) has the numbers.
 //! A row of the scenario benches is the one the spec's `[analysis]` describes.
 
 use std::hint::black_box;
@@ -485,7 +485,7 @@ mod batch {
 
     /// The same, column-major (`BatchPlan::run_columns`), as `egt batch`
     /// holds a Parquet or Arrow block: the in-process rate its end-to-end
-    /// rate is compared with (docs/benchmarks.md).
+    /// rate is compared with (docs/performance.md (history: git log -p -- docs/benchmarks.md)).
     #[divan::bench(sample_count = 10)]
     fn chain6_inverse_dynamics_new_ratios_bounded_one_column_by_columns(b: Bencher) {
         let (p, rows) = new_ratio_rows(
@@ -512,7 +512,7 @@ mod batch {
     /// `egt batch`'s own job in process: the input torque alone chosen
     /// (`--columns driving_torque.s1`), the load and the ratio given row by
     /// row and every other parameter as one value (`run_column_set`, as
-    /// `egt batch` holds a grid's Parquet block; docs/benchmarks.md).
+    /// `egt batch` holds a grid's Parquet block; docs/performance.md (history: git log -p -- docs/benchmarks.md)).
     #[divan::bench(sample_count = 10)]
     fn chain6_inverse_dynamics_new_ratios_bounded_driving_torque_column_set(b: Bencher) {
         use egt_core::batch::{Column, Threads};

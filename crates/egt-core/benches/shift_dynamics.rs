@@ -1,6 +1,6 @@
 //! Time of one simulated clutch engagement (divan): a 2-3-like inertia phase
 //! with a pressure ramp, Stribeck friction, drive torque and road load, from
-//! release to lock-up and on to the end time. Numbers in docs/benchmarks.md.
+//! release to lock-up and on to the end time. Numbers in docs/performance.md (history: git log -p -- docs/benchmarks.md).
 
 use std::hint::black_box;
 

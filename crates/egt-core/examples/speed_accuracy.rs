@@ -1,4 +1,4 @@
-//! The speed-accuracy study behind `docs/benchmarks.md` and `docs/accuracy.md`
+//! The speed-accuracy study behind `docs/performance.md (history: git log -p -- docs/benchmarks.md)` and `docs/accuracy.md`
 //! (run by `make chart`): for planetary chains of 4 to 30 links, the time per
 //! scenario and the error against exact rationals of every Rust method; this
 //! machine's flop rate (a dense matrix product) for the physical floor; the

@@ -836,7 +836,7 @@ pub enum Threads {
     /// On the calling thread only. For a caller with threads of its own (a
     /// process pool, a server's request threads) or with small batches:
     /// handing work to a pool thread and waiting for it costs a wake-up
-    /// each way, about 100 µs a call on the machine of docs/benchmarks.md.
+    /// each way, about 100 µs a call on the machine of docs/performance.md (history: git log -p -- docs/benchmarks.md).
     Calling,
 }
 
@@ -844,7 +844,7 @@ pub enum Threads {
 /// state per thread; the errors in row order. One task, a pool of one
 /// thread, or [`Threads::Calling`] runs on the calling thread: handing work
 /// to a pool thread and waiting for it (a wake-up each way) cost about 100
-/// µs a call on the machine of docs/benchmarks.md, as much as 2 500 rows'
+/// µs a call on the machine of docs/performance.md (history: git log -p -- docs/benchmarks.md), as much as 2 500 rows'
 /// solves. There the state is one the plan kept from an earlier call
 /// (building it cost more than solving 64 rows), and is kept again after.
 fn each_task<T: Send>(
@@ -1068,7 +1068,7 @@ impl BatchPlan {
             // while every column passes. (Column by column over the
             // whole task, a row-major buffer larger than L1 was read
             // again from L2 for every column: 337 ns a row at 10 links
-            // against 46 for the same rows row-major, docs/benchmarks.md.)
+            // against 46 for the same rows row-major, docs/performance.md (history: git log -p -- docs/benchmarks.md).)
             const TILE: usize = 8;
             pin.clear();
             pin.resize(n * p, 0.0);
@@ -1132,7 +1132,7 @@ struct Spare {
 /// Buffers a plan keeps from its calls on a calling thread for the next
 /// ones (at most [`SPARES`], for callers on several threads at once): a
 /// call of 8 rows spent more on building and freeing them than on solving
-/// (docs/benchmarks.md). A clone of the plan starts with none; so does a
+/// (docs/performance.md (history: git log -p -- docs/benchmarks.md)). A clone of the plan starts with none; so does a
 /// plan whose program or prepared train changes (`BatchPlan::reprogram`).
 #[derive(Default)]
 struct Spares(std::sync::Mutex<Vec<Spare>>);
@@ -1247,7 +1247,7 @@ impl Linear {
 /// Coordinates up to which a batch with condition bounds runs the
 /// straight-line program rather than the lanes: every dense train (the
 /// program was 1.8 to 5 times faster than the lanes from 4 to 30 links, its
-/// lead growing with the size; docs/benchmarks.md).
+/// lead growing with the size; docs/performance.md (history: git log -p -- docs/benchmarks.md)).
 pub const PROGRAM_MAX_COORDINATES: usize = crate::solve::prepared::PREPARED_SPARSE_FROM;
 
 /// Buffers of the lanes path: the group's structure of arrays; the

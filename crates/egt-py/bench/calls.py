@@ -5,7 +5,7 @@ pool). Prints microseconds a call and nanoseconds a row, best of 5.
 
 Usage (after `make python-dev`, with the chart's train written by `make chart`):
     .venv/bin/python crates/egt-py/bench/calls.py target/speed_accuracy/planetary_chain_6.toml
-See docs/benchmarks.md, "Python's threads=1 on the calling thread".
+See docs/performance.md (history: git log -p -- docs/benchmarks.md), "Python's threads=1 on the calling thread".
 """
 
 from __future__ import annotations

@@ -9,7 +9,7 @@ the AVX2 code or the interpreter on the same machine.
 
 Usage (after `make python-dev`, with the chart's train written by `make chart`):
     .venv/bin/python crates/egt-py/bench/program.py target/speed_accuracy/planetary_chain_6.toml
-See docs/benchmarks.md, "AVX2 code, the program by default in Python".
+See docs/performance.md (history: git log -p -- docs/benchmarks.md), "AVX2 code, the program by default in Python".
 """
 
 from __future__ import annotations

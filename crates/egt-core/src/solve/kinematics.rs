@@ -86,7 +86,7 @@ enum Slot {
 /// orders) is faster; from about 20 unknowns the sparse one is, and its time
 /// and memory grow about linearly where the dense LU's grow as n^2 to n^3
 /// (`cargo bench -p egt-core --bench scenarios -- large::kinematics`,
-/// figures in `docs/benchmarks.md`, "Large trains").
+/// figures in `docs/performance.md (history: git log -p -- docs/benchmarks.md)`, "Large trains").
 pub const SPARSE_FROM: usize = 20;
 
 /// The factorisation of a Willis system.

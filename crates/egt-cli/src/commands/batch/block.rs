@@ -93,7 +93,7 @@ impl Sweep<'_> {
         // program solves it: it reads and writes whole columns, and the
         // encoders copy them. Otherwise (a sweep of loads, speeds or
         // accelerations goes to the linear path) and for text, row-major,
-        // as the other paths solve rows (docs/benchmarks.md has the A/B).
+        // as the other paths solve rows (docs/performance.md (history: git log -p -- docs/benchmarks.md) has the A/B).
         let by_columns = self.encoder.is_some()
             && plan.has_program()
             && (design.varied.iter()).any(|&(_, c)| !plan.is_linear_parameter(c));

@@ -160,7 +160,7 @@ pub(super) fn long_columnar(kind: BatchOutput) -> anyhow::Result<(Encoder, Sink)
 /// The data page size limit of a Parquet file: a page of doubles holds
 /// this many bytes of values, 8 192 values. (A block's column is 512 KiB,
 /// and the writer's page buffers grow by doubling up to the page; with
-/// pages smaller than the default 1 MiB they stay small: docs/benchmarks.md.)
+/// pages smaller than the default 1 MiB they stay small: docs/performance.md (history: git log -p -- docs/benchmarks.md).)
 pub(super) const PAGE_BYTES: usize = 64 * 1024;
 
 /// parquet-rs's settings for a file of the columns of `schema`, of which

@@ -43,7 +43,7 @@ const BLOCK: usize = 1 << 14;
 /// Larger than a text block: what a block costs besides its rows (a row
 /// group's metadata and its place in the footer, the page writers, a task)
 /// was a tenth of a 10^7-row batch to Parquet at 16 384 rows (10^7 rows, 2
-/// threads: 34.3 -> 31.0 ms; docs/benchmarks.md). Text stays at [`BLOCK`]:
+/// threads: 34.3 -> 31.0 ms; docs/performance.md (history: git log -p -- docs/benchmarks.md)). Text stays at [`BLOCK`]:
 /// at this size CSV ran 5 % slower and JSON Lines 40 %.
 const COLUMNAR_BLOCK: usize = 1 << 16;
 

@@ -28,7 +28,7 @@ pub(super) struct Buffers {
 /// `threads` threads, not one more that wakes for every block: on a 2-core
 /// KVM guest, a thread woken while both cores were busy waited up to a
 /// 4 ms scheduler tick, and one started on an idle core ran 1 to 4 ms later
-/// (docs/benchmarks.md, "The writer solves too").
+/// (docs/performance.md (history: git log -p -- docs/benchmarks.md), "The writer solves too").
 pub(super) fn in_order<T: Send>(
     all: usize,
     ahead: usize,
@@ -134,7 +134,7 @@ pub(super) fn in_order<T: Send>(
 /// Found without starting rayon's global pool: the tasks run on pools of
 /// their own, and the global pool's idle threads would spin beside them
 /// (about 3.5 ms of CPU in a 17 ms run of 10^6 rows on 2 cores,
-/// docs/benchmarks.md).
+/// docs/performance.md (history: git log -p -- docs/benchmarks.md)).
 pub(super) fn batch_threads(requested: Option<usize>) -> usize {
     let asked = requested.or_else(|| {
         std::env::var("RAYON_NUM_THREADS")

@@ -6,7 +6,7 @@
 //! buffer each task reuses, and the task's overrides are appended to its
 //! list: no map and no vector a line, and the lists are kept as the tasks
 //! left them. (A map and a vector a line took about twice as long, much of
-//! it the kernel clearing fresh pages; docs/benchmarks.md.)
+//! it the kernel clearing fresh pages; docs/performance.md (history: git log -p -- docs/benchmarks.md).)
 
 use std::borrow::Cow;
 use std::collections::BTreeMap;

@@ -133,7 +133,7 @@ pub(super) fn run_one_spec(
     };
     // Blocks are solved and encoded in the pool's tasks, each task taking
     // the next block as soon as it has finished one, and written in order
-    // on this thread, which only copies bytes (docs/benchmarks.md has the
+    // on this thread, which only copies bytes (docs/performance.md (history: git log -p -- docs/benchmarks.md) has the
     // history: waves of blocks left a thread idle while the other finished
     // its block and while this one wrote).
     let ahead = if block < most { 1 } else { AHEAD };

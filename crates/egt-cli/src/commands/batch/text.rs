@@ -51,7 +51,7 @@ pub(super) fn number(buf: &mut String, v: f64, json: bool) {
 /// is one binary place below its last decimal place, so that `v` times ten
 /// to the decimal places is an odd number of halves. (Tested on half a
 /// million numbers; a release build of the same code agreed with `{v:?}` on
-/// 156 million, docs/benchmarks.md.)
+/// 156 million, docs/performance.md (history: git log -p -- docs/benchmarks.md).)
 pub(super) fn plain_decimal(buf: &mut String, v: f64) {
     let mut digits = zmij::Buffer::new();
     let text = digits.format_finite(v);

@@ -1052,7 +1052,7 @@ impl Program {
         // The usual block: every row valid, and moving (or none). Filled
         // whole; bit by bit only otherwise (a bit test and a store a row,
         // kept scalar by the compiler: a one-thread `egt batch` of 10^7 rows
-        // ran 7 % faster without them; docs/benchmarks.md).
+        // ran 7 % faster without them; docs/performance.md (history: git log -p -- docs/benchmarks.md)).
         let bits = |mask: u64| match mask {
             u64::MAX => [true; BLOCK],
             0 => [false; BLOCK],
@@ -1292,7 +1292,7 @@ impl Program {
 /// time, the program ran 3 times slower than with 4 000 rows (19.4 against
 /// 6.5 ns a row at 6 links, 4 096 rows); through the block's slots and
 /// copied, 9.8 ns (reading the parameters through the slots as well did
-/// not help: 10.6; docs/benchmarks.md).
+/// not help: 10.6; docs/performance.md (history: git log -p -- docs/benchmarks.md)).
 pub(crate) fn crowded(starts: impl IntoIterator<Item = usize>) -> bool {
     const LINE: usize = 64;
     const SETS: usize = 4096 / LINE;
