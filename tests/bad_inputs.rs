@@ -248,3 +248,146 @@ fn run_args(args: &[&str], stdin: Option<&str>) -> (i32, String) {
     let r = egt(args, stdin);
     (r.code, r.stdout + &r.stderr)
 }
+
+/// Issue 42: `egt batch` designs are bounded and checked before any row is
+/// solved. Each case failed on 5ff1b3c: a panic ("capacity overflow") or a
+/// machine's memory taken, a grid of 10^20 rows clamped and run, an uneven
+/// zip exiting 1, and a parameter given twice or `--rows` with a grid
+/// silently losing one of them.
+#[test]
+fn batch_designs_are_bounded_and_given_once() {
+    let fig3 = "examples/fig3_example61.toml";
+    let cases: &[(&[&str], i32, &[&str])] = &[
+        (
+            &["--vary", "speed.2=0:1:18446744073709551615"],
+            2,
+            &["COUNT", "--vary"],
+        ),
+        (
+            &["--grid", "speed.2=0:1:1000000000000"],
+            2,
+            &["COUNT", "--grid"],
+        ),
+        (
+            &[
+                "--grid",
+                "speed.2=0:1:100000",
+                "--grid",
+                "torque.4=0:1:100000",
+                "--grid",
+                "accel.4=0:1:100000",
+            ],
+            2,
+            &["1000000000000000", "--max-rows"],
+        ),
+        (
+            &["--vary", "speed.2=1,2,3", "--vary", "torque.4=1,2"],
+            2,
+            &["--vary", "equal lengths"],
+        ),
+        (
+            &["--vary", "speed.2=1,2", "--grid", "speed.2=3,4"],
+            2,
+            &["`speed.2` is given twice"],
+        ),
+        (
+            &["--set", "torque.4=-5", "--grid", "torque.4=3,4"],
+            2,
+            &["given twice"],
+        ),
+        (
+            &["--rows", "-", "--grid", "torque.4=3,4"],
+            2,
+            &["--rows", "--grid"],
+        ),
+        (&["--vary", "speed.2=1,inf"], 2, &["not a finite number"]),
+    ];
+    for (extra, exit, words) in cases {
+        let mut args = vec!["batch", fig3];
+        args.extend_from_slice(extra);
+        let (code, text) = run_args(&args, Some(""));
+        assert_eq!(code, *exit, "{extra:?}: {text}");
+        for w in *words {
+            assert!(text.contains(w), "{extra:?}: `{w}` not in {text}");
+        }
+        assert!(!text.contains("panicked"), "{extra:?}: {text}");
+    }
+    // The budget is a flag: a design under it runs.
+    let (code, text) = run_args(
+        &[
+            "batch",
+            fig3,
+            "--grid",
+            "torque.4=0:1:3",
+            "--grid",
+            "speed.2=1:2:2",
+            "--max-rows",
+            "6",
+        ],
+        None,
+    );
+    assert_eq!(code, 0, "{text}");
+    assert_eq!(text.lines().count(), 6, "{text}");
+    let (code, text) = run_args(
+        &[
+            "batch",
+            fig3,
+            "--grid",
+            "torque.4=0:1:3",
+            "--grid",
+            "speed.2=1:2:2",
+            "--max-rows",
+            "5",
+        ],
+        None,
+    );
+    assert_eq!(code, 2, "{text}");
+    assert!(text.contains("6 scenarios"), "{text}");
+}
+
+/// Issue 42: the atlas and the parts of a search refuse by name what they
+/// cannot do, before any work: on 5ff1b3c `--links 12` ran without end, a
+/// DOF of 2^64 - 1 wrapped into an empty atlas with exit 0, and a malformed
+/// `--part` exited 1.
+#[test]
+fn atlas_budgets_and_parts_are_usage_errors() {
+    let cases: &[(&[&str], i32, &[&str])] = &[
+        (
+            &["enumerate", "--links", "12", "--count"],
+            2,
+            &["--max-links 12", "budget"],
+        ),
+        (
+            &["enumerate", "--links", "6", "--dof", "18446744073709551615"],
+            2,
+            &["dof", "between 1 and 4"],
+        ),
+        (
+            &["enumerate", "--links", "6", "--part", "x"],
+            2,
+            &["--part", "`x`"],
+        ),
+        (
+            &["enumerate", "--links", "6", "--part", "1/k"],
+            2,
+            &["--part", "K"],
+        ),
+        (
+            &["synth", "examples/synth/zf_8hp70.toml", "--part", "0:4"],
+            2,
+            &["--part"],
+        ),
+        (
+            &["enumerate", "--links", "7", "--count", "--max-links", "7"],
+            0,
+            &["152"],
+        ),
+    ];
+    for (args, exit, words) in cases {
+        let (code, text) = run_args(args, None);
+        assert_eq!(code, *exit, "{args:?}: {text}");
+        for w in *words {
+            assert!(text.contains(w), "{args:?}: `{w}` not in {text}");
+        }
+    }
+}

@@ -228,17 +228,24 @@ pub fn resolve_pairs(
 /// `I/K`: partition I (0-based) of K disjoint parts of a search (`--part`).
 ///
 /// # Errors
-/// Not two integers separated by `/`.
-pub fn parse_part(text: &str) -> anyhow::Result<(usize, usize)> {
-    let (i, k) = text
-        .split_once('/')
-        .with_context(|| format!("--part `{text}`: expected I/K, e.g. 0/4"))?;
-    Ok((
-        i.trim()
-            .parse()
-            .with_context(|| format!("--part `{text}`: bad I"))?,
-        k.trim()
-            .parse()
-            .with_context(|| format!("--part `{text}`: bad K"))?,
-    ))
+/// Not two integers separated by `/`: a usage error naming `--part` (exit 2).
+pub fn parse_part(text: &str) -> Result<(usize, usize), egt_core::Error> {
+    let bad = |what: &str| {
+        egt_core::Error::spec(
+            "--part",
+            egt_core::SpecErrorKind::Invalid {
+                message: format!("`{text}`: {what}; expected I/K with 0 <= I < K, e.g. 0/4"),
+            },
+        )
+    };
+    let (i, k) = text.split_once('/').ok_or_else(|| bad("no `/`"))?;
+    let i = i
+        .trim()
+        .parse()
+        .map_err(|_| bad("I is not a whole number"))?;
+    let k = k
+        .trim()
+        .parse()
+        .map_err(|_| bad("K is not a whole number"))?;
+    Ok((i, k))
 }

@@ -235,7 +235,7 @@ pub fn enumerate_with(
             format!("must be between 3 and {MAX_LINKS}, got {}", req.links),
         ));
     }
-    if req.dof == 0 || req.dof + 2 > req.links {
+    if req.dof == 0 || req.dof.saturating_add(2) > req.links {
         return Err(Error::invalid(
             "dof",
             format!(

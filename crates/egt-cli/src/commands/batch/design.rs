@@ -28,6 +28,13 @@ pub(super) fn split(s: &str) -> Result<(String, &str), String> {
     Ok((n.trim().to_string(), v.trim()))
 }
 
+/// Most values one `--vary` array or `--grid` axis may hold (80 MB of
+/// doubles): a larger sweep is a product of axes, bounded by `--max-rows`.
+pub(super) const MAX_AXIS_VALUES: usize = 10_000_000;
+
+/// The default of `--max-rows`: the scenarios a design may make.
+pub const DEFAULT_MAX_ROWS: u64 = 1_000_000_000;
+
 pub(super) fn parse_values(s: &str) -> Result<(String, Vec<f64>), String> {
     let (name, v) = split(s)?;
     let num = |x: &str| -> Result<f64, String> {
@@ -47,6 +54,12 @@ pub(super) fn parse_values(s: &str) -> Result<(String, Vec<f64>), String> {
             .ok()
             .filter(|&n| n >= 1)
             .ok_or_else(|| format!("COUNT must be a positive integer, got `{n}`"))?;
+        if n > MAX_AXIS_VALUES {
+            return Err(format!(
+                "COUNT {n} is more than {MAX_AXIS_VALUES} values for one array or axis; \
+                 make a larger sweep a product of --grid axes"
+            ));
+        }
         (0..n)
             .map(|i| {
                 if n == 1 {
@@ -59,6 +72,9 @@ pub(super) fn parse_values(s: &str) -> Result<(String, Vec<f64>), String> {
     } else {
         v.split(',').map(num).collect::<Result<Vec<_>, _>>()?
     };
+    if let Some(bad) = values.iter().find(|x| !x.is_finite()) {
+        return Err(format!("`{bad}` for `{name}` is not a finite number"));
+    }
     if values.is_empty() {
         return Err(format!("no values for `{name}`"));
     }
@@ -217,12 +233,35 @@ pub(super) fn unknown(plan: &BatchPlan, name: &str, flag: &str) -> Error {
     )
 }
 
+/// A usage error of `egt batch` naming its flag (exit 2).
+fn refuse(flag: &str, message: String) -> Error {
+    Error::spec(flag, SpecErrorKind::Invalid { message })
+}
+
 pub(super) fn design(args: &Args, plan: &BatchPlan) -> anyhow::Result<Design> {
     let col = |name: &str, flag: &str| {
         plan.parameter(name)
             .ok_or_else(|| unknown(plan, name, flag))
     };
     let mut varied: Vec<(String, usize)> = Vec::new();
+    // A parameter is given once: a second `--vary`, `--grid` or `--set` of
+    // it would silently win over the first.
+    let mut given: Vec<(usize, &str)> = Vec::new();
+    let mut once = |name: &str, c: usize, flag: &'static str| -> Result<(), Error> {
+        if let Some((_, first)) = given.iter().find(|g| g.0 == c) {
+            return Err(refuse(
+                flag,
+                format!(
+                    "`{name}` is given twice (by {first} and by {flag}); give each parameter once"
+                ),
+            ));
+        }
+        given.push((c, flag));
+        Ok(())
+    };
+    for (name, _) in &args.set {
+        once(name, col(name, "--set")?, "--set")?;
+    }
     let mut note = |name: &str, c: usize| {
         if !varied.iter().any(|v| v.1 == c) {
             varied.push((name.to_string(), c));
@@ -249,24 +288,49 @@ pub(super) fn design(args: &Args, plan: &BatchPlan) -> anyhow::Result<Design> {
     let mut zipped = Vec::new();
     for (name, vals) in &args.vary {
         let c = col(name, "--vary")?;
-        if let Some((_, first)) = zipped.first().map(|z: &(usize, Vec<f64>)| (z.0, z.1.len())) {
-            anyhow::ensure!(
-                first == vals.len(),
-                "--vary arrays are zipped and must have equal lengths: `{name}` has {}, the first has {first}",
-                vals.len()
-            );
+        once(name, c, "--vary")?;
+        if let Some(first) = zipped.first().map(|z: &(usize, Vec<f64>)| z.1.len())
+            && first != vals.len()
+        {
+            return Err(refuse(
+                "--vary",
+                format!(
+                    "--vary arrays are zipped and must have equal lengths: `{name}` has {}, the first has {first}",
+                    vals.len()
+                ),
+            )
+            .into());
         }
         note(name, c);
         zipped.push((c, vals.clone()));
     }
     let mut axes = Vec::new();
-    let mut count = zipped.first().map_or(1, |z| z.1.len());
+    // Counted without overflow, and bounded before any row is made.
+    let mut count: u128 = zipped.first().map_or(1, |z| z.1.len() as u128);
     for (name, vals) in &args.grid {
         let c = col(name, "--grid")?;
+        once(name, c, "--grid")?;
         note(name, c);
-        count = count.saturating_mul(vals.len());
+        count = count.saturating_mul(vals.len() as u128);
         axes.push((c, vals.clone()));
     }
+    if count > u128::from(args.max_rows) {
+        return Err(refuse(
+            "--grid",
+            format!(
+                "the design makes {count} scenarios, more than --max-rows {} allows; \
+                 raise it with --max-rows if that many are meant",
+                args.max_rows
+            ),
+        )
+        .into());
+    }
+    let count = usize::try_from(count).map_err(|_| {
+        refuse(
+            "--max-rows",
+            format!("{count} scenarios do not fit this machine's addresses"),
+        )
+    })?;
     Ok(Design {
         varied,
         rows: Rows::Product {

@@ -114,8 +114,12 @@ pub struct Args {
     #[arg(long, value_name = "NAME=VALUES", value_parser = parse_values)]
     pub grid: Vec<(String, Vec<f64>)>,
     /// A JSON Lines file of parameter objects (`{"NAME": VALUE, ...}`), one scenario per line.
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["vary", "grid", "set"])]
     pub rows: Option<PathBuf>,
+    /// The most scenarios a `--vary`/`--grid` design may make (checked
+    /// before any is solved; one array or axis holds at most 10^7 values).
+    #[arg(long, value_name = "N", default_value_t = design::DEFAULT_MAX_ROWS)]
+    pub max_rows: u64,
     /// A gear state of the spec's transmission (repeatable), or `all` for the shift table.
     #[arg(long, value_name = "STATE")]
     pub state: Vec<String>,
