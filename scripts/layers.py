@@ -9,6 +9,8 @@ commands, and the bindings.
 3. The Python bindings (egt-py) use the CLI only through `egt_cli::run` (the
    wheel's `egt` command); the documents they return come from egt-views.
 4. egt-views (the JSON documents) depends on egt-core only.
+5. The Python package's modules import each other without a cycle at run
+   time (imports under `if TYPE_CHECKING:` are for annotations only).
 
 The layers of `crates/egt-core/src`, bottom to top (ARCHITECTURE.md):
 
@@ -25,6 +27,7 @@ Exit 0 when every reference runs down or sideways, 1 with a list otherwise.
 
 from __future__ import annotations
 
+import ast
 import re
 import sys
 from pathlib import Path
@@ -34,6 +37,7 @@ SRC = ROOT / "crates" / "egt-core" / "src"
 CLI = ROOT / "crates" / "egt-cli" / "src"
 PY = ROOT / "crates" / "egt-py" / "src"
 VIEWS = ROOT / "crates" / "egt-views" / "src"
+PYPKG = ROOT / "crates" / "egt-py" / "python" / "egt"
 
 LAYERS = {
     "error": 0,
@@ -134,6 +138,41 @@ def bindings_problems() -> list[str]:
     return bad
 
 
+def python_cycles() -> list[str]:
+    """Cycles among the package's modules through run-time imports
+    (module level or inside functions; `if TYPE_CHECKING:` blocks aside)."""
+    modules = {p.stem: p for p in PYPKG.glob("*.py")}
+    graph: dict[str, set[str]] = {m: set() for m in modules}
+    for name, path in modules.items():
+        tree = ast.parse(path.read_text())
+        typing_only = set()
+        for node in ast.walk(tree):
+            if isinstance(node, ast.If) and getattr(node.test, "id", None) == "TYPE_CHECKING":
+                typing_only |= {id(n) for n in ast.walk(node)}
+        for node in ast.walk(tree):
+            if id(node) in typing_only or not isinstance(node, ast.ImportFrom) or node.level != 1:
+                continue
+            targets = [node.module] if node.module else [a.name for a in node.names]
+            graph[name] |= {t for t in targets if t in modules}
+    bad = []
+    seen: set[str] = set()
+
+    def visit(m: str, stack: list[str]) -> None:
+        if m in stack:
+            cycle = stack[stack.index(m):] + [m]
+            key = " -> ".join(cycle)
+            if frozenset(cycle) not in seen:
+                seen.add(frozenset(cycle))
+                bad.append(f"egt-py/python/egt: import cycle {key}")
+            return
+        for t in sorted(graph[m]):
+            visit(t, stack + [m])
+
+    for m in sorted(graph):
+        visit(m, [])
+    return bad
+
+
 def main() -> int:
     exports = root_exports((SRC / "lib.rs").read_text())
     bad = []
@@ -153,13 +192,14 @@ def main() -> int:
                         f"{path.relative_to(SRC)}:{n}: layer `{name}` imports "
                         f"`{top}` above it: {line.strip()}"
                     )
-    bad += cli_problems() + bindings_problems()
+    bad += cli_problems() + bindings_problems() + python_cycles()
     if bad:
         print("layers.py: imports that break the layering:", *bad, sep="\n  ")
         return 1
     print(
         "layers.py: ok: no module of egt-core imports a layer above its own; "
-        "no command imports another or cli.rs; the bindings use only egt_cli::run"
+        "no command imports another or cli.rs; the bindings use only egt_cli::run; "
+        "no import cycle in the Python package"
     )
     return 0
 

@@ -13,7 +13,7 @@ render inline in notebooks; the result classes' ``plot()`` methods call these.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import TYPE_CHECKING, Any, List, Mapping, Optional, Sequence, Tuple, Union, cast
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -51,16 +51,17 @@ def speed_ladder(
     the largest input is 1. Planets without teeth (unknown speed) are left out.
     """
     from ._egt import TransmissionError
-    from ._transmission import ShiftTable
 
     ax = _axes(ax)
     lines: List[Tuple[str, List[float]]] = []
-    table: Optional[ShiftTable] = None
-    if isinstance(what, ShiftTable):
-        table = what
-    elif inputs is None and what.elements:
+    table: Optional["ShiftTable"] = None
+    # A train has a shift_table(); a ShiftTable is one (checked by what it
+    # has, so that this module imports no result class: they import it).
+    if not hasattr(what, "shift_table"):
+        table = cast("ShiftTable", what)
+    elif inputs is None and cast("Train", what).elements:
         try:
-            table = what.shift_table()
+            table = cast("Train", what).shift_table()
         except TransmissionError:  # elements but no gear states: the train itself
             table = None
     if table is not None:
