@@ -25,7 +25,7 @@ test-rust: ## Rust unit, integration, CLI and doc tests; the core's again as rel
 	cargo test --workspace --all-targets
 	cargo test --workspace --doc
 	cargo test --release -p egt-core --features jit --lib --test core
-	cargo test -p egt-core --lib --test core
+	cargo test -p egt-core --lib  # a default build: no jit feature, the interpreted program
 
 $(VENV)/.ready: crates/egt-py/requirements-dev.txt
 	$(PYTHON) -m venv $(VENV)
