@@ -61,7 +61,7 @@ impl Worker<'_> {
     ///
     /// # Errors
     /// A non-finite or out-of-range parameter (naming it); the analysis errors
-    /// of [`PreparedTrain::solve`].
+    /// of [`PreparedTrain::solve`](crate::solve::prepared::PreparedTrain::solve).
     ///
     /// # Panics
     /// When `row` or `out` has the wrong length.
