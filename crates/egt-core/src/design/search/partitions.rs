@@ -1,0 +1,130 @@
+//! Running a search whole or in partitions (for Dask): the partition
+//! count, one partition, all of them with progress.
+
+use crate::error::DesignError;
+
+use super::Search;
+use super::candidates::{Candidate, Stats, merge, rank};
+
+impl Search {
+    /// How many of the best candidates a run keeps (the spec's `top`).
+    pub fn top(&self) -> usize {
+        self.spec.top
+    }
+
+    /// The unknown sets, in the order of each candidate's lists.
+    pub fn set_names(&self) -> &[String] {
+        &self.set_names
+    }
+
+    /// Number of partitions the first unknown set's ratios can be split into.
+    pub fn max_partitions(&self) -> usize {
+        self.dims.first().map_or(0, |d| d.ks.len())
+    }
+
+    /// Run partition `part` of `parts` (contiguous slices of the first set's
+    /// sorted ratios). Partitions are disjoint and cover the space, so their
+    /// candidates can be merged and re-ranked in any order.
+    ///
+    /// # Errors
+    /// [`DesignError::Invalid`] for a bad partition, or an exact-analysis failure.
+    pub fn run_partition(
+        &self,
+        part: usize,
+        parts: usize,
+    ) -> Result<(Vec<Candidate>, Stats), DesignError> {
+        if parts == 0 || part >= parts {
+            return Err(DesignError::Invalid {
+                field: "partition".into(),
+                message: format!("{part} of {parts}"),
+            });
+        }
+        // In u128: part and parts come from the command line and may be huge.
+        let len = self.max_partitions() as u128;
+        let slice =
+            |p: usize| usize::try_from(len * p as u128 / parts as u128).unwrap_or(usize::MAX);
+        let (lo, hi) = (slice(part), slice(part + 1));
+        let mut stats = Stats {
+            tooth_space: self
+                .unknowns
+                .iter()
+                .map(|u| u.teeth.values().map(|t| t.len() as f64).sum::<f64>())
+                .product(),
+            ratio_space: self.unknowns.iter().map(|u| u.teeth.len() as f64).product(),
+            layouts: self.variants.len() as u64,
+            skipped_layouts: self.skipped_layouts,
+            ..Stats::default()
+        };
+        if lo >= hi {
+            return Ok((Vec::new(), stats));
+        }
+        let mut bounds: Vec<(usize, usize)> = self.dims.iter().map(|d| (0, d.ks.len())).collect();
+        bounds[0] = (lo, hi);
+        let nodes = std::sync::atomic::AtomicU64::new(0);
+        let leaves = std::sync::atomic::AtomicU64::new(0);
+        // Every layout over the partition's box, in parallel (each bound
+        // itself splits its halves with rayon::join).
+        use rayon::prelude::*;
+        let per_layout: Vec<Result<(Vec<Candidate>, u64), DesignError>> = self
+            .variants
+            .par_iter()
+            .map(|pick| {
+                let states = self.states(pick)?;
+                let mut out = Vec::new();
+                let mut rejected = 0;
+                for ks in self.branch(&states, &bounds, &nodes, &leaves) {
+                    match self.confirm(pick, &ks)? {
+                        Some(c) => out.push(c),
+                        None => rejected += 1,
+                    }
+                }
+                rank(&mut out, self.spec.top);
+                Ok((out, rejected))
+            })
+            .collect();
+        stats.nodes = nodes.into_inner();
+        stats.leaves = leaves.into_inner();
+        let mut out = Vec::new();
+        for r in per_layout {
+            let (c, rejected) = r?;
+            out.extend(c);
+            stats.rejected += rejected;
+        }
+        rank(&mut out, self.spec.top);
+        Ok((out, stats))
+    }
+
+    /// Run the whole space as `parts` partitions one after another (each on
+    /// all cores), calling `progress(done, parts, best)` after each with the
+    /// best candidates so far (ranked, at most `top`): what a progress bar, an
+    /// ETA and a stream of results need. Merged and ranked, the result is
+    /// [`Search::run`]'s.
+    ///
+    /// # Errors
+    /// As [`Search::run_partition`].
+    pub fn run_in_parts(
+        &self,
+        parts: usize,
+        mut progress: impl FnMut(usize, usize, &[Candidate]),
+    ) -> Result<(Vec<Candidate>, Stats), DesignError> {
+        let parts = parts.clamp(1, self.max_partitions().max(1));
+        let mut best: Vec<Candidate> = Vec::new();
+        let mut done = Vec::with_capacity(parts);
+        for part in 0..parts {
+            let (found, stats) = self.run_partition(part, parts)?;
+            best.extend(found.iter().cloned());
+            rank(&mut best, self.spec.top);
+            progress(part + 1, parts, &best);
+            done.push((found, stats));
+        }
+        Ok(merge(done, self.spec.top))
+    }
+
+    /// Run the whole space (one partition) on all cores.
+    ///
+    /// # Errors
+    /// As [`Search::run_partition`].
+    pub fn run(&self) -> Result<(Vec<Candidate>, Stats), DesignError> {
+        self.run_partition(0, 1)
+    }
+}

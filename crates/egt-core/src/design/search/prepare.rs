@@ -1,0 +1,236 @@
+//! Preparing a search: the [`Search`] and its construction from the spec
+//! and the base train.
+
+use crate::design::spec::SynthSpec;
+use crate::error::DesignError;
+use crate::spec::{PlanetaryKind, Spec};
+
+use super::layouts::{Layouts, doubled, layouts};
+use super::space::{Dim, basics, ravigneaux};
+use super::systems::{Rows, Unknown, WillisRow, col, generic, states};
+
+/// A prepared search: the per-set candidate ratios and, per element layout,
+/// the per-state systems.
+#[derive(Debug, Clone)]
+pub struct Search {
+    pub(super) spec: SynthSpec,
+    pub(super) base: Spec,
+    pub(super) set_names: Vec<String>,
+    pub(super) dims: Vec<Dim>,
+    pub(super) unknowns: Vec<Unknown>,
+    pub(super) rows: Rows,
+    pub(super) layouts: Layouts,
+    /// The layouts searched (one pick per freed element; one empty pick
+    /// without `[layout]`).
+    pub(super) variants: Vec<Vec<u32>>,
+    /// Layouts skipped before the search: an element doubled, a gear state
+    /// that is not one DOF, or one whose system is singular for any teeth.
+    pub(super) skipped_layouts: u64,
+}
+
+impl Search {
+    /// Prepare a search: check names against the base train, list each set's
+    /// admissible teeth, and build each gear state's system once.
+    ///
+    /// # Errors
+    /// [`DesignError`] naming the offending field, set or state.
+    pub fn new(spec: SynthSpec, base: Spec) -> Result<Search, DesignError> {
+        let tx = base
+            .transmission
+            .clone()
+            .ok_or_else(|| DesignError::Invalid {
+                field: "base".into(),
+                message: "the base train has no [transmission] section".into(),
+            })?;
+        let t = &spec.targets;
+        for (field, v) in [
+            ("tolerance", Some(t.tolerance)),
+            ("efficiency", t.efficiency),
+            ("max_element_torque", t.max_element_torque),
+            ("max_mesh_torque", t.max_mesh_torque),
+        ] {
+            if v.is_some_and(|v| !(v > 0.0 && v.is_finite())) {
+                return Err(DesignError::Invalid {
+                    field: format!("targets.{field}"),
+                    message: "must be a positive number".into(),
+                });
+            }
+        }
+        for (field, v) in [("spread", t.spread), ("steps", t.steps)] {
+            if let Some([lo, hi]) = v
+                && !(lo.is_finite() && hi.is_finite() && lo <= hi)
+            {
+                return Err(DesignError::Invalid {
+                    field: format!("targets.{field}"),
+                    message: "need [min, max] with min <= max".into(),
+                });
+            }
+        }
+        for s in spec.targets.ratios.keys() {
+            if !tx.states.contains_key(s) {
+                return Err(DesignError::UnknownState(s.clone()));
+            }
+        }
+        let mut links: Vec<String> = Vec::new();
+        // The Willis rows of every set (name, sun, ring, carrier, k, sign):
+        // one for a simple or double-pinion set, two for a Ravigneaux set
+        // (small sun, then large sun). Known sets get their k now.
+        let mut willis: Vec<WillisRow> = Vec::new();
+        for p in &base.planetary {
+            let ring = p.ring.clone().ok_or_else(|| DesignError::Invalid {
+                field: format!("planetary.{}", p.name),
+                message: "synth handles sets with a ring (simple, double-pinion, Ravigneaux)"
+                    .into(),
+            })?;
+            let k = |z: Option<i64>| match (z, p.teeth.ring) {
+                (Some(zs), Some(zr)) => zr as f64 / zs as f64,
+                _ => f64::NAN,
+            };
+            let (s, r, c) = (
+                col(&p.sun, &mut links),
+                col(&ring, &mut links),
+                col(&p.carrier, &mut links),
+            );
+            match p.kind {
+                PlanetaryKind::Simple => {
+                    willis.push((p.name.clone(), s, r, c, k(p.teeth.sun), 1.0))
+                }
+                PlanetaryKind::DoublePinion => {
+                    willis.push((p.name.clone(), s, r, c, k(p.teeth.sun), -1.0));
+                }
+                PlanetaryKind::Ravigneaux => {
+                    let large = p.sun2.as_deref().ok_or_else(|| DesignError::Invalid {
+                        field: format!("planetary.{}.sun2", p.name),
+                        message: "a Ravigneaux set needs its large sun".into(),
+                    })?;
+                    let s2 = col(large, &mut links);
+                    willis.push((p.name.clone(), s, r, c, k(p.teeth.sun), -1.0));
+                    willis.push((p.name.clone(), s2, r, c, k(p.teeth.sun2), 1.0));
+                }
+                _ => {
+                    return Err(DesignError::Invalid {
+                        field: format!("planetary.{}", p.name),
+                        message: "synth handles simple, double-pinion and Ravigneaux sets".into(),
+                    });
+                }
+            }
+        }
+        let set_names: Vec<String> = spec.sets.keys().cloned().collect();
+        // Per Willis row, the searched dimension it carries (if any).
+        let mut dim_of: Vec<Option<usize>> = vec![None; willis.len()];
+        let mut dims = Vec::new();
+        let mut unknowns = Vec::new();
+        for (name, range) in &spec.sets {
+            let rows: Vec<usize> = (0..willis.len())
+                .filter(|&i| &willis[i].0 == name)
+                .collect();
+            let kind = base
+                .planetary
+                .iter()
+                .find(|p| &p.name == name)
+                .map(|p| p.kind);
+            let field = |f: &str| format!("sets.{name}.{f}");
+            let unknown = match (kind, rows.as_slice()) {
+                (None, _) => return Err(DesignError::UnknownSet(name.clone())),
+                (Some(PlanetaryKind::Simple), &[row]) => {
+                    if range.sun2.is_some() {
+                        return Err(DesignError::Invalid {
+                            field: field("sun2"),
+                            message: "a simple set has one sun".into(),
+                        });
+                    }
+                    let b = basics(name, range, &spec.constraints)?;
+                    dim_of[row] = Some(dims.len());
+                    dims.push(Dim {
+                        ks: b.iter().map(|x| x.k).collect(),
+                        sign: 1.0,
+                    });
+                    Unknown {
+                        dims: vec![dims.len() - 1],
+                        teeth: b
+                            .into_iter()
+                            .enumerate()
+                            .map(|(i, x)| (vec![i], x.teeth))
+                            .collect(),
+                    }
+                }
+                (Some(PlanetaryKind::Ravigneaux), &[small, large]) => {
+                    let (k1, k2, teeth) = ravigneaux(name, range, &spec.constraints)?;
+                    dim_of[small] = Some(dims.len());
+                    dims.push(Dim { ks: k1, sign: -1.0 });
+                    dim_of[large] = Some(dims.len());
+                    dims.push(Dim { ks: k2, sign: 1.0 });
+                    Unknown {
+                        dims: vec![dims.len() - 2, dims.len() - 1],
+                        teeth,
+                    }
+                }
+                _ => {
+                    return Err(DesignError::Invalid {
+                        field: format!("sets.{name}"),
+                        message: "the search finds the teeth of simple and Ravigneaux sets".into(),
+                    });
+                }
+            };
+            unknowns.push(unknown);
+        }
+        for (i, w) in willis.iter().enumerate() {
+            if w.4.is_nan() && dim_of[i].is_none() {
+                return Err(DesignError::Invalid {
+                    field: format!("planetary.{}.teeth", w.0),
+                    message: "give sun and ring teeth, or list the set under [sets]".into(),
+                });
+            }
+        }
+        let layouts = layouts(&spec, &base, &links)?;
+        let rows = Rows {
+            tx,
+            willis,
+            dim_of,
+            links,
+        };
+        let mut search = Search {
+            spec,
+            base,
+            set_names,
+            dims,
+            unknowns,
+            rows,
+            layouts,
+            variants: Vec::new(),
+            skipped_layouts: 0,
+        };
+        if search.layouts.names.is_empty() {
+            // The base layout's errors are the spec's: say them.
+            search.states(&[])?;
+            search.variants.push(Vec::new());
+        } else {
+            // Every layout checked in parallel; only the picks that pass are kept.
+            use rayon::prelude::*;
+            let total = search.layouts.count();
+            let kept: Vec<Vec<u32>> = (0..total)
+                .into_par_iter()
+                .filter_map(|i| {
+                    let pick = search.layouts.pick(i);
+                    let elements = search.elements(&pick);
+                    if doubled(&elements) {
+                        return None;
+                    }
+                    let states = states(
+                        &elements,
+                        &search.base.frame,
+                        &search.rows,
+                        &search.spec.targets,
+                    );
+                    states
+                        .ok()
+                        .filter(|s| generic(s, &search.dims))
+                        .map(|_| pick)
+                })
+                .collect();
+            search.skipped_layouts = (total - kept.len()) as u64;
+            search.variants = kept;
+        }
+        Ok(search)
+    }
+}

@@ -1,0 +1,245 @@
+//! The search space: each set's admissible tooth triples (coaxial,
+//! non-interference, assembly) grouped by basic ratio, simple and Ravigneaux.
+
+use std::collections::HashMap;
+
+use num_rational::Ratio;
+use serde::{Deserialize, Serialize};
+
+use crate::design::spec::{Constraints, SetRange};
+use crate::error::DesignError;
+
+/// One way to build a set: sun, ring and planet teeth (and for a Ravigneaux
+/// set the large sun and the short pinion).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Teeth {
+    /// Sun (the small, forward sun of a Ravigneaux set).
+    pub sun: i64,
+    /// Ring.
+    pub ring: i64,
+    /// Planet meshing the sun (the short pinion of a Ravigneaux set), as the spec's `planet`.
+    pub planet: i64,
+    /// Large sun of a Ravigneaux set.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sun2: Option<i64>,
+    /// Long pinion of a Ravigneaux set (meshing the short pinion, the large
+    /// sun and the ring), as the spec's `planet2`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub planet2: Option<i64>,
+}
+
+/// A basic ratio k = ring / sun (reduced) and every admissible tooth triple giving it.
+#[derive(Debug, Clone)]
+pub(super) struct Basic {
+    pub(super) k: f64,
+    pub(super) teeth: Vec<Teeth>,
+}
+
+/// One searched basic ratio: its distinct values, ascending, and the sign of
+/// its Willis row w_s + sign k w_r - (1 + sign k) w_c = 0.
+#[derive(Debug, Clone)]
+pub(super) struct Dim {
+    pub(super) ks: Vec<f64>,
+    pub(super) sign: f64,
+}
+/// Most (sun, ring) pairs one set's ranges may span (each is visited once).
+pub const MAX_SET_PAIRS: i64 = 10_000_000;
+
+/// The planet between a sun and a ring on one axis (the coaxial condition,
+/// within the profile-shift allowance), if the constraints admit it; the
+/// non-interference and assembly tests of `planets` equally spaced copies.
+pub(super) fn coaxial_planet(sun: i64, ring: i64, planets: i64, c: &Constraints) -> Option<i64> {
+    let diff = ring - sun;
+    if diff <= 0 {
+        return None;
+    }
+    let planet = diff / 2;
+    if (diff - 2 * planet).abs() > c.profile_shift || planet < c.min_planet {
+        return None;
+    }
+    if c.assembly && (sun + ring) % planets != 0 {
+        return None;
+    }
+    if c.non_interference && planets > 1 {
+        let s = (std::f64::consts::PI / planets as f64).sin();
+        if (sun + planet) as f64 * s <= (planet + 2) as f64 {
+            return None;
+        }
+    }
+    Some(planet)
+}
+
+/// The checks every unknown set's ranges share; `bad(field, message)` names the field.
+pub(super) fn check_ranges(
+    r: &SetRange,
+    bad: &dyn Fn(&str, &str) -> DesignError,
+) -> Result<(), DesignError> {
+    for (field, range) in [("sun", Some(r.sun)), ("sun2", r.sun2)] {
+        if let Some([lo, hi]) = range
+            && (lo < 3 || lo > hi)
+        {
+            return Err(bad(field, "need 3 <= min <= max"));
+        }
+    }
+    if r.ring[0] > r.ring[1] || r.ring[1] <= r.sun[0] {
+        return Err(bad(
+            "ring",
+            "need min <= max and max above the smallest sun",
+        ));
+    }
+    if r.planets < 1 {
+        return Err(bad("planets", "need at least one planet"));
+    }
+    let max = crate::error::MAX_TEETH;
+    if r.sun[1] > max || r.ring[1] > max || r.sun2.is_some_and(|s| s[1] > max) {
+        return Err(bad(
+            "sun",
+            &format!("tooth counts above {max} are not searched"),
+        ));
+    }
+    // Bounded work per set: every tooth combination of the ranges is visited once.
+    let span = |x: [i64; 2]| x[1] - x[0] + 1;
+    let combos = span(r.sun)
+        .saturating_mul(span(r.ring))
+        .saturating_mul(r.sun2.map_or(1, span));
+    if combos > MAX_SET_PAIRS {
+        return Err(bad(
+            "ring",
+            &format!(
+                "{combos} tooth combinations in this set; at most {MAX_SET_PAIRS} are searched per set"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Admissible tooth triples of one simple set, grouped by reduced ring/sun, sorted by k.
+pub(super) fn basics(name: &str, r: &SetRange, c: &Constraints) -> Result<Vec<Basic>, DesignError> {
+    let bad = |f: &str, m: &str| DesignError::Invalid {
+        field: format!("sets.{name}.{f}"),
+        message: m.into(),
+    };
+    check_ranges(r, &bad)?;
+    let mut map: HashMap<Ratio<i64>, Vec<Teeth>> = HashMap::new();
+    for sun in r.sun[0]..=r.sun[1] {
+        for ring in r.ring[0]..=r.ring[1] {
+            let Some(planet) = coaxial_planet(sun, ring, r.planets, c) else {
+                continue;
+            };
+            let k = ring as f64 / sun as f64;
+            if let Some([lo, hi]) = c.ring_sun
+                && (k < lo || k > hi)
+            {
+                continue;
+            }
+            map.entry(Ratio::new(ring, sun)).or_default().push(Teeth {
+                sun,
+                ring,
+                planet,
+                sun2: None,
+                planet2: None,
+            });
+        }
+    }
+    let mut out: Vec<Basic> = map
+        .into_iter()
+        .map(|(q, mut teeth)| {
+            teeth.sort_by_key(|t| (t.sun, t.ring));
+            Basic {
+                k: *q.numer() as f64 / *q.denom() as f64,
+                teeth,
+            }
+        })
+        .collect();
+    out.sort_by(|a, b| a.k.total_cmp(&b.k));
+    if out.is_empty() {
+        return Err(bad(
+            "sun",
+            "no tooth counts in these ranges meet the constraints",
+        ));
+    }
+    Ok(out)
+}
+
+/// Admissible teeth of one Ravigneaux set: the two searched dimensions
+/// (ring/small sun, ring/large sun: distinct values, ascending) and the teeth
+/// of every index pair that teeth can make.
+///
+/// Geometry (in modules): the long pinion meshes the ring and the large sun
+/// on one axis (the coaxial condition, with the allowance, assembly and
+/// non-interference of a simple set); the short pinion meshes the small sun
+/// and the long pinion: its centre distance to the long pinion reaches it
+/// when 2 p_short >= s_large - s_small, and its tip clears the ring when
+/// s_small + 2 p_short + 4 <= ring. The short pinion is the smallest count
+/// meeting both and `min_planet`; the small sun is smaller than the large.
+#[allow(clippy::type_complexity)]
+pub(super) fn ravigneaux(
+    name: &str,
+    r: &SetRange,
+    c: &Constraints,
+) -> Result<(Vec<f64>, Vec<f64>, HashMap<Vec<usize>, Vec<Teeth>>), DesignError> {
+    let bad = |f: &str, m: &str| DesignError::Invalid {
+        field: format!("sets.{name}.{f}"),
+        message: m.into(),
+    };
+    check_ranges(r, &bad)?;
+    let large = r
+        .sun2
+        .ok_or_else(|| bad("sun2", "a Ravigneaux set needs the large sun's range"))?;
+    let mut found: HashMap<(Ratio<i64>, Ratio<i64>), Vec<Teeth>> = HashMap::new();
+    for ring in r.ring[0]..=r.ring[1] {
+        for sun2 in large[0]..=large[1] {
+            let Some(long) = coaxial_planet(sun2, ring, r.planets, c) else {
+                continue;
+            };
+            for sun in r.sun[0]..=r.sun[1].min(sun2 - 1) {
+                let short = c.min_planet.max((sun2 - sun + 1) / 2);
+                if sun + 2 * short + 4 > ring {
+                    continue;
+                }
+                let k = ring as f64 / sun as f64;
+                if let Some([lo, hi]) = c.ring_sun
+                    && (k < lo || k > hi)
+                {
+                    continue;
+                }
+                found
+                    .entry((Ratio::new(ring, sun), Ratio::new(ring, sun2)))
+                    .or_default()
+                    .push(Teeth {
+                        sun,
+                        ring,
+                        planet: short,
+                        sun2: Some(sun2),
+                        planet2: Some(long),
+                    });
+            }
+        }
+    }
+    if found.is_empty() {
+        return Err(bad(
+            "sun",
+            "no tooth counts in these ranges meet the constraints",
+        ));
+    }
+    let sorted = |pick: fn(&(Ratio<i64>, Ratio<i64>)) -> Ratio<i64>| {
+        let mut v: Vec<Ratio<i64>> = found.keys().map(pick).collect();
+        v.sort();
+        v.dedup();
+        v
+    };
+    let (k1, k2) = (sorted(|k| k.0), sorted(|k| k.1));
+    let value = |q: &Ratio<i64>| *q.numer() as f64 / *q.denom() as f64;
+    let mut teeth = HashMap::new();
+    for ((a, b), mut t) in found {
+        t.sort_by_key(|t| (t.sun, t.sun2, t.ring));
+        let i = k1.binary_search(&a).unwrap_or_default();
+        let j = k2.binary_search(&b).unwrap_or_default();
+        teeth.insert(vec![i, j], t);
+    }
+    Ok((
+        k1.iter().map(value).collect(),
+        k2.iter().map(value).collect(),
+        teeth,
+    ))
+}

@@ -1,0 +1,291 @@
+//! The design search's unit tests.
+
+use super::*;
+use crate::design::spec::SynthSpec;
+use crate::model::train::Train;
+use crate::spec::parse::{Format, parse_spec};
+
+const ZF: &str = include_str!(concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../examples/zf_8hp70.toml"
+));
+
+fn zf_search(sets: &str) -> Search {
+    zf_search_with(sets, "")
+}
+
+/// The 8HP search with more lines under `[targets]`.
+fn zf_search_with(sets: &str, targets: &str) -> Search {
+    let text = format!(
+        "base = \"zf_8hp70.toml\"\ntop = 5\n{sets}\n[targets]\nratios = {{ \"1\" = 4.696, \"2\" = 3.130, \"3\" = 2.104, \"4\" = 1.667, \"5\" = 1.285, \"6\" = 1.000, \"7\" = 0.839, \"8\" = 0.667, \"R\" = -3.297 }}\n{targets}\n"
+    );
+    let spec: SynthSpec = toml::from_str(&text).expect("test input");
+    Search::new(
+        spec,
+        parse_spec(ZF, Format::Toml, "zf").expect("test input"),
+    )
+    .expect("test input")
+}
+
+/// Rediscovery of the 8HP teeth from the published ratios (to three
+/// decimals) within small ranges around them; every candidate's ratios
+/// come from the exact analysis and meet the targets.
+#[test]
+fn rediscovers_8hp_teeth() {
+    let s = zf_search(
+        "[sets]\nP1 = { sun = [44, 52], ring = [90, 100] }\nP2 = { sun = [44, 52], ring = [90, 100] }\nP3 = { sun = [64, 72], ring = [106, 114] }\nP4 = { sun = [20, 26], ring = [80, 88] }",
+    );
+    let (found, stats) = s.run().expect("test input");
+    assert!(stats.leaves as f64 <= stats.ratio_space);
+    let real = [(48, 96), (48, 96), (69, 111), (23, 85)];
+    // The real set or one with identical basic ratios (ring/sun).
+    assert!(found.iter().any(|c| {
+        c.teeth
+            .iter()
+            .zip(real)
+            .all(|(t, (zs, zr))| t.ring * zs == zr * t.sun)
+    }));
+    for c in &found {
+        for (state, ratio, exact) in &c.ratios {
+            let q = crate::numerics::exact::parse_rational(exact).expect("test input");
+            assert!((crate::numerics::exact::to_f64(&q) - ratio).abs() < 1e-12);
+            let t = s.spec.targets.ratios[state];
+            assert!((ratio - t).abs() <= 5e-4, "{state}: {ratio} vs {t}");
+        }
+    }
+}
+
+/// Targets only the exact analysis checks, at the edges of the real
+/// 8HP's figures (`egt shift examples/zf_8hp70.toml`): largest element
+/// torque 2.642 (brake B in R), lowest efficiency 0.9462 (R), steps from
+/// 1.192 to 1.500, not progressive (1.262 then 1.297). Each target passes
+/// the real teeth on one side of its figure and rejects them on the other.
+#[test]
+fn analysis_targets_accept_and_reject_the_real_8hp() {
+    let sets = "[sets]\nP3 = { sun = [66, 72], ring = [108, 114] }\nP4 = { sun = [21, 25], ring = [82, 88] }";
+    let found = |targets: &str| {
+        let (c, stats) = zf_search_with(sets, targets).run().expect("test input");
+        (c.len(), stats.rejected)
+    };
+    assert_eq!(found(""), (1, 0));
+    for (pass, fail) in [
+        ("max_element_torque = 2.65", "max_element_torque = 2.6"),
+        ("efficiency = 0.946", "efficiency = 0.95"),
+        ("steps = [1.19, 1.5001]", "steps = [1.2, 1.6]"),
+        ("progressive = false", "progressive = true"),
+        ("single_swap = true", "steps = [1.0, 1.2]"),
+        ("max_mesh_torque = 100.0", "max_mesh_torque = 0.5"),
+    ] {
+        assert_eq!(found(pass), (1, 0), "{pass}");
+        assert_eq!(found(fail), (0, 1), "{fail}");
+    }
+    let bad = SynthSpec::from_str(
+        "base = \"x\"\n[sets]\nP3 = { sun = [66, 72], ring = [108, 114] }\n[targets]\nratios = { \"1\" = 4.7 }\nefficiency = -1\n",
+        Format::Toml,
+        "s",
+    )
+    .expect("test input");
+    let err = Search::new(bad, parse_spec(ZF, Format::Toml, "zf").expect("test input"))
+        .expect_err("must refuse");
+    assert!(err.to_string().contains("targets.efficiency"), "{err}");
+}
+
+/// Free element positions: the three clutches anywhere (21 952 layouts)
+/// with two sets' teeth free. The real layout is found (clutch E on any
+/// two of P3's members: three equivalent placements, each reported), with
+/// the real basic ratios; every candidate's written spec, analysed
+/// exactly, has the reported ratios; bad placements are refused by field.
+#[test]
+fn free_clutch_positions_find_the_real_layout() {
+    let sets = "[sets]\nP3 = { sun = [60, 76], ring = [100, 120] }\nP4 = { sun = [20, 28], ring = [76, 92] }\n[layout]\nC = \"any\"\nD = \"any\"\nE = \"any\"";
+    let s = zf_search(sets);
+    let (found, stats) = s.run().expect("test input");
+    assert_eq!(stats.layouts + stats.skipped_layouts, 28 * 28 * 28);
+    let real = |c: &Candidate| {
+        let links = |e: &str| {
+            let mut l = c.layout.iter().find(|x| x.0 == e).expect("freed").1.clone();
+            l.sort();
+            l
+        };
+        links("C") == ["input", "ring3_sun4"] && links("D") == ["carrier3", "output"]
+    };
+    assert_eq!(found.len(), 3, "{found:?}");
+    for c in &found {
+        assert!(real(c), "{:?}", c.layout);
+        assert_eq!(c.basic, ["37/23", "85/23"]);
+        let table = Train::from_spec(&s.candidate_spec(&c.teeth, &c.layout))
+            .expect("candidate spec")
+            .shift_table()
+            .expect("analysis");
+        for (g, (state, _, exact)) in table.gears.iter().zip(&c.ratios) {
+            assert_eq!(&g.state, state);
+            assert_eq!(
+                &crate::numerics::exact::display(g.ratio_exact.as_ref().expect("exact")),
+                exact
+            );
+        }
+    }
+    for (layout, field) in [
+        ("C = [[\"input\"]]", "layout.C[0]"),
+        ("C = [[\"input\", \"nowhere\"]]", "layout.C[0]"),
+        ("Z = \"any\"", "layout.Z"),
+        ("C = \"all\"", "layout.C"),
+    ] {
+        let text = format!(
+            "base = \"x\"\n[sets]\nP4 = {{ sun = [20, 28], ring = [76, 92] }}\n[layout]\n{layout}\n[targets]\nratios = {{ \"1\" = 4.7 }}\n"
+        );
+        let spec: SynthSpec = toml::from_str(&text).expect("test input");
+        let err = Search::new(
+            spec,
+            parse_spec(ZF, Format::Toml, "zf").expect("test input"),
+        )
+        .expect_err("must refuse");
+        assert!(err.to_string().starts_with(field), "{layout}: {err}");
+    }
+}
+
+/// Partitions are disjoint and cover the space: their merged candidates
+/// equal the one-partition run.
+#[test]
+fn partitions_merge_to_the_whole() {
+    let s = zf_search(
+        "[sets]\nP3 = { sun = [60, 76], ring = [100, 120] }\nP4 = { sun = [20, 28], ring = [76, 92] }",
+    );
+    let (whole, _) = s.run().expect("test input");
+    let mut merged = Vec::new();
+    for p in 0..3 {
+        merged.extend(s.run_partition(p, 3).expect("test input").0);
+    }
+    rank(&mut merged, 5);
+    let key = |c: &Vec<Candidate>| c.iter().map(|x| x.teeth.clone()).collect::<Vec<_>>();
+    assert_eq!(key(&whole), key(&merged));
+    assert!(!whole.is_empty());
+}
+
+/// Sequential parts with progress give the one-partition result.
+#[test]
+fn run_in_parts_reports_progress_and_equals_run() {
+    let s = zf_search(
+        "[sets]\nP3 = { sun = [60, 76], ring = [100, 120] }\nP4 = { sun = [20, 28], ring = [76, 92] }",
+    );
+    let (whole, ws) = s.run().expect("test input");
+    let mut seen = Vec::new();
+    let (parts, ps) = s
+        .run_in_parts(4, |done, of, best| {
+            assert!(best.len() <= 5);
+            seen.push((done, of));
+        })
+        .expect("test input");
+    assert_eq!(seen, [(1, 4), (2, 4), (3, 4), (4, 4)]);
+    let key = |c: &Vec<Candidate>| c.iter().map(|x| x.teeth.clone()).collect::<Vec<_>>();
+    assert_eq!(key(&whole), key(&parts));
+    assert_eq!(ws.tooth_space, ps.tooth_space);
+}
+
+const AOD: &str = include_str!(concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../examples/ford_aod_ravigneaux.toml"
+));
+
+/// A Ravigneaux set's two searched ratios: the branch and bound keeps
+/// exactly the tooth sets that an exhaustive run of the exact transmission
+/// analysis over every admissible (small sun, large sun, ring) accepts.
+#[test]
+fn ravigneaux_search_equals_exhaustive_exact_analysis() {
+    let text = "base = \"aod\"\ntop = 100000\n[sets]\nR = { sun = [24, 36], sun2 = [28, 44], ring = [60, 84] }\n[targets]\ntolerance = 0.03\nratios = { \"1\" = 2.40, \"2\" = 1.47, \"4\" = 0.67, \"R\" = -2.00 }\n";
+    let spec: SynthSpec = toml::from_str(text).expect("test input");
+    let s = Search::new(
+        spec,
+        parse_spec(AOD, Format::Toml, "aod").expect("test input"),
+    )
+    .expect("test input");
+    let (found, stats) = s.run().expect("test input");
+    let mut got: Vec<(String, String)> = found
+        .iter()
+        .map(|c| (c.basic[0].clone(), c.basic2[0].clone().expect("Ravigneaux")))
+        .collect();
+    got.sort();
+    // Every admissible tooth set, analysed exactly; its basic ratios kept
+    // when every targeted ratio is within the tolerance.
+    let mut want = std::collections::BTreeSet::new();
+    let teeth: Vec<Teeth> = s.unknowns[0].teeth.values().map(|t| t[0]).collect();
+    assert_eq!(teeth.len() as f64, stats.ratio_space);
+    for t in teeth {
+        let table = Train::from_spec(&s.candidate_spec(&[t], &[]))
+            .expect("admissible teeth make a train")
+            .shift_table()
+            .expect("every state solves");
+        let ok = table.gears.iter().all(|g| {
+            s.spec
+                .targets
+                .ratios
+                .get(&g.state)
+                .is_none_or(|&r| (g.ratio - r).abs() <= 0.03)
+        });
+        if ok {
+            let q =
+                |z: i64| crate::numerics::exact::display(&crate::numerics::exact::frac(t.ring, z));
+            want.insert((q(t.sun), q(t.sun2.expect("Ravigneaux"))));
+        }
+    }
+    let want: Vec<_> = want.into_iter().collect();
+    assert!(
+        want.len() > 3,
+        "a loose tolerance admits several sets: {want:?}"
+    );
+    assert_eq!(got, want);
+    assert!(got.contains(&("12/5".into(), "2".into())));
+}
+
+#[test]
+fn unknown_names_are_errors() {
+    let spec: SynthSpec = toml::from_str(
+        "base = \"x\"\n[sets]\nP9 = { sun = [20, 30], ring = [60, 80] }\n[targets]\nratios = { \"1\" = 4.7 }",
+    )
+    .expect("test input");
+    let err = Search::new(
+        spec,
+        parse_spec(ZF, Format::Toml, "zf").expect("test input"),
+    )
+    .expect_err("must fail");
+    assert!(err.to_string().contains("sets.P9"), "{err}");
+}
+
+/// Ranges that would take minutes or exhaust memory are refused by name
+/// before any pair is visited.
+#[test]
+fn huge_ranges_are_refused_by_field() {
+    let err = Search::new(
+        toml::from_str(
+            "base = \"x\"\n[sets]\nP1 = { sun = [20, 100000], ring = [60, 200000] }\n[targets]\nratios = { \"1\" = 4.7 }",
+        )
+        .expect("test input"),
+        parse_spec(ZF, Format::Toml, "zf").expect("test input"),
+    )
+    .expect_err("must refuse");
+    assert!(
+        err.to_string().contains("sets.P1.ring") && err.to_string().contains("10000000"),
+        "{err}"
+    );
+    let err = Search::new(
+        toml::from_str(
+            "base = \"x\"\n[sets]\nP1 = { sun = [20, 30], ring = [60, 2000000] }\n[targets]\nratios = { \"1\" = 4.7 }",
+        )
+        .expect("test input"),
+        parse_spec(ZF, Format::Toml, "zf").expect("test input"),
+    )
+    .expect_err("must refuse");
+    assert!(err.to_string().contains("1000000"), "{err}");
+}
+
+/// The ranges (suns 20-80, rings 60-130, all four sets unknown,
+/// 8.9e10 tooth combinations): the bound leaves one candidate, the 8HP's
+/// basic ratios 2, 2, 111/69, 85/23.
+#[test]
+fn rediscovers_8hp_full_ranges() {
+    let r = "{ sun = [20, 80], ring = [60, 130] }";
+    let s = zf_search(&format!("[sets]\nP1 = {r}\nP2 = {r}\nP3 = {r}\nP4 = {r}"));
+    let (found, stats) = s.run().expect("test input");
+    assert!(stats.tooth_space > 1e10);
+    assert_eq!(found[0].basic, ["2", "2", "37/23", "85/23"]);
+}
