@@ -58,7 +58,7 @@ def speed_ladder(
     # A train has a shift_table(); a ShiftTable is one (checked by what it
     # has, so that this module imports no result class: they import it).
     if not hasattr(what, "shift_table"):
-        table = cast("ShiftTable", what)
+        table = what
     elif inputs is None and cast("Train", what).elements:
         try:
             table = cast("Train", what).shift_table()
