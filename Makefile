@@ -7,7 +7,7 @@ VENV   ?= .venv
 VPY    := $(VENV)/bin/python
 EXAMPLE ?= examples/fig3_example61.toml
 
-.PHONY: help demo test test-rust test-python venv python-dev wheel test-wheel fmt lint bench chart clean
+.PHONY: help demo test test-rust test-release test-python venv python-dev wheel test-wheel fmt lint bench chart clean
 
 help: ## List the targets
 	@grep -E '^[a-zA-Z_-]+:.*?## ' $(MAKEFILE_LIST) | awk -F':.*?## ' '{printf "  %-12s %s\n", $$1, $$2}'
@@ -20,12 +20,17 @@ demo: ## Run egt on a bundled example: topology checks, circuit table, speeds
 
 test: test-rust test-python ## Run every test (Rust and Python)
 
-test-rust: ## Rust unit, integration, CLI and doc tests; the core's again as released (optimised: the SIMD lanes and the compiled programs as shipped) and without the jit feature (the interpreted program)
+test-rust: ## Rust unit, integration, CLI and doc tests (the jit feature on, as the CLI and wheel ship it; lint checks the core without it)
 	cargo fetch --locked || cargo fetch
 	cargo test --workspace --all-targets
 	cargo test --workspace --doc
+
+# Not in CI (each compiles the core's dependency tree once more: about 15
+# minutes on 2 cores): the core's tests optimised as shipped, and without the
+# jit feature. Run them after touching the batch executors.
+test-release: ## The core's tests optimised (SIMD lanes, compiled programs as shipped) and in a default build (no jit: the interpreted program)
 	cargo test --release -p egt-core --features jit --lib --test core
-	cargo test -p egt-core --lib  # a default build: no jit feature, the interpreted program
+	cargo test -p egt-core --lib
 
 $(VENV)/.ready: crates/egt-py/requirements-dev.txt
 	$(PYTHON) -m venv $(VENV)
