@@ -487,6 +487,20 @@ pub enum AnalysisError {
         /// What is still available for a train this large, in words.
         what: String,
     },
+    /// Work past a documented budget (steps of a simulation, leaves of a
+    /// search, rows of a grid), refused with the estimate and the flag or
+    /// field that raises it; never taken for a singular system.
+    #[error("{what}: {estimate} is past the budget of {limit}; {raise}")]
+    Budget {
+        /// The work refused, in words.
+        what: String,
+        /// The estimate or the count reached, in words.
+        estimate: String,
+        /// The budget, in words.
+        limit: String,
+        /// How to raise the budget (the flag or field).
+        raise: String,
+    },
     /// A solver could not allocate its working memory (reported instead of
     /// aborting; never taken for a singular system).
     #[error("{what} could not be computed: {detail}")]
@@ -551,6 +565,7 @@ impl AnalysisError {
             AnalysisError::ConfigurationDependent { .. } => "configuration_dependent",
             AnalysisError::TooLarge { .. } => "too_large",
             AnalysisError::OutOfMemory { .. } => "out_of_memory",
+            AnalysisError::Budget { .. } => "budget",
         }
     }
 }
