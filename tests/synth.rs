@@ -9,7 +9,7 @@
 
 use serde_json::Value;
 
-use crate::util::{egt, stdout};
+use crate::util::{Run, egt, root, stdout};
 
 fn synth(args: &[&str]) -> Value {
     serde_json::from_str(&stdout(args)).unwrap()
@@ -252,4 +252,145 @@ fn stream_gives_the_best_so_far_then_the_report_with_tables() {
     for c in cands {
         assert_gear_ratios(&c["shift"], c);
     }
+}
+
+/// Issue 42: a search spec gets a train spec's checks. The base train is
+/// checked as `egt check` would (a clutch with no links used to index out of
+/// bounds; a brake on three links, on the frame, or a clutch joining a link
+/// to itself were searched), every number is range-checked by field (NaN
+/// targets, an efficiency above 1, a NaN `ring_sun`, `min_planet = -5`, a
+/// range of three, bounds that overflow when subtracted), and a tolerance
+/// that prunes nothing is refused at the leaf budget (code `budget`, with
+/// the flag that raises it) instead of confirming every leaf.
+#[test]
+fn search_specs_are_checked_like_train_specs_and_bounded() {
+    let search = std::fs::read_to_string(root().join("examples/synth/ford_c4_simpson.toml"))
+        .expect("the C4 search")
+        .replace("../ford_c4_simpson.toml", "BASE");
+    let c4 = std::fs::read_to_string(root().join("examples/ford_c4_simpson.toml")).expect("C4");
+    let dir = std::env::temp_dir().join(format!("egt-synth-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let run = |base: &str, search: &str| {
+        let path = dir.join("base.toml");
+        std::fs::write(&path, base).expect("write base");
+        let text = search.replace("BASE", &path.to_string_lossy());
+        egt(
+            &["synth", "-", "--spec-format", "toml", "--format", "json"],
+            Some(&text),
+        )
+    };
+    let refused = |r: &Run, code: &str, path: &str| {
+        assert_eq!(r.code, 2, "{path}: {}", r.stderr);
+        let e: Value = serde_json::from_str(&r.stdout).expect("a JSON error");
+        assert_eq!(e["error"]["code"], code, "{}", r.stdout);
+        assert_eq!(e["error"]["path"], path, "{}", r.stdout);
+    };
+    // The base train, as `egt check` sees it.
+    for (from, to, path) in [
+        (
+            r#"links = ["input", "front_ring"]"#,
+            "links = []",
+            "base.elements[0].links",
+        ),
+        (
+            r#"links = ["sun"]"#,
+            r#"links = ["sun", "input", "output"]"#,
+            "base.elements[2].links",
+        ),
+        (
+            r#"links = ["sun"]"#,
+            r#"links = ["case"]"#,
+            "base.elements[2].links",
+        ),
+        (
+            r#"links = ["input", "sun"]"#,
+            r#"links = ["sun", "sun"]"#,
+            "base.elements[1].links",
+        ),
+    ] {
+        assert!(c4.contains(from));
+        let r = run(&c4.replacen(from, to, 1), &search);
+        assert_eq!(r.code, 2, "{to}: {}", r.stderr);
+        assert!(
+            r.stdout.contains(&format!("\"path\": \"{path}\"")),
+            "{to}: {}",
+            r.stdout
+        );
+    }
+    // The search's own numbers, by field.
+    for (from, to, code, path) in [
+        (
+            r#""1" = 2.46"#,
+            r#""1" = nan"#,
+            "invalid",
+            "targets.ratios.1",
+        ),
+        (
+            r#""1" = 2.46, "2" = 1.46, "3" = 1.00, "R" = -2.18"#,
+            "",
+            "invalid",
+            "targets.ratios",
+        ),
+        (
+            "[targets]",
+            "[targets]\nefficiency = 1.5",
+            "invalid",
+            "targets.efficiency",
+        ),
+        (
+            "profile_shift = 1 ",
+            "ring_sun = [nan, 3]\nprofile_shift = 1 ",
+            "invalid",
+            "constraints.ring_sun",
+        ),
+        (
+            "profile_shift = 1 ",
+            "min_planet = -5\nprofile_shift = 1 ",
+            "invalid",
+            "constraints.min_planet",
+        ),
+        (
+            "sun = [20, 60], ring",
+            "sun = [20, 40, 60], ring",
+            "syntax",
+            "sets.front.sun",
+        ),
+        (
+            "ring = [50, 110]",
+            "ring = [-9223372036854775807, 110]",
+            "invalid",
+            "sets.front.ring",
+        ),
+        ("top = 10", "top = 0", "invalid", "top"),
+    ] {
+        assert!(search.contains(from), "{from}");
+        refused(&run(&c4, &search.replacen(from, to, 1)), code, path);
+    }
+    // A tolerance that prunes nothing: refused at the leaf budget, quickly.
+    let loose = search.replace("tolerance = 0.005", "tolerance = 100");
+    let r = run(&c4, &format!("max_leaves = 50\n{loose}"));
+    assert_eq!(r.code, 1, "{}", r.stderr);
+    let e: Value = serde_json::from_str(&r.stdout).expect("a JSON error");
+    assert_eq!(e["error"]["code"], "budget", "{}", r.stdout);
+    assert!(r.stderr.contains("--max-leaves"), "{}", r.stderr);
+    // The flag overrides the spec: the same budget from the command line,
+    // and the real search is well within the default.
+    let path = dir.join("base.toml");
+    let text = loose.replace("BASE", &path.to_string_lossy());
+    let r = egt(
+        &[
+            "synth",
+            "-",
+            "--spec-format",
+            "toml",
+            "--format",
+            "json",
+            "--max-leaves",
+            "50",
+        ],
+        Some(&text),
+    );
+    assert_eq!(r.code, 1, "{}", r.stderr);
+    assert!(run(&c4, &search).code == 0);
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -98,3 +98,18 @@ def test_shape_and_keyword_errors_are_egt_errors(fig3: egt.Train) -> None:
         with pytest.raises(egt.EgtError) as info:
             case()
         assert isinstance(info.value, (ValueError, TypeError, KeyError)), type(info.value)
+
+
+def test_refused_rows_outside_the_matrix_are_argument_errors(train: egt.Train) -> None:
+    """Issue 42: ``plan.run((params, refused))`` with a refused row that is not
+    a row of the matrix raised NumPy's IndexError; it is an ArgumentError now,
+    and a value that is not a RowError a TypeError."""
+    plan = train.batch("dynamics")
+    params, _ = plan.params()
+    for bad in [{5: egt.RowError(5, "x", "y")}, {-1: egt.RowError(-1, "x", "y")}]:
+        with pytest.raises(egt.ArgumentError, match="refused row"):
+            plan.run((params, bad))
+    with pytest.raises(TypeError, match="RowError"):
+        plan.run((params, {0: "no"}))
+    ok = plan.run((params, {0: egt.RowError(0, "invalid", "refused")}))
+    assert not ok.ok[0]

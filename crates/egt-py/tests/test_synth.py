@@ -94,3 +94,31 @@ def test_synth_with_free_element_positions_reports_the_layout() -> None:
         t = c.train()
         assert sorted(t.elements["E"][1]) == sorted(c.layout["E"])
         assert {g.state: g.ratio_exact for g in t.shift_table().gears} == c.ratios
+
+
+def test_bad_numbers_and_budgets_are_egt_errors(tmp_path: Path) -> None:
+    """Issue 42 from Python: a NaN target, an efficiency above 1 and a broken
+    base train are SpecErrors naming the field (no longer ``results: invalid
+    type: null`` or a panic); a tolerance that prunes nothing is refused at
+    the leaf budget; a negative partition or atlas size is an ArgumentError,
+    not Python's OverflowError."""
+    text = C4.read_text().replace('base = "../ford_c4_simpson.toml"', f'base = "{ROOT / "examples" / "ford_c4_simpson.toml"}"')
+    with pytest.raises(egt.SpecError, match=r"targets\.ratios\.1"):
+        egt.synth(text.replace('"1" = 2.46', '"1" = nan'))
+    with pytest.raises(egt.SpecError, match=r"targets\.efficiency"):
+        egt.synth(text.replace("[targets]", "[targets]\nefficiency = 1.5"))
+    base = tmp_path / "base.toml"
+    base.write_text((ROOT / "examples" / "ford_c4_simpson.toml").read_text().replace('links = ["input", "front_ring"]', "links = []"))
+    with pytest.raises(egt.SpecError, match=r"base\.elements\[0\]\.links"):
+        egt.synth(C4.read_text().replace('base = "../ford_c4_simpson.toml"', f'base = "{base}"'))
+    with pytest.raises(egt.AnalysisError, match="max_leaves") as e:
+        egt.synth("max_leaves = 20\n" + text.replace("tolerance = 0.005", "tolerance = 100"))
+    assert e.value.kind == "budget"
+    for bad in [(-1, 4), (0, 2**70)]:
+        with pytest.raises(egt.ArgumentError, match="part"):
+            egt.synth(C4, part=bad)
+    for kwargs in [{"links": -1}, {"links": 7, "dof": 2**70}, {"links": 7, "part": (-1, 2)}]:
+        with pytest.raises(egt.ArgumentError):
+            egt.atlas(**kwargs)  # type: ignore[arg-type]
+    with pytest.raises(TypeError):
+        egt.atlas(7.0)  # type: ignore[arg-type]

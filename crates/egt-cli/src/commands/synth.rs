@@ -41,6 +41,11 @@ pub struct Args {
     /// Keep this many of the best candidates (default: the spec's `top`, else 20).
     #[arg(long, value_name = "N")]
     pub top: Option<usize>,
+    /// Refuse the search (code `budget`) once the bound reaches more than N
+    /// leaves in one run or partition, each confirmed exactly (default: the
+    /// spec's `max_leaves`, else 10000).
+    #[arg(long, value_name = "N")]
+    pub max_leaves: Option<u64>,
     /// Only partition I of K (`I/K`, 0-based): disjoint parts whose candidates,
     /// merged and ranked, are the whole search's.
     #[arg(long, value_name = "I/K")]
@@ -128,6 +133,9 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
     let mut spec = SynthSpec::from_str(&text, format, &source)?;
     if let Some(top) = args.top {
         spec.top = top;
+    }
+    if let Some(n) = args.max_leaves {
+        spec.max_leaves = n;
     }
     let file = (!is_stdin(&args.spec)).then_some(args.spec.as_path());
     let base_path = spec.base_path(file);

@@ -6,4 +6,4 @@ pub mod search;
 pub mod spec;
 
 pub use search::{Candidate, DesignError, Search, Stats, Teeth, merge, rank};
-pub use spec::{Constraints, Placement, SetRange, SynthSpec, Targets};
+pub use spec::{Constraints, DEFAULT_MAX_LEAVES, Placement, SetRange, SynthSpec, Targets};

@@ -6,6 +6,8 @@
 use indexmap::IndexMap;
 use serde::{Deserialize, Serialize};
 
+use crate::spec::{exactly_two, optional_two};
+
 /// A design search as written (TOML or JSON). See `docs/synth.md`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -23,6 +25,12 @@ pub struct SynthSpec {
     /// How many of the best candidates to keep. Default 20.
     #[serde(default = "default_top")]
     pub top: usize,
+    /// Most leaves (points of one k per set that teeth make) the bound may
+    /// reach in one run or partition before the search is refused as too
+    /// loose: each survivor is confirmed by an exact analysis. Default
+    /// 10 000; `egt synth --max-leaves` overrides it.
+    #[serde(default = "default_max_leaves")]
+    pub max_leaves: u64,
     /// Shift elements whose position is free: element name -> where it may
     /// sit. Elements not listed keep the base train's links.
     #[serde(default, skip_serializing_if = "IndexMap::is_empty")]
@@ -31,6 +39,13 @@ pub struct SynthSpec {
 
 fn default_top() -> usize {
     20
+}
+
+/// [`SynthSpec::max_leaves`]'s default.
+pub const DEFAULT_MAX_LEAVES: u64 = 10_000;
+
+fn default_max_leaves() -> u64 {
+    DEFAULT_MAX_LEAVES
 }
 
 /// Where a freed shift element may sit.
@@ -50,12 +65,18 @@ pub enum Placement {
 #[serde(deny_unknown_fields)]
 pub struct SetRange {
     /// Sun teeth `[min, max]` (the small, forward sun of a Ravigneaux set).
+    #[serde(deserialize_with = "exactly_two")]
     pub sun: [i64; 2],
     /// Large sun teeth `[min, max]`: required for a Ravigneaux set, refused
     /// for a simple one.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        deserialize_with = "optional_two",
+        skip_serializing_if = "Option::is_none"
+    )]
     pub sun2: Option<[i64; 2]>,
     /// Ring teeth `[min, max]`.
+    #[serde(deserialize_with = "exactly_two")]
     pub ring: [i64; 2],
     /// Number of equally spaced planets (assembly and non-interference). Default 3.
     #[serde(default = "default_planets")]
@@ -86,7 +107,11 @@ pub struct Constraints {
     #[serde(default = "yes")]
     pub non_interference: bool,
     /// Limits `[min, max]` of ring / sun.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        deserialize_with = "optional_two",
+        skip_serializing_if = "Option::is_none"
+    )]
     pub ring_sun: Option<[f64; 2]>,
 }
 
@@ -120,10 +145,18 @@ pub struct Targets {
     #[serde(default = "default_tolerance")]
     pub tolerance: f64,
     /// Accepted spread (largest / smallest forward ratio) `[min, max]`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        deserialize_with = "optional_two",
+        skip_serializing_if = "Option::is_none"
+    )]
     pub spread: Option<[f64; 2]>,
     /// Accepted step between adjacent forward gears `[min, max]` (every step).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        deserialize_with = "optional_two",
+        skip_serializing_if = "Option::is_none"
+    )]
     pub steps: Option<[f64; 2]>,
     /// A progressive ratio set: no step larger than the one below it.
     #[serde(default)]

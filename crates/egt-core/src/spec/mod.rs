@@ -360,7 +360,7 @@ pub struct AnalysisSpec {
 
 /// A pair written as an array of exactly two elements. (TOML's reader would
 /// otherwise take the first two of a longer array and drop the rest.)
-fn exactly_two<'de, D, T>(d: D) -> std::result::Result<[T; 2], D::Error>
+pub(crate) fn exactly_two<'de, D, T>(d: D) -> std::result::Result<[T; 2], D::Error>
 where
     D: serde::Deserializer<'de>,
     T: Deserialize<'de>,
@@ -372,7 +372,7 @@ where
 }
 
 /// [`exactly_two`] for an optional pair.
-fn optional_two<'de, D, T>(d: D) -> std::result::Result<Option<[T; 2]>, D::Error>
+pub(crate) fn optional_two<'de, D, T>(d: D) -> std::result::Result<Option<[T; 2]>, D::Error>
 where
     D: serde::Deserializer<'de>,
     T: Deserialize<'de>,

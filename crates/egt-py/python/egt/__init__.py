@@ -20,8 +20,8 @@ Pythonic surface. Every error is an :class:`EgtError`.
 from __future__ import annotations
 
 from ._args import ArgumentError, ArgumentKeyError, ArgumentTypeError
+from ._atlas import atlas
 from ._batch import BatchDynamics, BatchKinematics, BatchPlan, BatchResult, RowError
-from ._egt import atlas
 from ._egt import (
     AnalysisError,
     EgtError,

@@ -343,6 +343,7 @@ class BatchPlan:
             a = np.ascontiguousarray(a)
         # A Fortran-ordered matrix (as :meth:`params` builds) is solved
         # column by column and its outputs come back in Fortran order too.
+        _check_refused(refused, a.shape[0])
         values, raw = self._core.run(a, threads)
         return self._result(values, raw, refused)
 
@@ -439,6 +440,21 @@ def _run_chunk(plan: "BatchPlan", rows: np.ndarray, threads: Optional[int]) -> B
     return plan.run(np.array(rows, dtype=np.float64, order="C", copy=True), threads=threads)
 
 
+def _check_refused(refused: Mapping[Any, Any], rows: int) -> None:
+    """The refused rows given with a matrix (what :meth:`BatchPlan.params`
+    returns): each a row number of the matrix with a :class:`RowError`, or an
+    :class:`ArgumentError` naming the first that is not."""
+    for r, e in refused.items():
+        if isinstance(r, bool) or not isinstance(r, (int, np.integer)) or not 0 <= r < rows:
+            raise ArgumentError(
+                f"refused row {r!r} is not a row of the {rows}-row params matrix"
+            )
+        if not isinstance(e, RowError):
+            raise ArgumentTypeError(
+                f"refused row {r} must map to an egt.RowError, got {type(e).__name__}"
+            )
+
+
 def run_distributed(
     plan: "BatchPlan",
     params: Union[ArrayLike, Tuple[np.ndarray, Dict[int, RowError]]],
@@ -463,6 +479,7 @@ def run_distributed(
     if a.ndim == 1:
         a = a.reshape(1, -1)
     n = a.shape[0]
+    _check_refused(refused, n)
     k = count(chunks if chunks is not None else 4 * (os.cpu_count() or 1), "chunks", 1_000_000)
     k = max(1, min(k, n))
     bounds = [(n * i // k, n * (i + 1) // k) for i in range(k)]

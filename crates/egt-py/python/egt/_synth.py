@@ -194,6 +194,7 @@ def synth(
     job = _job(search, top, format)
     core = _prepared(job)
     i, k = part if part is not None else (0, 1)
+    i, k = count(i, "part[0]", 2**63 - 1), count(k, "part[1]", 2**63 - 1)
     start = time.perf_counter()
     result = core.run(i, k)
     return _merge(core, [result], len(result["candidates"]), time.perf_counter() - start)

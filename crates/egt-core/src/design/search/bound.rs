@@ -71,7 +71,8 @@ impl Search {
     ) -> Vec<Vec<usize>> {
         use std::sync::atomic::Ordering::Relaxed;
         nodes.fetch_add(1, Relaxed);
-        if !self.feasible(states, bounds) {
+        // Past the leaf budget the run is refused (`run_partition`): stop.
+        if leaves.load(Relaxed) > self.spec.max_leaves || !self.feasible(states, bounds) {
             return Vec::new();
         }
         let widest = (0..bounds.len())

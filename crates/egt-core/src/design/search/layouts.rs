@@ -126,6 +126,18 @@ pub(super) fn layouts(
                             message: format!("`{l}` is not a central link of the base train"),
                         });
                     }
+                    if c.contains(&base.frame) {
+                        return Err(DesignError::Invalid {
+                            field: format!("{field}[{k}]"),
+                            message: "name the held link; the frame is implied for a brake".into(),
+                        });
+                    }
+                    if c.len() == 2 && c[0] == c[1] {
+                        return Err(DesignError::Invalid {
+                            field: format!("{field}[{k}]"),
+                            message: format!("a clutch joins two links, `{}` twice", c[0]),
+                        });
+                    }
                 }
                 list.clone()
             }

@@ -72,7 +72,9 @@ impl Search {
                 let states = self.states(pick)?;
                 let mut out = Vec::new();
                 let mut rejected = 0;
-                for ks in self.branch(&states, &bounds, &nodes, &leaves) {
+                let survivors = self.branch(&states, &bounds, &nodes, &leaves);
+                self.within_leaf_budget(leaves.load(std::sync::atomic::Ordering::Relaxed))?;
+                for ks in survivors {
                     match self.confirm(pick, &ks)? {
                         Some(c) => out.push(c),
                         None => rejected += 1,
@@ -92,6 +94,27 @@ impl Search {
         }
         rank(&mut out, self.spec.top);
         Ok((out, stats))
+    }
+
+    /// The leaf budget (`max_leaves`): past it, a [`crate::AnalysisError::Budget`]
+    /// saying how to raise it (the bound stops early, so the count is a
+    /// lower estimate).
+    fn within_leaf_budget(&self, leaves: u64) -> Result<(), DesignError> {
+        let max = self.spec.max_leaves;
+        if leaves <= max {
+            return Ok(());
+        }
+        Err(DesignError::Egt(
+            crate::AnalysisError::Budget {
+                what: "the search's bound".into(),
+                estimate: format!(
+                    "more than {max} leaves (each one confirmed by an exact analysis; the tolerance or the ranges prune too little)"
+                ),
+                limit: format!("{max} leaves"),
+                raise: "tighten `targets.tolerance`, narrow `sets`, or raise `max_leaves` in the search spec (`egt synth --max-leaves N`)".into(),
+            }
+            .into(),
+        ))
     }
 
     /// Run the whole space as `parts` partitions one after another (each on

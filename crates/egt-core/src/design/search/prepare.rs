@@ -45,7 +45,6 @@ impl Search {
         let t = &spec.targets;
         for (field, v) in [
             ("tolerance", Some(t.tolerance)),
-            ("efficiency", t.efficiency),
             ("max_element_torque", t.max_element_torque),
             ("max_mesh_torque", t.max_mesh_torque),
         ] {
@@ -56,16 +55,7 @@ impl Search {
                 });
             }
         }
-        for (field, v) in [("spread", t.spread), ("steps", t.steps)] {
-            if let Some([lo, hi]) = v
-                && !(lo.is_finite() && hi.is_finite() && lo <= hi)
-            {
-                return Err(DesignError::Invalid {
-                    field: format!("targets.{field}"),
-                    message: "need [min, max] with min <= max".into(),
-                });
-            }
-        }
+        check_numbers(&spec)?;
         for s in spec.targets.ratios.keys() {
             if !tx.states.contains_key(s) {
                 return Err(DesignError::UnknownState(s.clone()));
@@ -200,6 +190,7 @@ impl Search {
             variants: Vec::new(),
             skipped_layouts: 0,
         };
+        search.check_base()?;
         if search.layouts.names.is_empty() {
             // The base layout's errors are the spec's: say them.
             search.states(&[])?;
@@ -232,5 +223,100 @@ impl Search {
             search.variants = kept;
         }
         Ok(search)
+    }
+}
+
+/// The search spec's numbers that the bound and the confirmation trust: every
+/// target finite and non-zero, the ranges' limits positive with min <= max,
+/// an efficiency in (0, 1], the constraints' counts in range.
+fn check_numbers(spec: &SynthSpec) -> Result<(), DesignError> {
+    let bad = |field: String, message: &str| {
+        Err(DesignError::Invalid {
+            field,
+            message: message.into(),
+        })
+    };
+    let t = &spec.targets;
+    if t.ratios.is_empty() {
+        return bad(
+            "targets.ratios".into(),
+            "give at least one gear state's target ratio",
+        );
+    }
+    for (state, r) in &t.ratios {
+        if !(r.is_finite() && *r != 0.0) {
+            return bad(
+                format!("targets.ratios.{state}"),
+                "a ratio target must be a finite, non-zero number",
+            );
+        }
+    }
+    if let Some(e) = t.efficiency
+        && !(e > 0.0 && e <= 1.0)
+    {
+        return bad("targets.efficiency".into(), "need 0 < efficiency <= 1");
+    }
+    let c = &spec.constraints;
+    for (field, v) in [
+        ("targets.spread", t.spread),
+        ("targets.steps", t.steps),
+        ("constraints.ring_sun", c.ring_sun),
+    ] {
+        if let Some([lo, hi]) = v
+            && !(lo.is_finite() && hi.is_finite() && 0.0 < lo && lo <= hi)
+        {
+            return bad(field.into(), "need [min, max] with 0 < min <= max");
+        }
+    }
+    if !(3..=crate::error::MAX_TEETH).contains(&c.min_planet) {
+        return bad(
+            "constraints.min_planet".into(),
+            "need a planet of at least 3 teeth",
+        );
+    }
+    if !(0..=crate::error::MAX_TEETH).contains(&c.profile_shift) {
+        return bad(
+            "constraints.profile_shift".into(),
+            "need an allowance of 0 or more teeth",
+        );
+    }
+    if spec.top == 0 {
+        return bad("top".into(), "keep at least one candidate");
+    }
+    Ok(())
+}
+
+impl Search {
+    /// The base train as `egt check` sees it (structure, elements, gear
+    /// states' names), each searched set given its first admissible teeth;
+    /// errors carry the base's field path after `base.`. A searched set
+    /// with no admissible teeth is refused here rather than searched empty.
+    fn check_base(&self) -> Result<(), DesignError> {
+        let mut teeth = Vec::with_capacity(self.unknowns.len());
+        for (name, u) in self.set_names.iter().zip(&self.unknowns) {
+            let first = u
+                .teeth
+                .iter()
+                .min_by(|a, b| a.0.cmp(b.0))
+                .and_then(|(_, t)| t.first());
+            let Some(first) = first else {
+                return Err(DesignError::Invalid {
+                    field: format!("sets.{name}"),
+                    message: "no tooth set in these ranges meets the constraints".into(),
+                });
+            };
+            teeth.push(*first);
+        }
+        crate::model::train::Train::from_spec(&self.candidate_spec(&teeth, &[]))
+            .map(drop)
+            .map_err(|e| {
+                DesignError::Egt(match e {
+                    crate::Error::Spec { path, kind } => crate::Error::Spec {
+                        path: format!("base.{path}"),
+                        kind,
+                    },
+                    e => e,
+                })
+            })
     }
 }

@@ -45,6 +45,9 @@ pub(super) struct Dim {
 /// Most (sun, ring) pairs one set's ranges may span (each is visited once).
 pub const MAX_SET_PAIRS: i64 = 10_000_000;
 
+/// Most equally spaced planets of a searched set.
+pub const MAX_PLANETS: i64 = 100;
+
 /// The planet between a sun and a ring on one axis (the coaxial condition,
 /// within the profile-shift allowance), if the constraints admit it; the
 /// non-interference and assembly tests of `planets` equally spaced copies.
@@ -81,14 +84,17 @@ pub(super) fn check_ranges(
             return Err(bad(field, "need 3 <= min <= max"));
         }
     }
-    if r.ring[0] > r.ring[1] || r.ring[1] <= r.sun[0] {
+    if r.ring[0] < 3 || r.ring[0] > r.ring[1] || r.ring[1] <= r.sun[0] {
         return Err(bad(
             "ring",
-            "need min <= max and max above the smallest sun",
+            "need 3 <= min <= max and max above the smallest sun",
         ));
     }
-    if r.planets < 1 {
-        return Err(bad("planets", "need at least one planet"));
+    if !(1..=MAX_PLANETS).contains(&r.planets) {
+        return Err(bad(
+            "planets",
+            &format!("need 1 to {MAX_PLANETS} equally spaced planets"),
+        ));
     }
     let max = crate::error::MAX_TEETH;
     if r.sun[1] > max || r.ring[1] > max || r.sun2.is_some_and(|s| s[1] > max) {
@@ -98,11 +104,11 @@ pub(super) fn check_ranges(
         ));
     }
     // Bounded work per set: every tooth combination of the ranges is visited once.
-    let span = |x: [i64; 2]| x[1] - x[0] + 1;
-    let combos = span(r.sun)
-        .saturating_mul(span(r.ring))
-        .saturating_mul(r.sun2.map_or(1, span));
-    if combos > MAX_SET_PAIRS {
+    // The bounds are 3..=MAX_TEETH here, so a span cannot overflow; i128 keeps
+    // the product exact.
+    let span = |x: [i64; 2]| i128::from(x[1]) - i128::from(x[0]) + 1;
+    let combos = span(r.sun) * span(r.ring) * r.sun2.map_or(1, span);
+    if combos > i128::from(MAX_SET_PAIRS) {
         return Err(bad(
             "ring",
             &format!(
