@@ -32,3 +32,6 @@ mod synth;
 
 // Issue 14: `egt shift-sim`, a gear change in time, on the 8HP example.
 mod shift_sim;
+
+// Issue 42: every flag of every subcommand run with a valid value.
+mod flags;
