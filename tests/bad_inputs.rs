@@ -391,3 +391,38 @@ fn atlas_budgets_and_parts_are_usage_errors() {
         }
     }
 }
+
+/// Issue 42: a batch row whose results overflow is a failed row (exit 1,
+/// `non_finite_result` in its error cell), as `egt dynamics` refuses the
+/// same input; it used to be written as blank cells with exit 0.
+#[test]
+fn batch_rows_that_overflow_fail_as_the_single_command_does() {
+    let spec = std::fs::read_to_string(crate::util::root().join("examples/fig3_example61.toml"))
+        .expect("fig3")
+        .replacen("inertia = 2.0e-3", "inertia = 1e308", 1);
+    let single = egt(&["dynamics", "-", "--spec-format", "toml"], Some(&spec));
+    assert_eq!(single.code, 1, "{}", single.stderr);
+    assert!(single.stderr.contains("overflow"), "{}", single.stderr);
+    let r = egt(
+        &[
+            "batch",
+            "examples/fig3_example61.toml",
+            "--set",
+            "inertia.2=1e308",
+            "--vary",
+            "accel.4=1e308,1",
+            "--output",
+            "csv",
+        ],
+        None,
+    );
+    assert_eq!(r.code, 1, "{}", r.stderr);
+    let lines: Vec<&str> = r.stdout.lines().collect();
+    assert_eq!(lines.len(), 3, "{}", r.stdout);
+    for line in &lines[1..] {
+        assert!(
+            line.ends_with("a result overflowed: the inputs exceed the range of double precision"),
+            "{line}"
+        );
+    }
+}

@@ -154,3 +154,67 @@ pub(super) fn bad_parameter(plan: &BatchPlan, c: usize, v: f64) -> Error {
         },
     )
 }
+
+/// Every value finite: the quick test of a task's outputs (v * 0 is 0 for a
+/// finite v and NaN for an infinite or NaN one; eight sums, so it vectorises).
+#[inline]
+pub(super) fn all_finite(v: &[f64]) -> bool {
+    let mut acc = [0.0f64; 8];
+    let mut chunks = v.chunks_exact(8);
+    for c in &mut chunks {
+        for (a, x) in acc.iter_mut().zip(c) {
+            *a += x * 0.0;
+        }
+    }
+    let tail: f64 = chunks.remainder().iter().map(|x| x * 0.0).sum();
+    acc.iter().sum::<f64>() + tail == 0.0
+}
+
+/// The rows of a task (`n` rows from row `first`; `at(r, o)` reads output
+/// `o` of its row `r`) whose results overflowed, with the first output that
+/// did: an inf or NaN where the analysis gives a number (`power.efficiency`
+/// is NaN by design when no power goes in). Rows already failed are skipped.
+#[cold]
+pub(super) fn overflowed(
+    plan: &BatchPlan,
+    n: usize,
+    first: usize,
+    at: impl Fn(usize, usize) -> f64,
+    errors: &[super::RowError],
+) -> Vec<(usize, usize)> {
+    let skip = plan.names.iter().position(|s| s == "power.efficiency");
+    (0..n)
+        .filter(|&r| !errors.iter().any(|e| e.row == first + r))
+        .filter_map(|r| {
+            (0..plan.names.len())
+                .find(|&o| Some(o) != skip && !at(r, o).is_finite())
+                .map(|o| (r, o))
+        })
+        .collect()
+}
+
+/// The rows [`overflowed`] found, as failed rows (`non_finite_result`, as the
+/// single-scenario analyses refuse the same inputs), merged in row order.
+#[cold]
+pub(super) fn refuse(
+    plan: &BatchPlan,
+    bad: Vec<(usize, usize)>,
+    first: usize,
+    errors: &mut Vec<super::RowError>,
+) {
+    if bad.is_empty() {
+        return;
+    }
+    errors.extend(bad.into_iter().map(|(r, o)| {
+        super::RowError {
+            row: first + r,
+            error: crate::AnalysisError::NonFinite {
+                what: plan.names[o].clone(),
+                detail: "a result overflowed: the inputs exceed the range of double precision"
+                    .into(),
+            }
+            .into(),
+        }
+    }));
+    errors.sort_by_key(|e| e.row);
+}

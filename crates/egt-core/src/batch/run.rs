@@ -10,6 +10,7 @@ use crate::error::Error;
 use crate::solve::prepared::Workspace;
 
 use super::linear::Linear;
+use super::outputs::{all_finite, overflowed, refuse};
 use super::plan::BatchPlan;
 use super::worker::{LANES_MIN_ROWS, Lanes, Worker};
 
@@ -97,6 +98,14 @@ impl BatchPlan {
             let mut errors = Vec::new();
             let first = task * ROWS_PER_TASK;
             t.w.eval_task(&mut t.lin, &mut t.lanes, pin, pout, first, &mut errors);
+            if !all_finite(pout) {
+                let n = pout.len() / q;
+                let bad = overflowed(self, n, first, |r, o| pout[r * q + o], &errors);
+                for &(r, _) in &bad {
+                    pout[r * q..(r + 1) * q].fill(f64::NAN);
+                }
+                refuse(self, bad, first, &mut errors);
+            }
             errors
         })
     }
@@ -318,52 +327,64 @@ impl BatchPlan {
             let mut errors = Vec::new();
             let first = task * ROWS_PER_TASK;
             let n = cols.first().map_or(0, |c| c.len());
-            let column = |k: usize| match inputs[k] {
-                (c, false) => &c[first..first + n],
-                (c, true) => &c[..n],
-            };
-            let linear = self.linear_may(column, n);
-            if !linear && self.program.is_some() && n >= LANES_MIN_ROWS {
-                let solved = w.eval_program_columns(lanes, column, &mut cols, first, &mut errors);
-                unbounded.fetch_add(n - solved, Ordering::Relaxed);
-                return errors;
-            }
-            // Not the program's rows: their `cond.*` may be anything.
-            unbounded.fetch_add(n, Ordering::Relaxed);
-            if linear {
-                // Column by column, as `eval_linear` would row by row.
-                if w.eval_linear_columns(lin, column, &mut cols, first, &mut errors) {
-                    return errors;
+            'solve: {
+                let column = |k: usize| match inputs[k] {
+                    (c, false) => &c[first..first + n],
+                    (c, true) => &c[..n],
+                };
+                let linear = self.linear_may(column, n);
+                if !linear && self.program.is_some() && n >= LANES_MIN_ROWS {
+                    let solved =
+                        w.eval_program_columns(lanes, column, &mut cols, first, &mut errors);
+                    unbounded.fetch_add(n - solved, Ordering::Relaxed);
+                    break 'solve;
                 }
-            }
-            // Transposed into rows, solved as `run` does, and back, a
-            // tile of TILE rows at a time: the tile's rows stay in L1
-            // while every column passes. (Column by column over the
-            // whole task, a row-major buffer larger than L1 was read
-            // again from L2 for every column: 337 ns a row at 10 links
-            // against 46 for the same rows row-major, docs/performance.md (history: git log -p -- docs/benchmarks.md).)
-            const TILE: usize = 8;
-            pin.clear();
-            pin.resize(n * p, 0.0);
-            for (t, tile) in pin.chunks_mut(TILE * p).enumerate() {
-                let at = t * TILE;
-                for k in 0..p {
-                    let c = &column(k)[at..];
-                    for (d, &v) in tile[k..].iter_mut().step_by(p).zip(c) {
-                        *d = v;
+                // Not the program's rows: their `cond.*` may be anything.
+                unbounded.fetch_add(n, Ordering::Relaxed);
+                if linear {
+                    // Column by column, as `eval_linear` would row by row.
+                    if w.eval_linear_columns(lin, column, &mut cols, first, &mut errors) {
+                        break 'solve;
+                    }
+                }
+                // Transposed into rows, solved as `run` does, and back, a
+                // tile of TILE rows at a time: the tile's rows stay in L1
+                // while every column passes. (Column by column over the
+                // whole task, a row-major buffer larger than L1 was read
+                // again from L2 for every column: 337 ns a row at 10 links
+                // against 46 for the same rows row-major, docs/performance.md (history: git log -p -- docs/benchmarks.md).)
+                const TILE: usize = 8;
+                pin.clear();
+                pin.resize(n * p, 0.0);
+                for (t, tile) in pin.chunks_mut(TILE * p).enumerate() {
+                    let at = t * TILE;
+                    for k in 0..p {
+                        let c = &column(k)[at..];
+                        for (d, &v) in tile[k..].iter_mut().step_by(p).zip(c) {
+                            *d = v;
+                        }
+                    }
+                }
+                pout.clear();
+                pout.resize(n * q, 0.0);
+                w.eval_task(lin, lanes, pin, pout, first, &mut errors);
+                for (t, tile) in pout.chunks(TILE * q).enumerate() {
+                    let at = t * TILE;
+                    for (o, c) in cols.iter_mut().enumerate() {
+                        for (d, &v) in c[at..].iter_mut().zip(tile[o..].iter().step_by(q)) {
+                            *d = v;
+                        }
                     }
                 }
             }
-            pout.clear();
-            pout.resize(n * q, 0.0);
-            w.eval_task(lin, lanes, pin, pout, first, &mut errors);
-            for (t, tile) in pout.chunks(TILE * q).enumerate() {
-                let at = t * TILE;
-                for (o, c) in cols.iter_mut().enumerate() {
-                    for (d, &v) in c[at..].iter_mut().zip(tile[o..].iter().step_by(q)) {
-                        *d = v;
+            if !cols.iter().all(|c| all_finite(c)) {
+                let bad = overflowed(self, n, first, |r, o| cols[o][r], &errors);
+                for &(r, _) in &bad {
+                    for c in cols.iter_mut() {
+                        c[r] = f64::NAN;
                     }
                 }
+                refuse(self, bad, first, &mut errors);
             }
             errors
         })

@@ -454,3 +454,55 @@ fn column_major_runs_give_the_row_major_numbers_bit_for_bit() {
         }
     }
 }
+
+/// Issue 42: a row whose results overflow (an inertia of 1e308 times an
+/// acceleration) is a failed row naming the first output that did, with NaN
+/// outputs, row- and column-major alike, as `Train::dynamics` refuses the
+/// same inputs (`tests/bad_inputs.rs` runs both); it used to be written as
+/// blank cells with no error. The rows around it are untouched.
+#[test]
+fn rows_whose_results_overflow_fail_by_name() {
+    let text = include_str!("../../../../examples/fig3_example61.toml");
+    let t = Train::from_str(text, Format::Toml, "fig3").unwrap_or_else(|e| panic!("{e}"));
+    let p = BatchPlan::new(
+        &t,
+        &BatchSpec::from_analysis(&t, Compute::Dynamics).unwrap_or_else(|e| panic!("{e}")),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let (np, q) = (p.parameters().len(), p.outputs().len());
+    let inertia = (p.parameters().iter().position(|n| n == "inertia.2"))
+        .unwrap_or_else(|| panic!("no inertia.2 in {:?}", p.parameters()));
+    let rows = 600;
+    let mut params = Vec::new();
+    for _ in 0..rows {
+        params.extend(p.base());
+    }
+    for r in [1, 450] {
+        params[r * np + inertia] = 1e308;
+    }
+    let mut out = vec![0.0; rows * q];
+    let errors = p.run(&params, &mut out);
+    let failed: Vec<usize> = errors.iter().map(|e| e.row).collect();
+    assert_eq!(failed, [1, 450]);
+    assert_eq!(errors[0].error.code(), "non_finite_result");
+    assert!(out[q..2 * q].iter().all(|v| v.is_nan()));
+    assert!(
+        out[..q]
+            .iter()
+            .chain(&out[2 * q..3 * q])
+            .all(|v| v.is_finite())
+    );
+    // The same rows column by column.
+    let mut columns = vec![0.0; rows * np];
+    for r in 0..rows {
+        for c in 0..np {
+            columns[c * rows + r] = params[r * np + c];
+        }
+    }
+    let mut col_out = vec![0.0; rows * q];
+    let col_errors = p.run_columns(&columns, &mut col_out);
+    assert_eq!(
+        col_errors.iter().map(|e| e.row).collect::<Vec<_>>(),
+        [1, 450]
+    );
+}
