@@ -22,17 +22,21 @@
 //! Not built yet: a stiff method, mesh losses in the shift, compliance. See
 //! docs/shift_dynamics.md.
 
+mod consistent;
 pub mod engagement;
+mod extremes;
 pub mod friction;
 pub mod lockup;
 pub mod mode;
 pub mod ode;
 pub mod shift;
+mod train_mode;
 
 pub use engagement::{Engagement, EngagementResult, EngagementSample, Phase};
 pub use friction::{Capacity, FrictionLaw};
 pub use lockup::{LockUp, lock_projection};
 pub use mode::{ModeBasis, mode_basis};
 pub use shift::{
-    InputTorque, ModeChange, ShiftMethod, ShiftResult, ShiftSample, ShiftSim, Stiffness,
+    DEFAULT_MAX_STEPS, InputTorque, MAX_STEP, MIN_RTOL, ModeChange, ShiftMethod, ShiftResult,
+    ShiftSample, ShiftSim, Stiffness,
 };
