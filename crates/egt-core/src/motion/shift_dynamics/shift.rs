@@ -1176,4 +1176,334 @@ mod tests {
         });
         assert!(e.contains("shift.input_torque[1]"), "{e}");
     }
+
+    /// A two-speed planetary: sun in, carrier out; a ring brake for first
+    /// (ratio 1 + 72/30 = 3.4), a sun-carrier clutch for second (direct).
+    /// The ring and the planets carry no inertia, so with the brake released
+    /// the sun and the carrier are two free inertias joined by the clutch.
+    const TWO_SPEED: &str = r#"
+name = "two-speed"
+frame = "case"
+
+[[planetary]]
+name = "P"
+sun = "sun"
+ring = "ring"
+carrier = "carrier"
+teeth = { sun = 30, planet = 21, ring = 72 }
+
+[[links]]
+name = "sun"
+inertia = 0.01
+
+[[links]]
+name = "carrier"
+inertia = 0.05
+
+[[elements]]
+name = "ring_brake"
+kind = "brake"
+links = ["ring"]
+
+[[elements]]
+name = "direct_clutch"
+kind = "clutch"
+links = ["sun", "carrier"]
+
+[transmission]
+input = "sun"
+output = "carrier"
+
+[transmission.states]
+"1" = ["ring_brake"]
+"2" = ["direct_clutch"]
+"#;
+
+    fn two_speed() -> Train {
+        Train::from_str(TWO_SPEED, Format::Toml, "two_speed.toml").unwrap()
+    }
+
+    /// A power-on 1-2 upshift of the two-speed train: the brake's capacity
+    /// falls while the clutch's rises (a torque phase, then an inertia phase).
+    fn two_speed_upshift() -> ShiftSim {
+        ShiftSim {
+            from: "1".into(),
+            to: "2".into(),
+            input_speed: 200.0,
+            input_torque: InputTorque::Constant(100.0),
+            road_load: [10.0, 0.1, 0.0],
+            vehicle_inertia: 2.0,
+            off_going: Capacity::Ramp {
+                t0: 0.05,
+                t1: 0.25,
+                from: 4000.0,
+                to: 0.0,
+            },
+            on_coming: Capacity::Ramp {
+                t0: 0.05,
+                t1: 0.3,
+                from: 0.0,
+                to: 3000.0,
+            },
+            t_end: 0.6,
+            ..upshift()
+        }
+    }
+
+    /// The 8HP 2-3 upshift of docs/shift_dynamics.md.
+    fn zf_2_3() -> ShiftSim {
+        ShiftSim {
+            from: "2".into(),
+            to: "3".into(),
+            input_speed: 250.0,
+            input_torque: InputTorque::Constant(300.0),
+            road_load: [20.0, 0.2, 0.002],
+            vehicle_inertia: 12.0,
+            off_going: Capacity::Ramp {
+                t0: 0.05,
+                t1: 0.15,
+                from: 5000.0,
+                to: 0.0,
+            },
+            on_coming: Capacity::Ramp {
+                t0: 0.05,
+                t1: 0.3,
+                from: 0.0,
+                to: 9000.0,
+            },
+            ..upshift()
+        }
+    }
+
+    #[test]
+    fn the_reported_extremes_do_not_move_with_the_tolerance() {
+        // The extremes sit at mode changes (just before a release, a lock):
+        // they must be the same at every tolerance, as the lock time is, to
+        // 1e-6 of the range. (They were the last accepted step's values: on
+        // the 8HP the minimum moved from 382 to 352 N m between rtol 1e-6 and 1e-10.)
+        for (train, sim) in [(zf(), zf_2_3()), (two_speed(), two_speed_upshift())] {
+            let runs: Vec<ShiftResult> = [1e-6, 1e-8, 1e-10]
+                .into_iter()
+                .map(|tol| {
+                    ShiftSim {
+                        rtol: tol,
+                        atol: tol,
+                        ..sim.clone()
+                    }
+                    .run(&train)
+                    .unwrap()
+                })
+                .collect();
+            let fine = &runs[2];
+            let ranges = |r: &ShiftResult| {
+                [
+                    r.output_torque_range,
+                    r.element_torque_range[0],
+                    r.element_torque_range[1],
+                    r.slip_range[0],
+                    r.slip_range[1],
+                ]
+            };
+            for r in &runs[..2] {
+                for (a, b) in ranges(r).iter().zip(ranges(fine)) {
+                    let range = b[0] - b[1];
+                    for k in 0..2 {
+                        assert!(
+                            (a[k] - b[k]).abs() <= 1e-6 * range,
+                            "{} -> {}: {a:?} against {b:?}",
+                            sim.from,
+                            sim.to
+                        );
+                    }
+                }
+            }
+            // Every sample lies within the reported range.
+            for s in &fine.samples {
+                let [hi, lo] = fine.output_torque_range;
+                assert!(s.output_torque <= hi && s.output_torque >= lo);
+            }
+        }
+    }
+
+    #[test]
+    fn a_release_is_sampled_on_both_sides_at_the_static_and_kinetic_limits() {
+        // The off-going clutch releases where its torque meets mu_s C(t) (the
+        // left limit) and then carries mu_k C(t) (the right limit): both are
+        // samples at the release time.
+        let r = zf_2_3().run(&zf()).unwrap();
+        let release = &r.changes[0];
+        assert_eq!(
+            (release.element.as_str(), release.now.as_str()),
+            ("A", "slipping")
+        );
+        let at: Vec<&ShiftSample> = r.samples.iter().filter(|s| s.t == release.t).collect();
+        assert_eq!(at.len(), 2, "a sample on each side");
+        let c = zf_2_3().off_going.at(release.t);
+        let (before, after) = (at[0].element_torque[0], at[1].element_torque[0]);
+        assert!(
+            rel(before.abs(), 0.15 * c) < 1e-9,
+            "{before} vs {}",
+            0.15 * c
+        );
+        assert!(
+            rel(after.abs(), 0.12 * c) < 1e-12,
+            "{after} vs {}",
+            0.12 * c
+        );
+        assert_eq!((at[0].dof, at[1].dof), (1, 2));
+        // the speeds are continuous across it
+        assert_eq!(at[0].speed, at[1].speed);
+    }
+
+    #[test]
+    fn a_constant_capacity_engagement_through_the_train_matches_the_closed_forms() {
+        // The brake has no capacity at all: it cannot hold the torque the
+        // slipping clutch puts on it, so it is released at t = 0, and the
+        // sun (J1) and the carrier (J2) are two free inertias joined by a
+        // clutch of constant capacity: slip time s0 / (mu C (1/J1 + 1/J2)),
+        // energy 1/2 J1 J2 / (J1 + J2) s0^2.
+        let train = two_speed();
+        let (j1, j2, mu, cap, w) = (0.01, 0.05, 0.12, 1000.0, 200.0);
+        let sim = ShiftSim {
+            input_speed: w,
+            input_torque: InputTorque::Constant(0.0),
+            road_load: [0.0; 3],
+            vehicle_inertia: 0.0,
+            law: FrictionLaw {
+                mu_static: 0.15,
+                mu_kinetic: mu,
+                decay: None,
+            },
+            off_going: Capacity::Constant(0.0),
+            on_coming: Capacity::Constant(cap),
+            t_end: 0.1,
+            ..two_speed_upshift()
+        };
+        let r = sim.run(&train).unwrap();
+        let s0 = w - w / 3.4; // sun minus carrier in first
+        let t_lock = s0 / (mu * cap * (1.0 / j1 + 1.0 / j2));
+        let energy = 0.5 * j1 * j2 / (j1 + j2) * s0 * s0;
+        assert_eq!(r.changes[0].t, 0.0);
+        assert_eq!(r.changes[0].element, "ring_brake");
+        assert!(
+            rel(r.lock_time.unwrap(), t_lock) < 1e-9,
+            "{:?} vs {t_lock}",
+            r.lock_time
+        );
+        assert!(
+            rel(r.dissipated[1], energy) < 1e-9,
+            "{:?} vs {energy}",
+            r.dissipated
+        );
+        assert_eq!(r.dissipated[0], 0.0);
+        // Lock-up speed: the momentum average, and the train ends direct.
+        let last = r.samples.last().unwrap();
+        let common = (j1 * w + j2 * w / 3.4) / (j1 + j2);
+        for l in ["sun", "carrier"] {
+            let k = train.link_id(l).unwrap().index();
+            assert!(rel(last.speed[k], common) < 1e-9, "{l}: {}", last.speed[k]);
+        }
+        assert!(r.max_energy_residual < 1e-9 * energy);
+    }
+
+    #[test]
+    fn a_brake_that_cannot_hold_at_the_start_is_released_at_t_0() {
+        // First gear holds the ring with about 2.4 x the input torque; a
+        // constant brake capacity with mu_s C = 150 N m cannot, so the brake
+        // slips from t = 0 and never carries more than its limit.
+        let train = two_speed();
+        let limit = 150.0;
+        let sim = ShiftSim {
+            off_going: Capacity::Constant(limit / 0.15),
+            ..two_speed_upshift()
+        };
+        let r = sim.run(&train).unwrap();
+        assert_eq!(
+            (
+                r.changes[0].t,
+                r.changes[0].element.as_str(),
+                r.changes[0].now.as_str()
+            ),
+            (0.0, "ring_brake", "slipping")
+        );
+        for s in &r.samples {
+            assert!(
+                s.element_torque[0].abs() <= limit * (1.0 + 1e-12),
+                "t = {}: {} N m against {limit}",
+                s.t,
+                s.element_torque[0]
+            );
+        }
+        assert!(
+            r.element_torque_range[0][0]
+                .abs()
+                .max(r.element_torque_range[0][1].abs())
+                <= limit * (1.0 + 1e-12)
+        );
+        assert!(r.max_energy_residual < 1e-7 * (r.dissipated[0] + r.dissipated[1]));
+        assert_ends_in(&train, &r, "2");
+    }
+
+    #[test]
+    fn a_coast_1_2_upshift_overruns_the_one_way_brake_at_t_0() {
+        // Foot off (engine braking): first gear would need the one-way brake
+        // to hold a torque of the wrong sign, so it overruns from the start
+        // and the band takes the train into second (it was a tie-up).
+        let train = simpson();
+        let sim = ShiftSim {
+            from: "1".into(),
+            to: "2".into(),
+            input_torque: InputTorque::Constant(-50.0),
+            off_going: Capacity::Constant(0.0),
+            ..upshift()
+        };
+        let r = sim.run(&train).unwrap();
+        assert_eq!(
+            (
+                r.changes[0].t,
+                r.changes[0].element.as_str(),
+                r.changes[0].now.as_str()
+            ),
+            (0.0, "low_one_way", "overrunning")
+        );
+        assert!(
+            r.samples
+                .iter()
+                .all(|s| s.element_torque[0] == 0.0 && s.slip[0] >= -1e-9 * 300.0)
+        );
+        assert!(r.lock_time.is_some());
+        assert_ends_in(&train, &r, "2");
+        // Little is dissipated (the band slips briefly): bound the residual
+        // by the vehicle's kinetic energy at the start instead.
+        let w_out = 300.0 / train.analyse_gear("1").unwrap().ratio;
+        assert!(r.max_energy_residual < 1e-9 * 0.5 * 15.0 * w_out * w_out);
+    }
+
+    #[test]
+    fn the_step_budget_and_an_impossible_tolerance_are_named() {
+        let train = simpson();
+        let e = ShiftSim {
+            max_steps: 10,
+            ..upshift()
+        }
+        .run(&train)
+        .unwrap_err();
+        assert_eq!(e.code(), "budget", "{e}");
+        // refused before any work: t_end / MAX_STEP steps at least
+        let e = ShiftSim {
+            t_end: 1e300,
+            ..upshift()
+        }
+        .run(&train)
+        .unwrap_err();
+        assert_eq!(e.code(), "budget", "{e}");
+        assert!(e.to_string().contains("max_steps"), "{e}");
+        let e = ShiftSim {
+            rtol: 1e-300,
+            ..upshift()
+        }
+        .run(&train)
+        .unwrap_err();
+        assert_eq!(e.location().0, Some("shift.rtol"), "{e}");
+    }
 }
