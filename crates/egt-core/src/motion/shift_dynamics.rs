@@ -17,7 +17,11 @@
 //! - [`shift`]: a whole train's gear change (`egt shift-sim`): the off-going
 //!   element releases, the on-coming one slips and locks, one-way elements
 //!   overrun and engage; modes of [`mode`], events located on the dense
-//!   output of [`ode`], lock-ups by momentum-consistent projection.
+//!   output of [`ode`], lock-ups by momentum-consistent projection. Private
+//!   pieces: `train_mode` (one mode of the train: forces, multipliers,
+//!   events), `consistent` (the consistent mode at `t = 0` and after every
+//!   event: release what cannot hold, lock what can) and `extremes` (the
+//!   reported ranges, over both sides of every event and between samples).
 //!
 //! Not built yet: a stiff method, mesh losses in the shift, compliance. See
 //! docs/shift_dynamics.md.

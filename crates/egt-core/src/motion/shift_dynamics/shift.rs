@@ -16,7 +16,9 @@
 //! its Lagrange multiplier: the least-squares solution of `A^T lambda =
 //! M v' - f` over the mode's rows `A`.
 //!
-//! Mode changes are located as roots on each step's dense output:
+//! At `t = 0` and after every mode change the mode is made consistent
+//! (`consistent.rs`): a locked element that cannot hold its torque is released
+//! before any step. Mode changes are located as roots on each step's dense output:
 //! - a slipping element's slip reaching zero (it locks, or slips on the other
 //!   way when its static limit cannot hold the locked torque);
 //! - a locked element's torque reaching its static limit `mu_s C(t)` (it
@@ -28,6 +30,9 @@
 //! That projection never raises kinetic energy; the energy it removes is
 //! recorded (about zero, since the slip was located at zero). Every sample
 //! carries the energy residual `W_applied - dKE - E_friction - E_lock`.
+//! Every change is sampled on both sides (the old mode's state at it, then
+//! the new mode's), and the reported ranges take the turning points between
+//! samples too (`extremes.rs`), so they converge with the tolerance.
 
 use nalgebra::DVector;
 use serde::Serialize;
