@@ -33,9 +33,9 @@ impl Extremes {
 
     /// Takes a value seen (a sample, or a turning point).
     pub(super) fn add(&mut self, q: &Observed) {
-        for k in 0..q.len() {
-            self.max[k] = self.max[k].max(q[k]);
-            self.min[k] = self.min[k].min(q[k]);
+        for (k, &v) in q.iter().enumerate() {
+            self.max[k] = self.max[k].max(v);
+            self.min[k] = self.min[k].min(v);
         }
     }
 
