@@ -689,7 +689,7 @@ impl ShiftSim {
                         &phases,
                         lock_loss,
                     );
-                    extremes.within(dense, t_now, te, &q0, &qe);
+                    extremes.within(dense, t_now, te, &q0, &qe, &slip_rates(&setup, &f0, &fe));
                     at_once = 0;
                 } else {
                     at_once += 1;
@@ -729,7 +729,7 @@ impl ShiftSim {
                 &phases,
                 lock_loss,
             );
-            extremes.within(dense, t_now, t1, &q0, &q1);
+            extremes.within(dense, t_now, t1, &q0, &q1, &slip_rates(&setup, &f0, &f1));
             t_now = t1;
             y = y1;
             f0 = f1;
@@ -759,6 +759,21 @@ impl ShiftSim {
         };
         Ok(out)
     }
+}
+
+/// The slips' rates at both ends of a step with end derivatives `f0`, `f1`
+/// (a slip is linear in the speeds, so its dense output is the step's cubic);
+/// the torques have none.
+fn slip_rates(setup: &Setup<'_>, f0: &[f64], f1: &[f64]) -> [Option<(f64, f64)>; 5] {
+    let n = setup.n;
+    let rate = |i: usize, f: &[f64]| setup.slip(i, &f[..n]);
+    [
+        None,
+        None,
+        None,
+        Some((rate(0, f0), rate(0, f1))),
+        Some((rate(1, f0), rate(1, f1))),
+    ]
 }
 
 /// The first time in `[0, t_end]` a capacity is positive.
