@@ -1468,35 +1468,45 @@ output = "carrier"
     fn a_coast_1_2_upshift_overruns_the_one_way_brake_at_t_0() {
         // Foot off (engine braking): first gear would need the one-way brake
         // to hold a torque of the wrong sign, so it overruns from the start
-        // and the band takes the train into second (it was a tie-up).
+        // and the band takes the train into second. (With the band ramped to
+        // 8000 the band slipped against a one-way brake held the wrong way,
+        // dissipating 1e5 J; to 20000 the run ended in a tie-up.)
         let train = simpson();
-        let sim = ShiftSim {
-            from: "1".into(),
-            to: "2".into(),
-            input_torque: InputTorque::Constant(-50.0),
-            off_going: Capacity::Constant(0.0),
-            ..upshift()
-        };
-        let r = sim.run(&train).unwrap();
-        assert_eq!(
-            (
-                r.changes[0].t,
-                r.changes[0].element.as_str(),
-                r.changes[0].now.as_str()
-            ),
-            (0.0, "low_one_way", "overrunning")
-        );
-        assert!(
-            r.samples
-                .iter()
-                .all(|s| s.element_torque[0] == 0.0 && s.slip[0] >= -1e-9 * 300.0)
-        );
-        assert!(r.lock_time.is_some());
-        assert_ends_in(&train, &r, "2");
-        // Little is dissipated (the band slips briefly): bound the residual
-        // by the vehicle's kinetic energy at the start instead.
-        let w_out = 300.0 / train.analyse_gear("1").unwrap().ratio;
-        assert!(r.max_energy_residual < 1e-9 * 0.5 * 15.0 * w_out * w_out);
+        for to in [8000.0, 20000.0] {
+            let sim = ShiftSim {
+                from: "1".into(),
+                to: "2".into(),
+                input_torque: InputTorque::Constant(-50.0),
+                off_going: Capacity::Constant(0.0),
+                on_coming: Capacity::Ramp {
+                    t0: 0.05,
+                    t1: 0.35,
+                    from: 0.0,
+                    to,
+                },
+                ..upshift()
+            };
+            let r = sim.run(&train).unwrap();
+            assert_eq!(
+                (
+                    r.changes[0].t,
+                    r.changes[0].element.as_str(),
+                    r.changes[0].now.as_str()
+                ),
+                (0.0, "low_one_way", "overrunning")
+            );
+            assert!(
+                r.samples
+                    .iter()
+                    .all(|s| s.element_torque[0] == 0.0 && s.slip[0] >= -1e-9 * 300.0)
+            );
+            assert!(r.lock_time.is_some());
+            assert_ends_in(&train, &r, "2");
+            // Little is dissipated (the band slips briefly): bound the residual
+            // by the vehicle's kinetic energy at the start instead.
+            let w_out = 300.0 / train.analyse_gear("1").unwrap().ratio;
+            assert!(r.max_energy_residual < 1e-9 * 0.5 * 15.0 * w_out * w_out);
+        }
     }
 
     #[test]
