@@ -172,8 +172,101 @@ fn bad_shifts_exit_2_naming_the_flag_or_field() {
         ],
         None,
     );
-    assert_ne!(r.code, 0);
+    // It is missing data (exit 1, code `missing_data`), not a usage error.
+    assert_eq!(r.code, 1, "{}", r.stderr);
     assert!(r.stderr.contains("inertia"), "{}", r.stderr);
+}
+
+#[test]
+fn the_step_budget_is_a_budget_error_and_an_impossible_tolerance_a_usage_error() {
+    let code = |r: &crate::util::Run| -> String {
+        let v: Value = serde_json::from_str(&r.stdout).expect("json error document");
+        v["error"]["code"].as_str().expect("code").to_string()
+    };
+    // A tiny step budget: exit 1, code `budget`, naming the flag.
+    let r = run(&with(&["--max-steps", "10", "--format", "json"]));
+    assert_eq!((r.code, code(&r).as_str()), (1, "budget"), "{}", r.stderr);
+    assert!(r.stderr.contains("--max-steps"), "{}", r.stderr);
+    // An end time no budget reaches is refused before any work (a step is at
+    // most 1 s, so it needs at least 1e300 steps): the same code.
+    let r = run(&with(&["--t-end", "1e300", "--format", "json"]));
+    assert_eq!((r.code, code(&r).as_str()), (1, "budget"), "{}", r.stderr);
+    assert!(r.stderr.contains("1e300 steps"), "{}", r.stderr);
+    // A tolerance below what double precision can meet: a usage error.
+    let r = run(&with(&["--rtol", "1e-300"]));
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("--rtol"), "{}", r.stderr);
+    assert!(!r.stderr.contains("singular"), "{}", r.stderr);
+}
+
+/// The ratio input / output speed of the last sample of `egt shift-sim
+/// --format json`, and the ratio `egt shift` gives `gear`.
+fn ends_in(spec: &str, run: &Value, gear: &str) -> (f64, f64) {
+    let shift: Value =
+        serde_json::from_str(&egt(&["shift", spec, "--format", "json"], None).stdout)
+            .expect("json");
+    let ratio = shift["gears"]
+        .as_array()
+        .expect("gears")
+        .iter()
+        .find(|g| g["state"] == gear)
+        .expect("the gear")["ratio"]
+        .as_f64()
+        .expect("ratio");
+    let nodes: Value =
+        serde_json::from_str(&egt(&["graph", spec, "--format", "json"], None).stdout)
+            .expect("json");
+    let nodes = nodes["nodes"].as_array().expect("nodes");
+    let index = |name: &str| nodes.iter().position(|n| n["link"] == name).expect("link");
+    let last = run["samples"]
+        .as_array()
+        .expect("samples")
+        .last()
+        .expect("a sample");
+    let speed = |name: &str| last["speed"][index(name)].as_f64().expect("speed");
+    (speed("input") / speed("output"), ratio)
+}
+
+#[test]
+fn a_coast_1_2_upshift_of_the_c4_overruns_its_one_way_brake_from_the_start() {
+    // Foot off: first gear would need the low one-way brake to hold a torque
+    // of the sign it cannot, so it overruns at t = 0 and the band shifts the
+    // train into second (this was a tie-up, or a band slipping against a
+    // one-way brake that held the wrong way).
+    let spec = "examples/ford_c4_simpson.toml";
+    let r = egt(
+        &[
+            "shift-sim",
+            spec,
+            "--from",
+            "1",
+            "--to",
+            "2",
+            "--input-speed",
+            "300",
+            "--input-torque=-50",
+            "--road-load",
+            "30,0.1,0.001",
+            "--vehicle-inertia",
+            "15",
+            "--off-going",
+            "0",
+            "--on-coming",
+            "0.05:0.35:0:8000",
+            "--format",
+            "json",
+        ],
+        None,
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let v: Value = serde_json::from_str(&r.stdout).expect("json");
+    let first = &v["changes"][0];
+    assert_eq!(first["t"].as_f64(), Some(0.0));
+    assert_eq!(first["element"], "low_one_way");
+    assert_eq!(first["now"], "overrunning");
+    assert!(v["lock_time"].as_f64().is_some());
+    let (ends, second) = ends_in(spec, &v, "2");
+    assert!((ends - second).abs() < 1e-9 * second, "{ends} vs {second}");
 }
 
 #[test]

@@ -78,6 +78,7 @@ fn zf_2_3() -> (egt_core::Train, egt_core::shift_dynamics::ShiftSim) {
         rtol: 1e-8,
         atol: 1e-8,
         method: egt_core::shift_dynamics::ShiftMethod::Auto,
+        max_steps: egt_core::shift_dynamics::DEFAULT_MAX_STEPS,
     };
     (train, sim)
 }

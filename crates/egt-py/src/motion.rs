@@ -260,6 +260,7 @@ pub fn shift_sim<'py>(
         rtol,
         atol,
         method,
+        max_steps: egt_core::shift_dynamics::DEFAULT_MAX_STEPS,
     };
     // The document is the run's serde form (and the version): one payload.
     guard(|| {

@@ -106,6 +106,11 @@ pub struct Args {
     /// implicit), `explicit` (reports a stiff mode, keeps going), `implicit`.
     #[arg(long, value_enum, default_value_t = MethodArg::Auto)]
     pub method: MethodArg,
+    /// Steps (accepted and rejected) allowed before the run is refused
+    /// (code `budget`). A step is at most 1 s, so `--t-end` past this many
+    /// seconds is refused at once.
+    #[arg(long, value_name = "N", default_value_t = egt_core::shift_dynamics::DEFAULT_MAX_STEPS)]
+    pub max_steps: usize,
     /// Write the shift plot (SVG) to FILE.
     #[arg(long, value_name = "FILE")]
     pub plot: Option<PathBuf>,
@@ -199,10 +204,21 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
             MethodArg::Explicit => ShiftMethod::Explicit,
             MethodArg::Implicit => ShiftMethod::Implicit,
         },
+        max_steps: args.max_steps,
     };
-    let r = sim
-        .run(train)
-        .map_err(|e| anyhow::Error::new(e).context(loaded.source.clone()))?;
+    let r = sim.run(train).map_err(|e| {
+        // A refused field `shift.x_y` is this command's flag `--x-y`.
+        let flag = e
+            .location()
+            .0
+            .and_then(|p| p.strip_prefix("shift."))
+            .map(|f| f.split(['.', '[']).next().unwrap_or(f).replace('_', "-"));
+        let context = match flag {
+            Some(f) => format!("{} (flag `--{f}`)", loaded.source),
+            None => loaded.source.clone(),
+        };
+        anyhow::Error::new(e).context(context)
+    })?;
     if let Some(path) = &args.plot {
         std::fs::write(path, plot(train, &report::title(train, &loaded.source), &r))
             .with_context(|| format!("writing {}", path.display()))?;

@@ -17,22 +17,30 @@
 //! - [`shift`]: a whole train's gear change (`egt shift-sim`): the off-going
 //!   element releases, the on-coming one slips and locks, one-way elements
 //!   overrun and engage; modes of [`mode`], events located on the dense
-//!   output of [`ode`], lock-ups by momentum-consistent projection.
+//!   output of [`ode`], lock-ups by momentum-consistent projection. Private
+//!   pieces: `train_mode` (one mode of the train: forces, multipliers,
+//!   events), `consistent` (the consistent mode at `t = 0` and after every
+//!   event: release what cannot hold, lock what can) and `extremes` (the
+//!   reported ranges, over both sides of every event and between samples).
 //!
 //! Not built yet: a stiff method, mesh losses in the shift, compliance. See
 //! docs/shift_dynamics.md.
 
+mod consistent;
 pub mod engagement;
+mod extremes;
 pub mod friction;
 pub mod lockup;
 pub mod mode;
 pub mod ode;
 pub mod shift;
+mod train_mode;
 
 pub use engagement::{Engagement, EngagementResult, EngagementSample, Phase};
 pub use friction::{Capacity, FrictionLaw};
 pub use lockup::{LockUp, lock_projection};
 pub use mode::{ModeBasis, mode_basis};
 pub use shift::{
-    InputTorque, ModeChange, ShiftMethod, ShiftResult, ShiftSample, ShiftSim, Stiffness,
+    DEFAULT_MAX_STEPS, InputTorque, MAX_STEP, MIN_RTOL, ModeChange, ShiftMethod, ShiftResult,
+    ShiftSample, ShiftSim, Stiffness,
 };

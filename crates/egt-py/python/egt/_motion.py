@@ -284,7 +284,8 @@ class ShiftSimulation(_Documented):
     kept: Tuple[str, ...]
     """Elements engaged in both gears (locked throughout)."""
     t: np.ndarray
-    """(samples,) times [s]."""
+    """(samples,) times [s]. A mode change has two samples at its time: the
+    old mode's state there (the left limit), then the new mode's."""
     speeds: np.ndarray
     """(samples, links) link speeds [rad/s]."""
     slip: np.ndarray

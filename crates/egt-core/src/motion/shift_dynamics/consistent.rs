@@ -1,0 +1,143 @@
+//! The mode a shift is in at one instant: at `t = 0` and after every mode
+//! change, every locked element is checked against its capacity (a one-way
+//! element against the sign it can hold) and released, slipping the way its
+//! torque cannot be held; an element at zero slip locks where it can hold.
+//!
+//! With two friction elements this is a small complementarity problem. Each
+//! element at zero slip (locked, or the one whose event fired) may be locked
+//! or slip either way; an element slipping at a speed keeps slipping. The
+//! candidates are tried in order of preference (fewest changes to elements
+//! that did not fire; locked before slipping; the way the torque pushes
+//! first), and the first *consistent* one is taken:
+//! - a locked clutch or brake carries `|T| <= mu_s C(t)`, a locked one-way
+//!   element `T >= 0` (its holding sign, as `egt shift`);
+//! - an element that starts slipping at zero slip has its slip speed growing
+//!   the way it slips (`dir * d(slip)/dt >= 0`), so that the kinetic friction
+//!   it is given opposes its motion.
+//!
+//! A candidate whose locked rows tie the train up (zero DOF) is skipped. When
+//! no candidate is consistent the run is refused, naming the elements.
+
+use super::train_mode::{Mode, Phase, Setup, refuse};
+use crate::error::Result;
+
+/// A consistent mode at one instant, and how it was reached.
+pub(super) struct Settled {
+    /// The elements' phases.
+    pub(super) phases: [Phase; 2],
+    /// Their mode.
+    pub(super) mode: Mode,
+    /// The state in it (speeds projected onto the mode where an element locked).
+    pub(super) y: Vec<f64>,
+    /// Kinetic energy removed by that projection (J).
+    pub(super) lost: f64,
+    /// The elements whose phase changed (or whose event fired), in index order.
+    pub(super) changed: Vec<usize>,
+}
+
+/// Relative slack on the slip acceleration of an element that starts to slip
+/// (a rate of rounding size, against the largest acceleration, is no sign).
+const RATE_SLACK: f64 = 1e-9;
+
+/// The consistent mode at time `t` and state `y`, starting from `phases`.
+/// `fired` is the element whose event located this instant (its current
+/// phase has ended and is not a candidate), `None` at the start.
+///
+/// # Errors
+/// A tie-up (every candidate locks the train), a singular mode, or no
+/// consistent candidate (the elements named).
+pub(super) fn settle(
+    setup: &Setup<'_>,
+    phases: [Phase; 2],
+    t: f64,
+    y: &[f64],
+    fired: Option<usize>,
+) -> Result<Settled> {
+    let n = setup.n;
+    // The way each locked element's torque pushes: it slips that way if released.
+    let now = setup.mode(&phases)?;
+    let dy = setup.rhs(&now, &phases, t, y);
+    let lam = setup.locked_torques(&now, &phases, t, y, &dy);
+    let options: Vec<Vec<Phase>> = (0..2)
+        .map(|i| {
+            let release = if setup.one_way[i] {
+                vec![Phase::Slipping(1.0)]
+            } else {
+                // The torque on the first link is `-dir mu C`: it slips against its torque.
+                let dir = if lam[i] > 0.0 { -1.0 } else { 1.0 };
+                vec![Phase::Slipping(dir), Phase::Slipping(-dir)]
+            };
+            match (phases[i], fired == Some(i)) {
+                (Phase::Locked, true) => release,
+                (Phase::Locked, false) => [vec![Phase::Locked], release].concat(),
+                (Phase::Slipping(d), true) => {
+                    let back = if setup.one_way[i] { 1.0 } else { -d };
+                    vec![Phase::Locked, Phase::Slipping(back)]
+                }
+                (p @ Phase::Slipping(_), false) => vec![p],
+            }
+        })
+        .collect();
+    let mut candidates: Vec<([Phase; 2], (usize, usize))> = Vec::new();
+    for (a, &pa) in options[0].iter().enumerate() {
+        for (b, &pb) in options[1].iter().enumerate() {
+            let c = [pa, pb];
+            let moved = (0..2)
+                .filter(|&i| fired != Some(i) && c[i] != phases[i])
+                .count();
+            candidates.push((c, (moved, a + b)));
+        }
+    }
+    candidates.sort_by_key(|&(_, key)| key);
+    let mut tie_up = None;
+    for (c, _) in candidates {
+        let mode = match setup.mode(&c) {
+            Ok(m) => m,
+            Err(e) => {
+                tie_up.get_or_insert(e);
+                continue;
+            }
+        };
+        let locks = (0..2).any(|i| c[i] == Phase::Locked && phases[i] != Phase::Locked);
+        let mut yc = y.to_vec();
+        let mut lost = 0.0;
+        if locks {
+            let (speed, l) = setup.project(&mode, &y[..n]);
+            yc[..n].copy_from_slice(speed.as_slice());
+            lost = l;
+        }
+        let d = setup.rhs(&mode, &c, t, &yc);
+        let torque = setup.locked_torques(&mode, &c, t, &yc, &d);
+        let slack = RATE_SLACK * d[..n].iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let entered = |i: usize| fired == Some(i) || c[i] != phases[i];
+        let holds = (0..2).all(|i| match c[i] {
+            Phase::Locked if setup.one_way[i] => torque[i] >= 0.0,
+            Phase::Locked => torque[i].abs() <= setup.sim.law.static_limit(setup.capacity[i].at(t)),
+            Phase::Slipping(dir) if entered(i) => {
+                let rate: f64 = setup.rows[i].iter().zip(&d[..n]).map(|(a, b)| a * b).sum();
+                dir * rate >= -slack
+            }
+            Phase::Slipping(_) => true,
+        });
+        if holds {
+            let changed = (0..2).filter(|&i| entered(i)).collect();
+            return Ok(Settled {
+                phases: c,
+                mode,
+                y: yc,
+                lost,
+                changed,
+            });
+        }
+    }
+    let names: Vec<String> = (0..2)
+        .filter(|&i| options[i].len() > 1)
+        .map(|i| format!("`{}`", setup.name(i)))
+        .collect();
+    Err(tie_up.unwrap_or_else(|| {
+        refuse(format!(
+            "no consistent mode at t = {t}: {} can neither hold their torques within their capacities nor slip the way those torques push (the stick-slip problem has no solution)",
+            names.join(" and ")
+        ))
+    }))
+}

@@ -1,0 +1,260 @@
+//! One mode of a whole train during a shift: which elements are locked, the
+//! mode's matrices (its null-space basis `N`, the Cholesky of `N^T M N`, the
+//! rows and their Gram inverse), and what the mode gives at a state: the
+//! forces, the accelerations, the locked elements' torques (Lagrange
+//! multipliers), the event functions and the lock-up projection.
+
+use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
+
+use super::friction::Capacity;
+use super::mode::mode_basis;
+use super::shift::ShiftSim;
+use crate::error::{AnalysisError, Error, Result};
+use crate::model::train::{ElementId, Train};
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum Phase {
+    Locked,
+    /// Slipping with the sign its slip had when the phase began.
+    Slipping(f64),
+}
+
+/// One mode's constant matrices.
+pub(super) struct Mode {
+    pub(super) basis: DMatrix<f64>,
+    /// Cholesky of `N^T M N`.
+    pub(super) reduced: Cholesky<f64, Dyn>,
+    pub(super) rows: DMatrix<f64>,
+    /// `(A A^T)^-1`, for the multipliers.
+    pub(super) gram_inverse: DMatrix<f64>,
+    /// Row index of each friction element when locked.
+    pub(super) row_of: [Option<usize>; 2],
+}
+
+pub(super) struct Setup<'a> {
+    pub(super) train: &'a Train,
+    pub(super) sim: &'a ShiftSim,
+    pub(super) m: DMatrix<f64>,
+    pub(super) input: usize,
+    pub(super) output: usize,
+    pub(super) kept: Vec<ElementId>,
+    pub(super) elements: [ElementId; 2],
+    pub(super) rows: [DVector<f64>; 2],
+    pub(super) one_way: [bool; 2],
+    pub(super) capacity: [&'a Capacity; 2],
+    pub(super) n: usize,
+}
+
+impl Setup<'_> {
+    pub(super) fn mode(&self, phases: &[Phase; 2]) -> Result<Mode> {
+        let mut locked = self.kept.clone();
+        let mut row_of = [None, None];
+        let willis = mode_basis(self.train, &[])?.rows.nrows();
+        for (i, p) in phases.iter().enumerate() {
+            if *p == Phase::Locked {
+                row_of[i] = Some(willis + locked.len());
+                locked.push(self.elements[i]);
+            }
+        }
+        let mb = mode_basis(self.train, &locked)?;
+        if mb.dof() == 0 {
+            return Err(refuse(format!(
+                "tie-up: with {} locked the train cannot move",
+                locked
+                    .iter()
+                    .map(|&e| format!("`{}`", self.train.elements()[e.index()].name))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )));
+        }
+        let basis = mb.basis.clone();
+        let reduced = Cholesky::new(basis.transpose() * &self.m * &basis).ok_or_else(|| {
+            Error::Analysis(AnalysisError::MissingData {
+                what: "inertia on every moving part of the mode".into(),
+                analysis: "a shift simulation (the reduced mass matrix is singular)".into(),
+                hint: "give `inertia` to the links (and planets) of the gear sets".into(),
+            })
+        })?;
+        let gram_inverse = (&mb.rows * mb.rows.transpose())
+            .try_inverse()
+            .ok_or_else(|| {
+                refuse(format!(
+                    "the rows of the mode with {} locked are dependent (an element that repeats another's constraint), so its torques are not determined",
+                    locked
+                        .iter()
+                        .map(|&e| format!("`{}`", self.train.elements()[e.index()].name))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))
+            })?;
+        Ok(Mode {
+            basis,
+            reduced,
+            rows: mb.rows,
+            gram_inverse,
+            row_of,
+        })
+    }
+
+    /// The applied torques (input and road load) at speeds `v`.
+    pub(super) fn applied(&self, v: &[f64]) -> DVector<f64> {
+        let mut f = DVector::zeros(self.n);
+        f[self.input] += self.sim.input_torque.at(v[self.input]);
+        f[self.output] -= self.road(v[self.output]);
+        f
+    }
+
+    /// The road load at output speed `w`, resisting motion.
+    pub(super) fn road(&self, w: f64) -> f64 {
+        let [c0, c1, c2] = self.sim.road_load;
+        c0 * w.signum() * f64::from(u8::from(w != 0.0)) + c1 * w + c2 * w * w.abs()
+    }
+
+    pub(super) fn slip(&self, i: usize, v: &[f64]) -> f64 {
+        self.rows[i].iter().zip(v).map(|(a, b)| a * b).sum()
+    }
+
+    /// Torque of a slipping element on its first link.
+    pub(super) fn friction(&self, i: usize, dir: f64, t: f64, v: &[f64]) -> f64 {
+        if self.one_way[i] {
+            0.0
+        } else {
+            -dir * self.sim.law.mu(self.slip(i, v)) * self.capacity[i].at(t)
+        }
+    }
+
+    /// All generalised forces in `phases` (applied plus slipping friction).
+    pub(super) fn forces(
+        &self,
+        phases: &[Phase; 2],
+        t: f64,
+        v: &[f64],
+    ) -> (DVector<f64>, [f64; 2]) {
+        let mut f = self.applied(v);
+        let mut tf = [0.0; 2];
+        for (i, p) in phases.iter().enumerate() {
+            if let Phase::Slipping(dir) = *p {
+                tf[i] = self.friction(i, dir, t, v);
+                f.axpy(tf[i], &self.rows[i], 1.0);
+            }
+        }
+        (f, tf)
+    }
+
+    /// The state derivative: speeds, the two elements' dissipation, applied work.
+    pub(super) fn rhs(&self, mode: &Mode, phases: &[Phase; 2], t: f64, y: &[f64]) -> Vec<f64> {
+        let n = self.n;
+        let v = &y[..n];
+        let (f, tf) = self.forces(phases, t, v);
+        let q = mode.reduced.solve(&(mode.basis.transpose() * &f));
+        let a = &mode.basis * q;
+        let mut d = a.as_slice().to_vec();
+        for (i, t) in tf.iter().enumerate() {
+            d.push(-t * self.slip(i, v));
+        }
+        d.push(self.applied(v).iter().zip(v).map(|(x, w)| x * w).sum());
+        d
+    }
+
+    /// The locked elements' torques on their first links (`0` where slipping).
+    pub(super) fn locked_torques(
+        &self,
+        mode: &Mode,
+        phases: &[Phase; 2],
+        t: f64,
+        y: &[f64],
+        dy: &[f64],
+    ) -> [f64; 2] {
+        let n = self.n;
+        let (f, _) = self.forces(phases, t, &y[..n]);
+        let a = DVector::from_column_slice(&dy[..n]);
+        let r = &self.m * a - f;
+        let lambda = &mode.gram_inverse * (&mode.rows * r);
+        mode.row_of.map(|k| k.map_or(0.0, |k| lambda[k]))
+    }
+
+    /// Event functions of the current phases: each crosses zero at a change.
+    pub(super) fn events(
+        &self,
+        mode: &Mode,
+        phases: &[Phase; 2],
+        t: f64,
+        y: &[f64],
+        dy: &[f64],
+    ) -> [f64; 2] {
+        let lam = self.locked_torques(mode, phases, t, y, dy);
+        let mut g = [f64::INFINITY; 2];
+        for i in 0..2 {
+            g[i] = match phases[i] {
+                Phase::Slipping(dir) => dir * self.slip(i, &y[..self.n]),
+                Phase::Locked if self.one_way[i] => lam[i],
+                Phase::Locked => self.sim.law.static_limit(self.capacity[i].at(t)) - lam[i].abs(),
+            };
+        }
+        g
+    }
+
+    /// The lock-up: `v` projected onto `mode`'s speeds in the metric of
+    /// \[M\] (the speeds a constraint impulse leaves: `M (v+ - v)` lies in the
+    /// row space of the mode's rows), and the kinetic energy it removes. The
+    /// same map as [`super::lockup::lock_projection`], computed in the mode's
+    /// coordinates so that links without inertia do no harm.
+    pub(super) fn project(&self, mode: &Mode, v: &[f64]) -> (DVector<f64>, f64) {
+        let v = DVector::from_column_slice(v);
+        let q = mode
+            .reduced
+            .solve(&(mode.basis.transpose() * (&self.m * &v)));
+        let plus = &mode.basis * q;
+        let lost = self.kinetic(v.as_slice()) - self.kinetic(plus.as_slice());
+        (plus, lost.max(0.0))
+    }
+
+    pub(super) fn kinetic(&self, v: &[f64]) -> f64 {
+        let v = DVector::from_column_slice(v);
+        0.5 * v.dot(&(&self.m * &v))
+    }
+
+    /// What the report follows at a state with derivative `dy`: the output
+    /// torque (vehicle inertia times output acceleration plus the road load),
+    /// the two elements' torques on their first links (the multiplier where
+    /// locked, the friction torque where slipping) and their slips.
+    pub(super) fn observe(
+        &self,
+        mode: &Mode,
+        phases: &[Phase; 2],
+        t: f64,
+        y: &[f64],
+        dy: &[f64],
+    ) -> Observed {
+        let v = &y[..self.n];
+        let lam = self.locked_torques(mode, phases, t, y, dy);
+        let torque = [0, 1].map(|i| match phases[i] {
+            Phase::Locked => lam[i],
+            Phase::Slipping(dir) => self.friction(i, dir, t, v),
+        });
+        let output = self.sim.vehicle_inertia * dy[self.output] + self.road(v[self.output]);
+        [
+            output,
+            torque[0],
+            torque[1],
+            self.slip(0, v),
+            self.slip(1, v),
+        ]
+    }
+
+    /// An element's name.
+    pub(super) fn name(&self, i: usize) -> &str {
+        &self.train.elements()[self.elements[i].index()].name
+    }
+}
+
+/// The quantities a shift report follows, in the order of
+/// [`Setup::observe`]: output torque, the two element torques, the two slips.
+pub(super) type Observed = [f64; 5];
+
+pub(super) fn refuse(detail: String) -> Error {
+    Error::Analysis(AnalysisError::Singular {
+        what: "shift simulation".into(),
+        detail,
+    })
+}
