@@ -82,7 +82,7 @@ clean: ## Remove build outputs and the virtualenv
 	rm -rf $(VENV)
 
 FUZZ_SECONDS ?= 30
-FUZZ_TARGETS := spec adjacency input_value program
+FUZZ_TARGETS := spec adjacency input_value program search_spec batch_args shift_sim_args
 
 .PHONY: fuzz-seed fuzz-smoke
 fuzz-seed: ## Seed fuzz/corpus/* from examples/ (specs, adjacency strings, input values) and a few trains for the program target

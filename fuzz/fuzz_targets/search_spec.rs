@@ -1,0 +1,58 @@
+//! Fuzz target: a design-search spec (`egt synth`'s parser, validation and a
+//! bounded search) over the bundled base train its `base` names (the C4 by
+//! default). Any refusal is fine; a panic, an abort, a hang, or a candidate
+//! with a non-finite score or ratio is a bug. The harness bounds each run
+//! below the CLI's budgets (at most 200 leaves, 20 000 tooth pairs per set,
+//! two freed elements), so that every execution stays well under a second.
+#![no_main]
+
+use std::sync::LazyLock;
+
+use egt_core::design::{Search, SynthSpec};
+use egt_core::{Format, Spec, parse_spec};
+use libfuzzer_sys::fuzz_target;
+
+fn base(text: &str, name: &str) -> Spec {
+    parse_spec(text, Format::Toml, name).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+static C4: LazyLock<Spec> =
+    LazyLock::new(|| base(include_str!("../../examples/ford_c4_simpson.toml"), "c4"));
+static ZF8: LazyLock<Spec> =
+    LazyLock::new(|| base(include_str!("../../examples/zf_8hp70.toml"), "8hp70"));
+static AOD: LazyLock<Spec> =
+    LazyLock::new(|| base(include_str!("../../examples/ford_aod_ravigneaux.toml"), "aod"));
+static ZF6: LazyLock<Spec> =
+    LazyLock::new(|| base(include_str!("../../examples/zf_6hp26_lepelletier.toml"), "6hp26"));
+
+fuzz_target!(|data: &[u8]| {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    let Ok(mut spec) = SynthSpec::from_str(text, Format::sniff(text), "fuzz") else {
+        return;
+    };
+    let span = |r: [i64; 2]| (i128::from(r[1]) - i128::from(r[0]) + 1).max(0);
+    let pairs = |s: &egt_core::design::SetRange| {
+        span(s.sun) * span(s.ring) * s.sun2.map_or(1, span)
+    };
+    if spec.sets.values().any(|s| pairs(s) > 20_000) || spec.layout.len() > 2 {
+        return;
+    }
+    spec.max_leaves = spec.max_leaves.min(200);
+    let base = match spec.base.rsplit('/').next() {
+        Some("zf_8hp70.toml") => &*ZF8,
+        Some("ford_aod_ravigneaux.toml") => &*AOD,
+        Some("zf_6hp26_lepelletier.toml") => &*ZF6,
+        _ => &*C4,
+    };
+    let Ok(search) = Search::new(spec, base.clone()) else {
+        return;
+    };
+    if let Ok((candidates, _)) = search.run() {
+        for c in &candidates {
+            assert!(c.score.is_finite(), "score {}", c.score);
+            assert!(c.ratios.iter().all(|r| r.1.is_finite()), "{:?}", c.ratios);
+        }
+    }
+});
