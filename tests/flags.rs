@@ -606,6 +606,27 @@ const RUNS: &[(&str, &str, &[&str])] = {
         ),
         (
             "shift-sim",
+            "max-steps",
+            &[
+                ZF,
+                "--from",
+                "2",
+                "--to",
+                "3",
+                "--input-speed",
+                "250",
+                "--input-torque",
+                "300",
+                "--off-going",
+                "0.05:0.15:5000:0",
+                "--on-coming",
+                "0.05:0.3:0:9000",
+                "--max-steps",
+                "100000",
+            ],
+        ),
+        (
+            "shift-sim",
             "ramp",
             &[
                 ZF,
