@@ -16,15 +16,19 @@ enum Base {
     /// A spec or search spec.
     Spec(&'static str),
     /// The 8HP70's 2-3 upshift of tests/shift_sim.rs (without its input
-    /// torque: `--torque-table` replaces it).
-    Upshift { torque: bool },
+    /// torque: `--torque-table` replaces it; without its two ramps: `--ramp`
+    /// gives them by element).
+    Upshift { torque: bool, ramps: bool },
 }
 
 const FIG3: Base = Base::Spec("examples/fig3_example61.toml");
 const FIG5: Base = Base::Spec("examples/fig5_stability.toml");
 const ZF: Base = Base::Spec("examples/zf_8hp70.toml");
 const C4_SEARCH: Base = Base::Spec("examples/synth/ford_c4_simpson.toml");
-const UP: Base = Base::Upshift { torque: true };
+const UP: Base = Base::Upshift {
+    torque: true,
+    ramps: true,
+};
 
 /// One run per flag: (command, flag, base, the arguments after the base).
 /// `{tmp}` is a fresh directory for the files a flag reads or writes.
@@ -109,7 +113,8 @@ const RUNS: &[(&str, &str, Base, &[&str])] = &[
     ("shift-sim", "to", UP, &[]),
     ("shift-sim", "input-speed", UP, &[]),
     ("shift-sim", "input-torque", UP, &[]),
-    ("shift-sim", "torque-table", Base::Upshift { torque: false }, &["--torque-table", "0:300,1000:250"]),
+    ("shift-sim", "torque-table", Base::Upshift { torque: false, ramps: true }, &["--torque-table", "0:300,1000:250"]),
+    ("shift-sim", "ramp", Base::Upshift { torque: true, ramps: false }, &["--ramp", "A=0.05:0.15:5000:0", "--ramp", "C=0.05:0.3:0:9000"]),
     ("shift-sim", "road-load", UP, &[]),
     ("shift-sim", "vehicle-inertia", UP, &[]),
     ("shift-sim", "mu", UP, &["--mu", "0.15,0.12"]),
@@ -129,7 +134,7 @@ impl Base {
         match self {
             Base::Bare => Vec::new(),
             Base::Spec(path) => vec![path],
-            Base::Upshift { torque } => {
+            Base::Upshift { torque, ramps } => {
                 let mut a = vec![
                     "examples/zf_8hp70.toml",
                     "--from",
@@ -142,11 +147,15 @@ impl Base {
                     "20,0.2,0.002",
                     "--vehicle-inertia",
                     "12",
-                    "--off-going",
-                    "0.05:0.15:5000:0",
-                    "--on-coming",
-                    "0.05:0.3:0:9000",
                 ];
+                if ramps {
+                    a.extend([
+                        "--off-going",
+                        "0.05:0.15:5000:0",
+                        "--on-coming",
+                        "0.05:0.3:0:9000",
+                    ]);
+                }
                 if torque {
                     a.extend(["--input-torque", "300"]);
                 }

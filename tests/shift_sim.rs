@@ -139,12 +139,27 @@ fn csv_and_plot_carry_the_time_series() {
 
 #[test]
 fn bad_shifts_exit_2_naming_the_flag_or_field() {
-    let mut not_single = with(&[]);
-    // 1 (A B C) -> 4 (B D E) swaps two elements each way
-    not_single[3] = "1".into();
-    not_single[5] = "4".into();
+    let mut double = with(&[]);
+    // 1 (A B C) -> 4 (B D E) swaps two elements each way: `--off-going`
+    // names no single element, and each changing element needs its `--ramp`.
+    double[3] = "1".into();
+    double[5] = "4".into();
+    let mut unramped: Vec<String> = double[..double.len() - 4].to_vec();
+    for r in [
+        "A=0.05:0.15:5000:0",
+        "C=0.05:0.15:5000:0",
+        "D=0.05:0.3:0:9000",
+    ] {
+        unramped.extend(["--ramp".to_string(), r.to_string()]);
+    }
     for (args, words) in [
-        (not_single, "shift.to"),
+        (double, "--off-going"),
+        (unramped, "element `E`"),
+        (
+            with(&["--ramp", "B=1000"]),
+            "`B` is not an element that changes",
+        ),
+        (with(&["--ramp", "1000"]), "NAME=RAMP"),
         (with(&["--mu", "0.1"]), "--mu"),
         (with(&["--t-end=-1"]), "shift.t_end"),
     ] {
@@ -365,4 +380,87 @@ fn a_flat_torque_table_is_the_constant_torque() {
     let r = run(&bad);
     assert_eq!(r.code, 2, "{}", r.stderr);
     assert!(r.stderr.contains("--torque-table"), "{}", r.stderr);
+}
+
+/// The 8HP shift `from` -> `to` with one `--ramp` each, as JSON.
+fn by_ramps(from: &str, to: &str, ramps: &[&str]) -> Value {
+    let mut args: Vec<String> = UPSHIFT[..UPSHIFT.len() - 4]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    args[3] = from.into();
+    args[5] = to.into();
+    for r in ramps {
+        args.extend(["--ramp".to_string(), r.to_string()]);
+    }
+    args.extend(["--t-end", "1.5", "--format", "json"].map(String::from));
+    let r = run(&args);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    serde_json::from_str(&r.stdout).expect("json")
+}
+
+#[test]
+fn an_8hp_skip_shift_and_double_swap_by_ramp_flags_end_in_the_new_gear() {
+    let spec = "examples/zf_8hp70.toml";
+    for (from, to, ramps) in [
+        // 2 (A B E) -> 4 (B D E): a skip shift, A off, D on
+        ("2", "4", &["A=0.05:0.15:20000:0", "D=0.05:0.4:0:20000"][..]),
+        // 1 (A B C) -> 4 (B D E): A and C off, D and E on
+        (
+            "1",
+            "4",
+            &[
+                "A=0.05:0.15:20000:0",
+                "C=0.05:0.15:20000:0",
+                "D=0.05:0.4:0:20000",
+                "E=0.05:0.4:0:20000",
+            ][..],
+        ),
+    ] {
+        let v = by_ramps(from, to, ramps);
+        let (ends, ratio) = ends_in(spec, &v, to);
+        assert!(
+            (ends - ratio).abs() < 1e-9 * ratio,
+            "{from}-{to}: {ends} vs {ratio}"
+        );
+        let dissipated: f64 = v["dissipated"]
+            .as_array()
+            .expect("per element")
+            .iter()
+            .map(|d| d.as_f64().expect("J"))
+            .sum();
+        let residual = v["max_energy_residual"].as_f64().expect("residual");
+        assert!(
+            residual < 1e-7 * dissipated,
+            "{from}-{to}: {residual} of {dissipated}"
+        );
+        assert_eq!(
+            v["elements"].as_array().expect("elements").len(),
+            ramps.len()
+        );
+    }
+}
+
+#[test]
+fn a_single_swap_by_ramp_flags_is_bit_for_bit_the_off_going_on_coming_run() {
+    let roles = run(&with(&["--format", "json"]));
+    assert_eq!(roles.code, 0, "{}", roles.stderr);
+    let mut named: Vec<String> = UPSHIFT[..UPSHIFT.len() - 4]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    named.extend(
+        [
+            "--ramp",
+            "C=0.05:0.3:0:9000",
+            "--ramp",
+            "A=0.05:0.15:5000:0",
+            "--format",
+            "json",
+        ]
+        .map(String::from),
+    );
+    let names = run(&named);
+    assert_eq!(names.code, 0, "{}", names.stderr);
+    assert_eq!(roles.stdout, names.stdout);
 }

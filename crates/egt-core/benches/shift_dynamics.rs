@@ -62,23 +62,24 @@ fn zf_2_3() -> (egt_core::Train, egt_core::shift_dynamics::ShiftSim) {
             mu_kinetic: 0.12,
             decay: None,
         },
-        off_going: Capacity::Ramp {
+        off_going: Some(Capacity::Ramp {
             t0: 0.05,
             t1: 0.15,
             from: 5000.0,
             to: 0.0,
-        },
-        on_coming: Capacity::Ramp {
+        }),
+        on_coming: Some(Capacity::Ramp {
             t0: 0.05,
             t1: 0.3,
             from: 0.0,
             to: 9000.0,
-        },
+        }),
         t_end: 1.0,
         rtol: 1e-8,
         atol: 1e-8,
         method: egt_core::shift_dynamics::ShiftMethod::Auto,
         max_steps: egt_core::shift_dynamics::DEFAULT_MAX_STEPS,
+        ramps: Vec::new(),
     };
     (train, sim)
 }

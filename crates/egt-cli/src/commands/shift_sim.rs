@@ -1,6 +1,7 @@
 //! `egt shift-sim SPEC --from 2 --to 3 ...`: a gear change in time
-//! (egt_core::shift_dynamics::ShiftSim). The off-going element's capacity
-//! falls and the on-coming one's rises. The report gives the mode changes,
+//! (egt_core::shift_dynamics::ShiftSim). The off-going elements' capacities
+//! fall and the on-coming ones' rise (`--off-going`/`--on-coming` for a single
+//! swap, `--ramp NAME=RAMP` for each element of any change). The report gives the mode changes,
 //! the shift time, the output-torque range and each element's dissipated
 //! energy. `--format json` adds every sample, `--format csv` gives the time
 //! series, and `--plot FILE` writes the shift plot: link speeds, element
@@ -57,7 +58,9 @@ pub struct Args {
     /// The gear before the shift (a state of `[transmission.states]`).
     #[arg(long)]
     pub from: String,
-    /// The gear after the shift: one element released, one applied.
+    /// The gear after the shift. The elements of `--from` not in `--to`
+    /// release, those of `--to` not in `--from` apply (one or more each way:
+    /// single swaps, skip shifts, double swaps); the others stay locked.
     #[arg(long)]
     pub to: String,
     /// Input speed at t = 0 [rad/s]; the train starts in the `--from` gear's steady motion.
@@ -87,12 +90,23 @@ pub struct Args {
     /// kinetic (exp(-|slip|/decay)); default: a step.
     #[arg(long, value_name = "W")]
     pub mu_decay: Option<f64>,
-    /// Off-going capacity [N m per unit friction coefficient]: `C` or a ramp `T0:T1:FROM:TO`.
+    /// Off-going capacity [N m per unit friction coefficient]: `C` or a ramp
+    /// `T0:T1:FROM:TO`. For a shift that releases one element; otherwise
+    /// give each its `--ramp`.
     #[arg(long, value_name = "RAMP", value_parser = parse_capacity)]
-    pub off_going: Capacity,
-    /// On-coming capacity, as `--off-going` (e.g. a pressure ramp `0.05:0.35:0:8000`).
+    pub off_going: Option<Capacity>,
+    /// On-coming capacity, as `--off-going` (e.g. a pressure ramp
+    /// `0.05:0.35:0:8000`), for a shift that applies one element.
     #[arg(long, value_name = "RAMP", value_parser = parse_capacity)]
-    pub on_coming: Capacity,
+    pub on_coming: Option<Capacity>,
+    /// One changing element's capacity, `NAME=RAMP` (RAMP as `--off-going`);
+    /// repeat it for each element released or applied, e.g. the 8HP's 1-4
+    /// double swap: `--ramp A=0.05:0.15:5000:0 --ramp C=0.05:0.15:5000:0
+    /// --ramp D=0.05:0.3:0:9000 --ramp E=0.1:0.35:0:9000`. It comes before
+    /// `--off-going`/`--on-coming`; every changing element needs a capacity
+    /// (a missing one exits 2, naming it).
+    #[arg(long = "ramp", value_name = "NAME=RAMP", value_parser = parse_ramp)]
+    pub ramps: Vec<(String, Capacity)>,
     /// End time [s].
     #[arg(long, value_name = "T", default_value_t = 1.0)]
     pub t_end: f64,
@@ -155,6 +169,17 @@ fn parse_capacity(s: &str) -> Result<Capacity, String> {
     }
 }
 
+fn parse_ramp(s: &str) -> Result<(String, Capacity), String> {
+    let (name, ramp) = s
+        .split_once('=')
+        .ok_or_else(|| format!("expected NAME=RAMP (e.g. `D=0.05:0.3:0:9000`), got `{s}`"))?;
+    let name = name.trim();
+    if name.is_empty() {
+        return Err(format!("`{s}`: the element name is empty"));
+    }
+    Ok((name.to_string(), parse_capacity(ramp)?))
+}
+
 /// The points of `--torque-table`, one flag value. (A bare `Vec` here would
 /// tell clap that the flag takes many values of one point each, and its
 /// parser's `Vec` would then not be the type clap stores: a panic.)
@@ -196,6 +221,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         },
         off_going: args.off_going,
         on_coming: args.on_coming,
+        ramps: args.ramps.clone(),
         t_end: args.t_end,
         rtol: args.rtol,
         atol: args.atol,
@@ -212,7 +238,8 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
             .location()
             .0
             .and_then(|p| p.strip_prefix("shift."))
-            .map(|f| f.split(['.', '[']).next().unwrap_or(f).replace('_', "-"));
+            .map(|f| f.split(['.', '[']).next().unwrap_or(f).replace('_', "-"))
+            .map(|f| if f == "ramps" { "ramp".into() } else { f });
         let context = match flag {
             Some(f) => format!("{} (flag `--{f}`)", loaded.source),
             None => loaded.source.clone(),
@@ -230,6 +257,15 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
     }
 }
 
+/// `` `A`, `C` ``.
+fn quoted(names: &[String]) -> String {
+    names
+        .iter()
+        .map(|n| format!("`{n}`"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 fn opt(v: Option<f64>) -> String {
     v.map_or_else(|| "-".into(), report::float)
 }
@@ -245,9 +281,9 @@ fn table(
     writeln!(out, "{}", report::title(train, source))?;
     writeln!(
         out,
-        "shift {from} -> {to}: off-going `{}`, on-coming `{}`; locked throughout: {}",
-        r.elements[0],
-        r.elements[1],
+        "shift {from} -> {to}: off-going {}, on-coming {}; locked throughout: {}",
+        quoted(&r.off_going),
+        quoted(&r.on_coming),
         if r.kept.is_empty() {
             "none".to_string()
         } else {
@@ -278,7 +314,12 @@ fn table(
     )?;
     writeln!(
         out,
-        "on-coming element locks:                      {} s",
+        "on-coming {}:                      {} s",
+        if r.on_coming.len() == 1 {
+            "element locks"
+        } else {
+            "elements lock"
+        },
         opt(r.lock_time)
     )?;
     writeln!(
@@ -294,11 +335,13 @@ fn table(
     )?;
     writeln!(
         out,
-        "energy dissipated: `{}` {} J, `{}` {} J; at lock-ups {} J",
-        r.elements[0],
-        report::float(r.dissipated[0]),
-        r.elements[1],
-        report::float(r.dissipated[1]),
+        "energy dissipated: {}; at lock-ups {} J",
+        r.elements
+            .iter()
+            .zip(&r.dissipated)
+            .map(|(e, d)| format!("`{e}` {} J", report::float(*d)))
+            .collect::<Vec<_>>()
+            .join(", "),
         report::sci(r.lock_loss)
     )?;
     writeln!(
@@ -345,7 +388,7 @@ fn csv(out: &mut dyn Write, train: &Train, r: &ShiftResult) -> anyhow::Result<()
     for s in &r.samples {
         let mut row = vec![format!("{:e}", s.t)];
         row.extend(moving.iter().map(|&l| format!("{:e}", s.speed[l])));
-        for i in 0..2 {
+        for i in 0..r.elements.len() {
             row.extend([s.slip[i], s.element_torque[i], s.dissipated[i]].map(|v| format!("{v:e}")));
         }
         row.push(format!("{:e}", s.output_torque));
@@ -364,9 +407,9 @@ fn plot(train: &Train, title: &str, r: &ShiftResult) -> String {
     let height = TOP + 3.0 * (PLOT_H + GAP) + 10.0;
     let mut svg = String::new();
     let subtitle = format!(
-        "off-going `{}`, on-coming `{}`; shift time {} s; output torque {} .. {} N m",
-        r.elements[0],
-        r.elements[1],
+        "off-going {}, on-coming {}; shift time {} s; output torque {} .. {} N m",
+        quoted(&r.off_going),
+        quoted(&r.on_coming),
         opt(r.shift_time),
         report::float(r.output_torque_range[1]),
         report::float(r.output_torque_range[0]),
@@ -397,12 +440,21 @@ fn plot(train: &Train, title: &str, r: &ShiftResult) -> String {
         &lines,
         t_end,
     );
-    let off = |i: usize| s[i].element_torque[0];
-    let on = |i: usize| s[i].element_torque[1];
-    let head = format!(
-        "element torques: blue `{}` (off-going), orange `{}` (on-coming)",
-        r.elements[0], r.elements[1]
-    );
+    let torques: Vec<Box<dyn Fn(usize) -> f64 + '_>> = (0..r.elements.len())
+        .map(|e| Box::new(move |i: usize| s[i].element_torque[e]) as Box<dyn Fn(usize) -> f64>)
+        .collect();
+    let head = if r.elements.len() == 2 {
+        format!(
+            "element torques: blue `{}` (off-going), orange `{}` (on-coming)",
+            r.elements[0], r.elements[1]
+        )
+    } else {
+        format!(
+            "element torques, in the colour order of the link speeds: off-going {}, on-coming {}",
+            quoted(&r.off_going),
+            quoted(&r.on_coming)
+        )
+    };
     panel(
         &mut svg,
         &Panel {
@@ -412,16 +464,13 @@ fn plot(train: &Train, title: &str, r: &ShiftResult) -> String {
         },
         s.len(),
         &time,
-        &[
-            Line {
-                value: &off,
+        &torques
+            .iter()
+            .map(|f| Line {
+                value: f.as_ref(),
                 level: None,
-            },
-            Line {
-                value: &on,
-                level: None,
-            },
-        ],
+            })
+            .collect::<Vec<_>>(),
         t_end,
     );
     let output = |i: usize| s[i].output_torque;

@@ -3,7 +3,7 @@
 //! element against the sign it can hold) and released, slipping the way its
 //! torque cannot be held; an element at zero slip locks where it can hold.
 //!
-//! With two friction elements this is a small complementarity problem. Each
+//! With a few changing elements this is a small complementarity problem. Each
 //! element at zero slip (locked, or the one whose event fired) may be locked
 //! or slip either way; an element slipping at a speed keeps slipping. The
 //! candidates are tried in order of preference (fewest changes to elements
@@ -23,8 +23,8 @@ use crate::error::Result;
 
 /// A consistent mode at one instant, and how it was reached.
 pub(super) struct Settled {
-    /// The elements' phases.
-    pub(super) phases: [Phase; 2],
+    /// The changing elements' phases.
+    pub(super) phases: Vec<Phase>,
     /// Their mode.
     pub(super) mode: Mode,
     /// The state in it (speeds projected onto the mode where an element locked).
@@ -48,17 +48,18 @@ const RATE_SLACK: f64 = 1e-9;
 /// consistent candidate (the elements named).
 pub(super) fn settle(
     setup: &Setup<'_>,
-    phases: [Phase; 2],
+    phases: &[Phase],
     t: f64,
     y: &[f64],
     fired: Option<usize>,
 ) -> Result<Settled> {
     let n = setup.n;
     // The way each locked element's torque pushes: it slips that way if released.
-    let now = setup.mode(&phases)?;
-    let dy = setup.rhs(&now, &phases, t, y);
-    let lam = setup.locked_torques(&now, &phases, t, y, &dy);
-    let options: Vec<Vec<Phase>> = (0..2)
+    let k = phases.len();
+    let now = setup.mode(phases)?;
+    let dy = setup.rhs(&now, phases, t, y);
+    let lam = setup.locked_torques(&now, phases, t, y, &dy);
+    let options: Vec<Vec<Phase>> = (0..k)
         .map(|i| {
             let release = if setup.one_way[i] {
                 vec![Phase::Slipping(1.0)]
@@ -78,17 +79,23 @@ pub(super) fn settle(
             }
         })
         .collect();
-    let mut candidates: Vec<([Phase; 2], (usize, usize))> = Vec::new();
-    for (a, &pa) in options[0].iter().enumerate() {
-        for (b, &pb) in options[1].iter().enumerate() {
-            let c = [pa, pb];
-            let moved = (0..2)
-                .filter(|&i| fired != Some(i) && c[i] != phases[i])
-                .count();
-            candidates.push((c, (moved, a + b)));
-        }
+    // Every combination of the options, the last element's varying fastest.
+    let mut candidates: Vec<(Vec<Phase>, (usize, usize))> = Vec::new();
+    let mut pick = vec![0usize; k];
+    loop {
+        let c: Vec<Phase> = (0..k).map(|i| options[i][pick[i]]).collect();
+        let moved = (0..k)
+            .filter(|&i| fired != Some(i) && c[i] != phases[i])
+            .count();
+        candidates.push((c, (moved, pick.iter().sum())));
+        // the next combination (an odometer over the options)
+        let Some(i) = (0..k).rev().find(|&i| pick[i] + 1 < options[i].len()) else {
+            break;
+        };
+        pick[i] += 1;
+        pick[i + 1..].iter_mut().for_each(|p| *p = 0);
     }
-    candidates.sort_by_key(|&(_, key)| key);
+    candidates.sort_by_key(|(_, key)| *key);
     let mut tie_up = None;
     for (c, _) in candidates {
         let mode = match setup.mode(&c) {
@@ -98,7 +105,7 @@ pub(super) fn settle(
                 continue;
             }
         };
-        let locks = (0..2).any(|i| c[i] == Phase::Locked && phases[i] != Phase::Locked);
+        let locks = (0..k).any(|i| c[i] == Phase::Locked && phases[i] != Phase::Locked);
         let mut yc = y.to_vec();
         let mut lost = 0.0;
         if locks {
@@ -110,7 +117,7 @@ pub(super) fn settle(
         let torque = setup.locked_torques(&mode, &c, t, &yc, &d);
         let slack = RATE_SLACK * d[..n].iter().fold(0.0f64, |m, x| m.max(x.abs()));
         let entered = |i: usize| fired == Some(i) || c[i] != phases[i];
-        let holds = (0..2).all(|i| match c[i] {
+        let holds = (0..k).all(|i| match c[i] {
             Phase::Locked if setup.one_way[i] => torque[i] >= 0.0,
             Phase::Locked => torque[i].abs() <= setup.sim.law.static_limit(setup.capacity[i].at(t)),
             Phase::Slipping(dir) if entered(i) => {
@@ -120,7 +127,7 @@ pub(super) fn settle(
             Phase::Slipping(_) => true,
         });
         if holds {
-            let changed = (0..2).filter(|&i| entered(i)).collect();
+            let changed = (0..k).filter(|&i| entered(i)).collect();
             return Ok(Settled {
                 phases: c,
                 mode,
@@ -130,7 +137,7 @@ pub(super) fn settle(
             });
         }
     }
-    let names: Vec<String> = (0..2)
+    let names: Vec<String> = (0..k)
         .filter(|&i| options[i].len() > 1)
         .map(|i| format!("`{}`", setup.name(i)))
         .collect();

@@ -28,15 +28,16 @@ pub(super) struct Extremes {
 const GOLDEN_STEPS: usize = 40;
 
 impl Extremes {
-    pub(super) fn new() -> Self {
+    /// No values yet of `len` quantities.
+    pub(super) fn new(len: usize) -> Self {
         Self {
-            max: [f64::NEG_INFINITY; 5],
-            min: [f64::INFINITY; 5],
+            max: vec![f64::NEG_INFINITY; len],
+            min: vec![f64::INFINITY; len],
         }
     }
 
     /// Takes a value seen (a sample, or a turning point).
-    pub(super) fn add(&mut self, q: &Observed) {
+    pub(super) fn add(&mut self, q: &[f64]) {
         for (k, &v) in q.iter().enumerate() {
             self.max[k] = self.max[k].max(v);
             self.min[k] = self.min[k].min(v);
@@ -54,9 +55,9 @@ impl Extremes {
         mut at: impl FnMut(f64) -> Observed,
         t0: f64,
         t1: f64,
-        q0: &Observed,
-        q1: &Observed,
-        rates: &[Option<(f64, f64)>; 5],
+        q0: &[f64],
+        q1: &[f64],
+        rates: &[Option<(f64, f64)>],
     ) {
         let h = t1 - t0;
         if h <= 0.0 {
@@ -164,8 +165,8 @@ mod tests {
     #[test]
     fn a_turning_point_inside_a_step_is_found() {
         // q0 = sin(t) over [1, 2]: a maximum of 1 at pi/2, between the ends.
-        let at = |t: f64| [t.sin(), -t.sin(), 0.0, 0.0, 0.0];
-        let mut e = Extremes::new();
+        let at = |t: f64| vec![t.sin(), -t.sin(), 0.0, 0.0, 0.0];
+        let mut e = Extremes::new(5);
         let (q0, q1) = (at(1.0), at(2.0));
         e.add(&q0);
         e.add(&q1);
@@ -180,8 +181,8 @@ mod tests {
     fn a_cubic_turns_where_its_derivative_vanishes() {
         // q = 1 + 3 t - t^3 on [0, 2]: q' = 3 - 3 t^2, a maximum of 3 at t = 1;
         // the ends: 1 and -1, rates 3 and -9.
-        let mut e = Extremes::new();
-        let (q0, q1) = ([1.0; 5], [-1.0; 5]);
+        let mut e = Extremes::new(5);
+        let (q0, q1) = (vec![1.0; 5], vec![-1.0; 5]);
         let never = |_: f64| -> Observed { unreachable!("no evaluation for an exact cubic") };
         e.within(never, 0.0, 2.0, &q0, &q1, &[Some((3.0, -9.0)); 5]);
         assert!((e.max[3] - 3.0).abs() < 1e-14, "{}", e.max[3]);

@@ -1,13 +1,15 @@
-//! A gear change of a whole train: one element releases, one applies, and the
-//! link speeds move from the old gear's ratio to the new one's.
+//! A gear change of a whole train: the elements of the old gear that the new
+//! one does not engage release (off-going), the new gear's others apply
+//! (on-coming), and the link speeds move from the old gear's ratio to the new
+//! one's. A single swap changes one element each way; a skip shift or a
+//! double swap may change several, each with its own capacity ramp.
 //!
 //! The run goes through *modes*, each a set of locked elements. The kept
 //! elements (engaged in both gears) stay locked. The off-going and on-coming
 //! elements are locked or slipping. A mode's speeds are `v = N q`, with `N`
 //! the orthonormal null-space basis of its rows ([`mode_basis`]: Willis rows
 //! plus one row `a_e` per locked element). So a mode has exactly its own
-//! degrees of freedom: 1 in a gear, 2 while one element slips, 3 while both
-//! slip. The equations of motion are `N^T M N q' = N^T f` (eq. 25 with `V = N`).
+//! degrees of freedom: 1 in a gear, one more for each element that slips. The equations of motion are `N^T M N q' = N^T f` (eq. 25 with `V = N`).
 //! Here `f` is the input torque at the input link, the road load and the
 //! vehicle inertia at the output link, and, for each slipping element, its
 //! friction torque `T_e a_e`. A slipping element's torque on its first link
@@ -135,7 +137,7 @@ pub enum ShiftMethod {
     Implicit,
 }
 
-/// What to simulate: a single-swap shift between two gear states.
+/// What to simulate: a shift between two gear states.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ShiftSim {
     /// The gear before (a state of the spec's `[transmission]`).
@@ -152,10 +154,16 @@ pub struct ShiftSim {
     pub vehicle_inertia: f64,
     /// Friction law of the off-going and on-coming elements.
     pub law: FrictionLaw,
-    /// Capacity (N m per unit friction coefficient) of the off-going element.
-    pub off_going: Capacity,
-    /// Capacity of the on-coming element.
-    pub on_coming: Capacity,
+    /// Capacity (N m per unit friction coefficient) of the off-going element,
+    /// when exactly one element releases and `ramps` does not name it.
+    pub off_going: Option<Capacity>,
+    /// Capacity of the on-coming element, when exactly one element applies
+    /// and `ramps` does not name it.
+    pub on_coming: Option<Capacity>,
+    /// Capacity of each changing element by name (`egt shift-sim --ramp
+    /// NAME=RAMP`); it comes before `off_going` and `on_coming`. Every
+    /// off-going and on-coming element needs one or the other.
+    pub ramps: Vec<(String, Capacity)>,
     /// End time (s).
     pub t_end: f64,
     /// Relative tolerance of the adaptive steps.
@@ -201,15 +209,16 @@ pub struct ShiftSample {
     pub t: f64,
     /// Speed of every link, by link index (rad/s; 0 for the frame).
     pub speed: Vec<f64>,
-    /// Slip of the off-going and on-coming elements (`a_e . v`).
-    pub slip: [f64; 2],
-    /// Torque of the off-going and on-coming elements on their first link.
-    pub element_torque: [f64; 2],
+    /// Slip of each changing element (`a_e . v`), in the order of
+    /// [`ShiftResult::elements`].
+    pub slip: Vec<f64>,
+    /// Torque of each changing element on its first link.
+    pub element_torque: Vec<f64>,
     /// Torque the output shaft delivers to the vehicle: vehicle inertia times
     /// output acceleration plus the road load.
     pub output_torque: f64,
-    /// Energy dissipated so far by the off-going and on-coming elements (J).
-    pub dissipated: [f64; 2],
+    /// Energy dissipated so far by each changing element (J).
+    pub dissipated: Vec<f64>,
     /// `W_applied - dKE - E_friction - E_lock` (J).
     pub energy_residual: f64,
     /// Degrees of freedom of the mode.
@@ -219,8 +228,13 @@ pub struct ShiftSample {
 /// The result of a shift.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ShiftResult {
-    /// The off-going and on-coming elements' names.
-    pub elements: [String; 2],
+    /// The changing elements' names: the off-going ones, then the on-coming
+    /// ones (the columns of every per-element array).
+    pub elements: Vec<String>,
+    /// The off-going elements (released: in the old gear, not the new).
+    pub off_going: Vec<String>,
+    /// The on-coming elements (applied: in the new gear, not the old).
+    pub on_coming: Vec<String>,
     /// The elements engaged in both gears (locked throughout).
     pub kept: Vec<String>,
     /// Samples at every accepted step and on both sides of every mode
@@ -230,23 +244,23 @@ pub struct ShiftResult {
     pub samples: Vec<ShiftSample>,
     /// Mode changes in time order.
     pub changes: Vec<ModeChange>,
-    /// Time the on-coming element first carries capacity (start of the torque phase).
+    /// Time an on-coming element first carries capacity (start of the torque phase).
     pub shift_start: Option<f64>,
-    /// Time the on-coming element locks (end of the inertia phase).
+    /// Time the on-coming elements are first all locked (end of the inertia phase).
     pub lock_time: Option<f64>,
     /// `lock_time - shift_start`.
     pub shift_time: Option<f64>,
     /// Largest and smallest output torque over the run: over both sides of
     /// every mode change and the turning points between samples.
     pub output_torque_range: [f64; 2],
-    /// Largest and smallest torque of the off-going and on-coming element, as
+    /// Largest and smallest torque of each changing element, as
     /// `output_torque_range`.
-    pub element_torque_range: [[f64; 2]; 2],
-    /// Largest and smallest slip of the off-going and on-coming element, as
+    pub element_torque_range: Vec<[f64; 2]>,
+    /// Largest and smallest slip of each changing element, as
     /// `output_torque_range`.
-    pub slip_range: [[f64; 2]; 2],
-    /// Energy each element dissipated (J).
-    pub dissipated: [f64; 2],
+    pub slip_range: Vec<[f64; 2]>,
+    /// Energy each changing element dissipated (J).
+    pub dissipated: Vec<f64>,
     /// Energy removed by the lock-up projections (J).
     pub lock_loss: f64,
     /// Largest |energy residual| over the run (J).
@@ -331,15 +345,89 @@ impl ShiftSim {
         }
         self.input_torque.validate()?;
         self.law.validate("shift.law")?;
-        self.off_going.validate("shift.off_going")?;
-        self.on_coming.validate("shift.on_coming")
+        if let Some(c) = &self.off_going {
+            c.validate("shift.off_going")?;
+        }
+        if let Some(c) = &self.on_coming {
+            c.validate("shift.on_coming")?;
+        }
+        for (i, (name, c)) in self.ramps.iter().enumerate() {
+            c.validate(&format!("shift.ramps.{name}"))?;
+            if self.ramps[..i].iter().any(|(n, _)| n == name) {
+                return Err(Error::invalid(
+                    format!("shift.ramps.{name}"),
+                    format!("`{name}` has two ramps"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The capacity of each changing element, off-going then on-coming:
+    /// its ramp in `ramps`, else `off_going` / `on_coming` when it is the only
+    /// element going its way.
+    fn capacities(&self, off: &[String], on: &[String]) -> Result<Vec<Capacity>> {
+        let changing: Vec<&String> = off.iter().chain(on).collect();
+        for (name, _) in &self.ramps {
+            if !changing.contains(&name) {
+                return Err(Error::invalid(
+                    format!("shift.ramps.{name}"),
+                    format!(
+                        "`{name}` is not an element that changes in `{}` -> `{}` (those are {})",
+                        self.from,
+                        self.to,
+                        listed(&changing)
+                    ),
+                ));
+            }
+        }
+        let mut out = Vec::with_capacity(changing.len());
+        for (group, single, field, verb) in [
+            (off, &self.off_going, "off_going", "releases"),
+            (on, &self.on_coming, "on_coming", "applies"),
+        ] {
+            if single.is_some() && group.len() != 1 {
+                return Err(Error::invalid(
+                    format!("shift.{field}"),
+                    format!(
+                        "`{}` -> `{}` {verb} {}: `{field}` is for a single element; give each its own ramp (`ramps`)",
+                        self.from,
+                        self.to,
+                        listed(&group.iter().collect::<Vec<_>>())
+                    ),
+                ));
+            }
+            for name in group {
+                let own = self.ramps.iter().find(|(n, _)| n == name).map(|r| r.1);
+                match own.or(*single) {
+                    Some(c) => out.push(c),
+                    None => {
+                        return Err(Error::invalid(
+                            format!("shift.ramps.{name}"),
+                            format!(
+                                "element `{name}` changes in `{}` -> `{}` but has no capacity ramp: give it one (`ramps`){}",
+                                self.from,
+                                self.to,
+                                if group.len() == 1 {
+                                    format!(", or `{field}`")
+                                } else {
+                                    String::new()
+                                }
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(out)
     }
 
     /// Simulates the shift on `train`.
     ///
     /// # Errors
-    /// A named invalid field; an unknown gear state or one that is not a
-    /// single swap from `from`; missing inertias (a singular reduced mass
+    /// A named invalid field; an unknown gear state, a change that releases
+    /// or applies nothing, a changing element without a capacity (named);
+    /// missing inertias (a singular reduced mass
     /// matrix); a tie-up; too many steps or a state that stops being finite.
     pub fn run(&self, train: &Train) -> Result<ShiftResult> {
         self.validate()?;
@@ -379,32 +467,22 @@ impl ShiftSim {
             .filter(|e| !from.engaged.contains(e))
             .collect();
         let name = |e: ElementId| train.elements()[e.index()].name.clone();
-        let ([off], [on]) = (&off[..], &on[..]) else {
+        let names = |es: &[ElementId]| es.iter().map(|&e| name(e)).collect::<Vec<_>>();
+        if off.is_empty() || on.is_empty() {
             return Err(Error::invalid(
                 "shift.to",
                 format!(
-                    "`{}` -> `{}` releases {} and applies {}: only single swaps (one element each way) are simulated",
+                    "`{}` -> `{}` releases {} and applies {}: a shift releases at least one element and applies at least one",
                     self.from,
                     self.to,
-                    if off.is_empty() {
-                        "nothing".into()
-                    } else {
-                        off.iter()
-                            .map(|&e| format!("`{}`", name(e)))
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    },
-                    if on.is_empty() {
-                        "nothing".into()
-                    } else {
-                        on.iter()
-                            .map(|&e| format!("`{}`", name(e)))
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    },
+                    listed(&names(&off).iter().collect::<Vec<_>>()),
+                    listed(&names(&on).iter().collect::<Vec<_>>()),
                 ),
             ));
-        };
+        }
+        let capacity = self.capacities(&names(&off), &names(&on))?;
+        let changing: Vec<ElementId> = off.iter().chain(&on).copied().collect();
+        let (k, n_off) = (changing.len(), off.len());
         let (input, output) = (
             train.coordinate(t.input).expect("checked: input moves"),
             train.coordinate(t.output).expect("checked: output moves"),
@@ -412,10 +490,10 @@ impl ShiftSim {
         let mut m = train.mass_matrix()?.matrix()?;
         m[(output, output)] += self.vehicle_inertia;
         let n = m.nrows();
-        let rows = [
-            DVector::from_vec(element_row(train, *off)?),
-            DVector::from_vec(element_row(train, *on)?),
-        ];
+        let rows = changing
+            .iter()
+            .map(|&e| element_row(train, e).map(DVector::from_vec))
+            .collect::<Result<Vec<_>>>()?;
         let kind = |e: ElementId| train.elements()[e.index()].kind;
         let setup = Setup {
             train,
@@ -424,10 +502,10 @@ impl ShiftSim {
             input,
             output,
             kept: kept.clone(),
-            elements: [*off, *on],
+            elements: changing.clone(),
             rows,
-            one_way: [is_one_way(kind(*off)), is_one_way(kind(*on))],
-            capacity: [&self.off_going, &self.on_coming],
+            one_way: changing.iter().map(|&e| is_one_way(kind(e))).collect(),
+            capacity: capacity.clone(),
             n,
         };
         // Start: the old gear's steady motion at the input speed.
@@ -435,19 +513,23 @@ impl ShiftSim {
         let col = start.basis.column(0);
         let scale = self.input_speed / col[input];
         let mut y: Vec<f64> = col.iter().map(|c| c * scale).collect();
-        y.extend([0.0, 0.0, 0.0]);
+        // the dissipation of each changing element, then the applied work
+        y.extend(std::iter::repeat_n(0.0, k + 1));
         let ke0 = setup.kinetic(&y[..n]);
-        let slip_on = setup.slip(1, &y[..n]);
-        let first = [
-            Phase::Locked,
-            if slip_on == 0.0 {
-                Phase::Locked
-            } else {
-                Phase::Slipping(slip_on.signum())
-            },
-        ];
+        let first: Vec<Phase> = (0..k)
+            .map(|i| {
+                let slip = setup.slip(i, &y[..n]);
+                if i < n_off || slip == 0.0 {
+                    Phase::Locked
+                } else {
+                    Phase::Slipping(slip.signum())
+                }
+            })
+            .collect();
         let mut out = ShiftResult {
-            elements: [name(*off), name(*on)],
+            elements: names(&changing),
+            off_going: names(&off),
+            on_coming: names(&on),
             kept: kept.iter().map(|&e| name(e)).collect(),
             samples: Vec::new(),
             changes: Vec::new(),
@@ -455,16 +537,16 @@ impl ShiftSim {
             lock_time: None,
             shift_time: None,
             output_torque_range: [f64::NEG_INFINITY, f64::INFINITY],
-            element_torque_range: [[f64::NEG_INFINITY, f64::INFINITY]; 2],
-            slip_range: [[f64::NEG_INFINITY, f64::INFINITY]; 2],
-            dissipated: [0.0; 2],
+            element_torque_range: vec![[f64::NEG_INFINITY, f64::INFINITY]; k],
+            slip_range: vec![[f64::NEG_INFINITY, f64::INFINITY]; k],
+            dissipated: vec![0.0; k],
             lock_loss: 0.0,
             max_energy_residual: 0.0,
             steps: 0,
             method: String::new(),
             stiff: None,
         };
-        let mut extremes = Extremes::new();
+        let mut extremes = Extremes::new(1 + 2 * k);
         // Takes a consistent mode: its changes, the on-coming lock, the loss.
         let take = |out: &mut ShiftResult, s: &Settled, t: f64| {
             for &i in &s.changed {
@@ -473,7 +555,11 @@ impl ShiftSim {
                     Phase::Slipping(_) if setup.one_way[i] => "overrunning",
                     Phase::Slipping(_) => "slipping",
                 };
-                if i == 1 && now == "locked" && out.lock_time.is_none() {
+                if i >= n_off
+                    && now == "locked"
+                    && out.lock_time.is_none()
+                    && s.phases[n_off..].iter().all(|p| *p == Phase::Locked)
+                {
                     out.lock_time = Some(t);
                 }
                 out.changes.push(ModeChange {
@@ -491,13 +577,17 @@ impl ShiftSim {
                       y: &[f64],
                       dy: &[f64],
                       mode: &Mode,
-                      phases: &[Phase; 2],
+                      phases: &[Phase],
                       loss: f64|
          -> Observed {
             let v = &y[..n];
             let q = setup.observe(mode, phases, t, y, dy);
             ext.add(&q);
-            let residual = y[n + 2] - (setup.kinetic(v) - ke0) - y[n] - y[n + 1] - loss;
+            // W_applied - dKE - each element's friction work - E_lock, in that order
+            let residual = y[n..n + k]
+                .iter()
+                .fold(y[n + k] - (setup.kinetic(v) - ke0), |r, d| r - d)
+                - loss;
             out.max_energy_residual = out.max_energy_residual.max(residual.abs());
             let mut speed = vec![0.0; train.links().len()];
             for (k, &l) in train.coordinates().iter().enumerate() {
@@ -506,10 +596,10 @@ impl ShiftSim {
             out.samples.push(ShiftSample {
                 t,
                 speed,
-                slip: [q[3], q[4]],
-                element_torque: [q[1], q[2]],
+                slip: q[1 + k..].to_vec(),
+                element_torque: q[1..1 + k].to_vec(),
                 output_torque: q[0],
-                dissipated: [y[n], y[n + 1]],
+                dissipated: y[n..n + k].to_vec(),
                 energy_residual: residual,
                 dof: mode.basis.ncols(),
             });
@@ -517,7 +607,7 @@ impl ShiftSim {
         };
         // At t = 0 every locked element is checked against its capacity: the
         // old gear's elements may not hold what the shift asks of them.
-        let settled = settle(&setup, first, 0.0, &y, None)?;
+        let settled = settle(&setup, &first, 0.0, &y, None)?;
         take(&mut out, &settled, 0.0);
         let Settled {
             mut phases,
@@ -540,12 +630,7 @@ impl ShiftSim {
             &phases,
             lock_loss,
         );
-        let breaks: Vec<f64> = self
-            .off_going
-            .breakpoints()
-            .into_iter()
-            .chain(self.on_coming.breakpoints())
-            .collect();
+        let breaks: Vec<f64> = capacity.iter().flat_map(Capacity::breakpoints).collect();
         let mut h = (self.t_end * 1e-4).min(1e-4);
         let mut attempts = 0usize;
         // Events in a row at one instant (each changes the mode; a few at most).
@@ -650,7 +735,7 @@ impl ShiftSim {
             // that entered its phase at the crossing (g = 0) and heads the
             // wrong way fires at once.
             let mut first: Option<(f64, usize)> = None;
-            for i in 0..2 {
+            for i in 0..k {
                 if (g0[i] > 0.0 && g1[i] <= 0.0) || (g0[i] == 0.0 && g1[i] < 0.0) {
                     let te = ode::locate(
                         |s| {
@@ -695,13 +780,13 @@ impl ShiftSim {
                     at_once += 1;
                     if at_once > MAX_AT_ONCE {
                         return Err(refuse(format!(
-                            "the elements `{}` and `{}` change mode again and again at t = {te} (no consistent mode)",
-                            out.elements[0], out.elements[1]
+                            "the elements {} change mode again and again at t = {te} (no consistent mode)",
+                            listed(&out.elements.iter().collect::<Vec<_>>())
                         )));
                     }
                 }
                 // The right limit: a consistent mode after the change.
-                let s = settle(&setup, phases, te, &ye, Some(i))?;
+                let s = settle(&setup, &phases, te, &ye, Some(i))?;
                 take(&mut out, &s, te);
                 lock_loss += s.lost;
                 (phases, mode, y) = (s.phases, s.mode, s.y);
@@ -748,11 +833,18 @@ impl ShiftSim {
         }
         .to_string();
         out.output_torque_range = [extremes.max[0], extremes.min[0]];
-        out.element_torque_range = [0, 1].map(|i| [extremes.max[1 + i], extremes.min[1 + i]]);
-        out.slip_range = [0, 1].map(|i| [extremes.max[3 + i], extremes.min[3 + i]]);
-        out.dissipated = [y[n], y[n + 1]];
+        out.element_torque_range = (0..k)
+            .map(|i| [extremes.max[1 + i], extremes.min[1 + i]])
+            .collect();
+        out.slip_range = (0..k)
+            .map(|i| [extremes.max[1 + k + i], extremes.min[1 + k + i]])
+            .collect();
+        out.dissipated = y[n..n + k].to_vec();
         out.lock_loss = lock_loss;
-        out.shift_start = first_positive(&self.on_coming, self.t_end);
+        out.shift_start = capacity[n_off..]
+            .iter()
+            .filter_map(|c| first_positive(c, self.t_end))
+            .reduce(f64::min);
         out.shift_time = match (out.shift_start, out.lock_time) {
             (Some(s), Some(l)) => Some(l - s),
             _ => None,
@@ -764,16 +856,24 @@ impl ShiftSim {
 /// The slips' rates at both ends of a step with end derivatives `f0`, `f1`
 /// (a slip is linear in the speeds, so its dense output is the step's cubic);
 /// the torques have none.
-fn slip_rates(setup: &Setup<'_>, f0: &[f64], f1: &[f64]) -> [Option<(f64, f64)>; 5] {
-    let n = setup.n;
+fn slip_rates(setup: &Setup<'_>, f0: &[f64], f1: &[f64]) -> Vec<Option<(f64, f64)>> {
+    let (n, k) = (setup.n, setup.k());
     let rate = |i: usize, f: &[f64]| setup.slip(i, &f[..n]);
-    [
-        None,
-        None,
-        None,
-        Some((rate(0, f0), rate(0, f1))),
-        Some((rate(1, f0), rate(1, f1))),
-    ]
+    let mut rates = vec![None; 1 + k];
+    rates.extend((0..k).map(|i| Some((rate(i, f0), rate(i, f1)))));
+    rates
+}
+
+/// `` `A`, `B` `` (or `nothing`).
+fn listed(names: &[&String]) -> String {
+    if names.is_empty() {
+        return "nothing".into();
+    }
+    names
+        .iter()
+        .map(|n| format!("`{n}`"))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// The first time in `[0, t_end]` a capacity is positive.
@@ -815,23 +915,24 @@ mod tests {
                 mu_kinetic: 0.12,
                 decay: None,
             },
-            off_going: Capacity::Ramp {
+            off_going: Some(Capacity::Ramp {
                 t0: 0.05,
                 t1: 0.25,
                 from: 6000.0,
                 to: 0.0,
-            },
-            on_coming: Capacity::Ramp {
+            }),
+            on_coming: Some(Capacity::Ramp {
                 t0: 0.05,
                 t1: 0.35,
                 from: 0.0,
                 to: 8000.0,
-            },
+            }),
             t_end: 1.0,
             rtol: 1e-8,
             atol: 1e-8,
             method: ShiftMethod::Auto,
             max_steps: DEFAULT_MAX_STEPS,
+            ramps: Vec::new(),
         }
     }
 
@@ -973,18 +1074,18 @@ mod tests {
             from: "3".into(),
             to: "2".into(),
             input_speed: 200.0,
-            off_going: Capacity::Ramp {
+            off_going: Some(Capacity::Ramp {
                 t0: 0.05,
                 t1: 0.2,
                 from: 6000.0,
                 to: 400.0,
-            },
-            on_coming: Capacity::Ramp {
+            }),
+            on_coming: Some(Capacity::Ramp {
                 t0: 0.3,
                 t1: 0.5,
                 from: 0.0,
                 to: 8000.0,
-            },
+            }),
             ..upshift()
         };
         let r = sim.run(&train).unwrap();
@@ -1016,18 +1117,18 @@ mod tests {
                     input_torque: InputTorque::Constant(200.0),
                     road_load: [20.0, 0.2, 0.002],
                     vehicle_inertia: 12.0,
-                    off_going: Capacity::Ramp {
+                    off_going: Some(Capacity::Ramp {
                         t0: 0.05,
                         t1: 0.15,
                         from: 20000.0,
                         to: 0.0,
-                    },
-                    on_coming: Capacity::Ramp {
+                    }),
+                    on_coming: Some(Capacity::Ramp {
                         t0: 0.05,
                         t1: 0.4,
                         from: 0.0,
                         to: 20000.0,
-                    },
+                    }),
                     t_end: 1.5,
                     ..upshift()
                 };
@@ -1055,12 +1156,12 @@ mod tests {
         let stiff = ShiftSim {
             road_load: [0.0, 5000.0, 0.0],
             vehicle_inertia: 0.0,
-            off_going: Capacity::Ramp {
+            off_going: Some(Capacity::Ramp {
                 t0: 0.0,
                 t1: 0.02,
                 from: 6000.0,
                 to: 0.0,
-            },
+            }),
             t_end: 0.6,
             ..upshift()
         };
@@ -1131,13 +1232,13 @@ mod tests {
             from: "2".into(),
             to: "1".into(),
             input_speed: 200.0,
-            off_going: Capacity::Ramp {
+            off_going: Some(Capacity::Ramp {
                 t0: 0.05,
                 t1: 0.15,
                 from: 6000.0,
                 to: 0.0,
-            },
-            on_coming: Capacity::Constant(0.0),
+            }),
+            on_coming: Some(Capacity::Constant(0.0)),
             ..upshift()
         };
         let r = sim.run(&train).unwrap();
@@ -1184,7 +1285,44 @@ mod tests {
             to: "R".into(),
             ..upshift()
         });
-        assert!(e.contains("shift.to") && e.contains("single swap"), "{e}");
+        // 1 -> R releases two elements and applies two: `off_going` and
+        // `on_coming` name no single element, and each needs its ramp.
+        assert!(
+            e.contains("shift.off_going") && e.contains("`forward_clutch`, `low_one_way`"),
+            "{e}"
+        );
+        let e = err(ShiftSim {
+            from: "1".into(),
+            to: "R".into(),
+            off_going: None,
+            on_coming: None,
+            ramps: vec![
+                ("forward_clutch".into(), Capacity::Constant(0.0)),
+                ("low_one_way".into(), Capacity::Constant(0.0)),
+                ("reverse_high_clutch".into(), Capacity::Constant(1.0)),
+            ],
+            ..upshift()
+        });
+        assert!(
+            e.contains("shift.ramps.low_reverse_band") && e.contains("no capacity ramp"),
+            "{e}"
+        );
+        let e = err(ShiftSim {
+            ramps: vec![("low_one_way".into(), Capacity::Constant(0.0))],
+            ..upshift()
+        });
+        assert!(
+            e.contains("shift.ramps.low_one_way") && e.contains("not an element that changes"),
+            "{e}"
+        );
+        let e = err(ShiftSim {
+            to: "2".into(),
+            ..upshift()
+        });
+        assert!(
+            e.contains("shift.to") && e.contains("releases nothing"),
+            "{e}"
+        );
         let e = err(ShiftSim {
             t_end: -1.0,
             ..upshift()
@@ -1253,18 +1391,18 @@ output = "carrier"
             input_torque: InputTorque::Constant(100.0),
             road_load: [10.0, 0.1, 0.0],
             vehicle_inertia: 2.0,
-            off_going: Capacity::Ramp {
+            off_going: Some(Capacity::Ramp {
                 t0: 0.05,
                 t1: 0.25,
                 from: 4000.0,
                 to: 0.0,
-            },
-            on_coming: Capacity::Ramp {
+            }),
+            on_coming: Some(Capacity::Ramp {
                 t0: 0.05,
                 t1: 0.3,
                 from: 0.0,
                 to: 3000.0,
-            },
+            }),
             t_end: 0.6,
             ..upshift()
         }
@@ -1279,20 +1417,154 @@ output = "carrier"
             input_torque: InputTorque::Constant(300.0),
             road_load: [20.0, 0.2, 0.002],
             vehicle_inertia: 12.0,
-            off_going: Capacity::Ramp {
+            off_going: Some(Capacity::Ramp {
                 t0: 0.05,
                 t1: 0.15,
                 from: 5000.0,
                 to: 0.0,
-            },
-            on_coming: Capacity::Ramp {
+            }),
+            on_coming: Some(Capacity::Ramp {
                 t0: 0.05,
                 t1: 0.3,
                 from: 0.0,
                 to: 9000.0,
-            },
+            }),
             ..upshift()
         }
+    }
+
+    /// An 8HP change from `from` to `to` with a ramp for each element named.
+    fn zf_change(from: &str, to: &str, ramps: &[(&str, Capacity)]) -> ShiftSim {
+        ShiftSim {
+            from: from.into(),
+            to: to.into(),
+            off_going: None,
+            on_coming: None,
+            ramps: ramps.iter().map(|(n, c)| (n.to_string(), *c)).collect(),
+            t_end: 1.5,
+            ..zf_2_3()
+        }
+    }
+
+    const RELEASE: Capacity = Capacity::Ramp {
+        t0: 0.05,
+        t1: 0.15,
+        from: 20000.0,
+        to: 0.0,
+    };
+    const APPLY: Capacity = Capacity::Ramp {
+        t0: 0.05,
+        t1: 0.4,
+        from: 0.0,
+        to: 20000.0,
+    };
+
+    /// The run released every off-going element, locked every on-coming
+    /// one, ended in `to`'s ratio and balanced its energy.
+    fn assert_changed_gear(train: &Train, r: &ShiftResult, to: &str) {
+        for e in &r.off_going {
+            assert!(
+                r.changes
+                    .iter()
+                    .any(|c| &c.element == e && c.now != "locked"),
+                "{e} released: {:?}",
+                r.changes
+            );
+        }
+        let lock = r.lock_time.expect("the on-coming elements lock");
+        for e in &r.on_coming {
+            let last = r.changes.iter().rev().find(|c| &c.element == e);
+            assert!(
+                last.is_none_or(|c| c.now == "locked" && c.t <= lock),
+                "{e}: {:?}",
+                r.changes
+            );
+        }
+        assert_ends_in(train, r, to);
+        let dissipated: f64 = r.dissipated.iter().sum();
+        assert!(r.dissipated.iter().all(|&d| d >= 0.0));
+        assert!(
+            r.max_energy_residual < 1e-7 * dissipated,
+            "{} of {dissipated}",
+            r.max_energy_residual
+        );
+        assert_eq!(r.samples.last().unwrap().dissipated, r.dissipated);
+    }
+
+    #[test]
+    fn an_8hp_2_4_skip_shift_releases_a_applies_d_and_ends_in_fourth() {
+        // 2 = A B E, 4 = B D E: a skip shift that is a single swap.
+        let train = zf();
+        let r = zf_change("2", "4", &[("A", RELEASE), ("D", APPLY)])
+            .run(&train)
+            .unwrap();
+        assert_eq!(
+            (r.off_going.clone(), r.on_coming.clone()),
+            (vec!["A".to_string()], vec!["D".to_string()])
+        );
+        assert_eq!(r.kept, ["B", "E"]);
+        assert_changed_gear(&train, &r, "4");
+        eprintln!(
+            "8HP 2-4: lock {:?} s, dissipated {:?} J, residual {:e} J, steps {}",
+            r.lock_time, r.dissipated, r.max_energy_residual, r.steps
+        );
+    }
+
+    #[test]
+    fn an_8hp_double_swap_releases_two_applies_two_and_ends_in_the_new_gear() {
+        // 1 = A B C, 4 = B D E: A and C release, D and E apply, B holds.
+        // 2 = A B E, 5 = B C D: A and E release, C and D apply.
+        let train = zf();
+        for (from, to, off, on) in [
+            ("1", "4", ["A", "C"], ["D", "E"]),
+            ("2", "5", ["A", "E"], ["C", "D"]),
+        ] {
+            let r = zf_change(
+                from,
+                to,
+                &[
+                    (off[0], RELEASE),
+                    (off[1], RELEASE),
+                    (on[0], APPLY),
+                    (on[1], APPLY),
+                ],
+            )
+            .run(&train)
+            .unwrap();
+            assert_eq!(r.off_going, off);
+            assert_eq!(r.on_coming, on);
+            assert_eq!(r.elements.len(), 4);
+            assert_changed_gear(&train, &r, to);
+            eprintln!(
+                "8HP {from}-{to}: changes {:?}; lock {:?} s, dissipated {:?} J, residual {:e} J, steps {}",
+                r.changes
+                    .iter()
+                    .map(|c| (c.t, c.element.as_str(), c.now.as_str(), c.dof))
+                    .collect::<Vec<_>>(),
+                r.lock_time,
+                r.dissipated,
+                r.max_energy_residual,
+                r.steps
+            );
+        }
+    }
+
+    #[test]
+    fn a_single_swap_by_ramps_is_the_single_swap_by_off_going_and_on_coming() {
+        let train = zf();
+        let by_role = zf_2_3().run(&train).unwrap();
+        let by_name = ShiftSim {
+            off_going: None,
+            on_coming: None,
+            ramps: vec![
+                ("C".into(), zf_2_3().on_coming.unwrap()),
+                ("A".into(), zf_2_3().off_going.unwrap()),
+            ],
+            ..zf_2_3()
+        }
+        .run(&train)
+        .unwrap();
+        assert_eq!(by_role, by_name);
     }
 
     #[test]
@@ -1358,7 +1630,7 @@ output = "carrier"
         );
         let at: Vec<&ShiftSample> = r.samples.iter().filter(|s| s.t == release.t).collect();
         assert_eq!(at.len(), 2, "a sample on each side");
-        let c = zf_2_3().off_going.at(release.t);
+        let c = zf_2_3().off_going.unwrap().at(release.t);
         let (before, after) = (at[0].element_torque[0], at[1].element_torque[0]);
         assert!(
             rel(before.abs(), 0.15 * c) < 1e-9,
@@ -1394,8 +1666,8 @@ output = "carrier"
                 mu_kinetic: mu,
                 decay: None,
             },
-            off_going: Capacity::Constant(0.0),
-            on_coming: Capacity::Constant(cap),
+            off_going: Some(Capacity::Constant(0.0)),
+            on_coming: Some(Capacity::Constant(cap)),
             t_end: 0.1,
             ..two_speed_upshift()
         };
@@ -1434,7 +1706,7 @@ output = "carrier"
         let train = two_speed();
         let limit = 150.0;
         let sim = ShiftSim {
-            off_going: Capacity::Constant(limit / 0.15),
+            off_going: Some(Capacity::Constant(limit / 0.15)),
             ..two_speed_upshift()
         };
         let r = sim.run(&train).unwrap();
@@ -1477,13 +1749,13 @@ output = "carrier"
                 from: "1".into(),
                 to: "2".into(),
                 input_torque: InputTorque::Constant(-50.0),
-                off_going: Capacity::Constant(0.0),
-                on_coming: Capacity::Ramp {
+                off_going: Some(Capacity::Constant(0.0)),
+                on_coming: Some(Capacity::Ramp {
                     t0: 0.05,
                     t1: 0.35,
                     from: 0.0,
                     to,
-                },
+                }),
                 ..upshift()
             };
             let r = sim.run(&train).unwrap();

@@ -27,8 +27,8 @@ pub(super) struct Mode {
     pub(super) rows: DMatrix<f64>,
     /// `(A A^T)^-1`, for the multipliers.
     pub(super) gram_inverse: DMatrix<f64>,
-    /// Row index of each friction element when locked.
-    pub(super) row_of: [Option<usize>; 2],
+    /// Row index of each changing element when locked.
+    pub(super) row_of: Vec<Option<usize>>,
 }
 
 pub(super) struct Setup<'a> {
@@ -38,17 +38,23 @@ pub(super) struct Setup<'a> {
     pub(super) input: usize,
     pub(super) output: usize,
     pub(super) kept: Vec<ElementId>,
-    pub(super) elements: [ElementId; 2],
-    pub(super) rows: [DVector<f64>; 2],
-    pub(super) one_way: [bool; 2],
-    pub(super) capacity: [&'a Capacity; 2],
+    /// The changing elements: the off-going ones, then the on-coming ones.
+    pub(super) elements: Vec<ElementId>,
+    pub(super) rows: Vec<DVector<f64>>,
+    pub(super) one_way: Vec<bool>,
+    pub(super) capacity: Vec<Capacity>,
     pub(super) n: usize,
 }
 
 impl Setup<'_> {
-    pub(super) fn mode(&self, phases: &[Phase; 2]) -> Result<Mode> {
+    /// The number of changing elements (off-going and on-coming).
+    pub(super) fn k(&self) -> usize {
+        self.elements.len()
+    }
+
+    pub(super) fn mode(&self, phases: &[Phase]) -> Result<Mode> {
         let mut locked = self.kept.clone();
-        let mut row_of = [None, None];
+        let mut row_of = vec![None; phases.len()];
         let willis = mode_basis(self.train, &[])?.rows.nrows();
         for (i, p) in phases.iter().enumerate() {
             if *p == Phase::Locked {
@@ -124,14 +130,9 @@ impl Setup<'_> {
     }
 
     /// All generalised forces in `phases` (applied plus slipping friction).
-    pub(super) fn forces(
-        &self,
-        phases: &[Phase; 2],
-        t: f64,
-        v: &[f64],
-    ) -> (DVector<f64>, [f64; 2]) {
+    pub(super) fn forces(&self, phases: &[Phase], t: f64, v: &[f64]) -> (DVector<f64>, Vec<f64>) {
         let mut f = self.applied(v);
-        let mut tf = [0.0; 2];
+        let mut tf = vec![0.0; phases.len()];
         for (i, p) in phases.iter().enumerate() {
             if let Phase::Slipping(dir) = *p {
                 tf[i] = self.friction(i, dir, t, v);
@@ -141,8 +142,8 @@ impl Setup<'_> {
         (f, tf)
     }
 
-    /// The state derivative: speeds, the two elements' dissipation, applied work.
-    pub(super) fn rhs(&self, mode: &Mode, phases: &[Phase; 2], t: f64, y: &[f64]) -> Vec<f64> {
+    /// The state derivative: speeds, each changing element's dissipation, applied work.
+    pub(super) fn rhs(&self, mode: &Mode, phases: &[Phase], t: f64, y: &[f64]) -> Vec<f64> {
         let n = self.n;
         let v = &y[..n];
         let (f, tf) = self.forces(phases, t, v);
@@ -160,31 +161,34 @@ impl Setup<'_> {
     pub(super) fn locked_torques(
         &self,
         mode: &Mode,
-        phases: &[Phase; 2],
+        phases: &[Phase],
         t: f64,
         y: &[f64],
         dy: &[f64],
-    ) -> [f64; 2] {
+    ) -> Vec<f64> {
         let n = self.n;
         let (f, _) = self.forces(phases, t, &y[..n]);
         let a = DVector::from_column_slice(&dy[..n]);
         let r = &self.m * a - f;
         let lambda = &mode.gram_inverse * (&mode.rows * r);
-        mode.row_of.map(|k| k.map_or(0.0, |k| lambda[k]))
+        mode.row_of
+            .iter()
+            .map(|k| k.map_or(0.0, |k| lambda[k]))
+            .collect()
     }
 
     /// Event functions of the current phases: each crosses zero at a change.
     pub(super) fn events(
         &self,
         mode: &Mode,
-        phases: &[Phase; 2],
+        phases: &[Phase],
         t: f64,
         y: &[f64],
         dy: &[f64],
-    ) -> [f64; 2] {
+    ) -> Vec<f64> {
         let lam = self.locked_torques(mode, phases, t, y, dy);
-        let mut g = [f64::INFINITY; 2];
-        for i in 0..2 {
+        let mut g = vec![f64::INFINITY; phases.len()];
+        for i in 0..phases.len() {
             g[i] = match phases[i] {
                 Phase::Slipping(dir) => dir * self.slip(i, &y[..self.n]),
                 Phase::Locked if self.one_way[i] => lam[i],
@@ -216,30 +220,27 @@ impl Setup<'_> {
 
     /// What the report follows at a state with derivative `dy`: the output
     /// torque (vehicle inertia times output acceleration plus the road load),
-    /// the two elements' torques on their first links (the multiplier where
-    /// locked, the friction torque where slipping) and their slips.
+    /// each changing element's torque on its first link (the multiplier where
+    /// locked, the friction torque where slipping), then each one's slip.
     pub(super) fn observe(
         &self,
         mode: &Mode,
-        phases: &[Phase; 2],
+        phases: &[Phase],
         t: f64,
         y: &[f64],
         dy: &[f64],
     ) -> Observed {
         let v = &y[..self.n];
         let lam = self.locked_torques(mode, phases, t, y, dy);
-        let torque = [0, 1].map(|i| match phases[i] {
+        let k = phases.len();
+        let mut q = Vec::with_capacity(1 + 2 * k);
+        q.push(self.sim.vehicle_inertia * dy[self.output] + self.road(v[self.output]));
+        q.extend((0..k).map(|i| match phases[i] {
             Phase::Locked => lam[i],
             Phase::Slipping(dir) => self.friction(i, dir, t, v),
-        });
-        let output = self.sim.vehicle_inertia * dy[self.output] + self.road(v[self.output]);
-        [
-            output,
-            torque[0],
-            torque[1],
-            self.slip(0, v),
-            self.slip(1, v),
-        ]
+        }));
+        q.extend((0..k).map(|i| self.slip(i, v)));
+        q
     }
 
     /// An element's name.
@@ -249,8 +250,9 @@ impl Setup<'_> {
 }
 
 /// The quantities a shift report follows, in the order of
-/// [`Setup::observe`]: output torque, the two element torques, the two slips.
-pub(super) type Observed = [f64; 5];
+/// [`Setup::observe`]: the output torque, the `k` changing elements'
+/// torques, their `k` slips.
+pub(super) type Observed = Vec<f64>;
 
 pub(super) fn refuse(detail: String) -> Error {
     Error::Analysis(AnalysisError::Singular {
