@@ -20,17 +20,17 @@ demo: ## Run egt on a bundled example: topology checks, circuit table, speeds
 
 test: test-rust test-python ## Run every test (Rust and Python)
 
-test-rust: ## Rust unit, integration, CLI and doc tests (the jit feature on, as the CLI and wheel ship it; lint checks the core without it)
+test-rust: ## Rust unit, integration, CLI and doc tests (a default build), and the core's unit tests with the opt-in jit feature (compiled programs against the interpreter)
 	cargo fetch --locked || cargo fetch
 	cargo test --workspace --all-targets
 	cargo test --workspace --doc
+	cargo test -p egt-core --features jit --lib
 
-# Not in CI (each compiles the core's dependency tree once more: about 15
-# minutes on 2 cores): the core's tests optimised as shipped, and without the
-# jit feature. Run them after touching the batch executors.
-test-release: ## The core's tests optimised (SIMD lanes, compiled programs as shipped) and in a default build (no jit: the interpreted program)
+# Not in CI (it compiles the core's dependency tree once more, optimised:
+# about 15 minutes on 2 cores): the core's tests optimised, with the opt-in
+# jit feature. Run it after touching the batch executors.
+test-release: ## The core's tests optimised (SIMD lanes, compiled programs) with the opt-in jit feature
 	cargo test --release -p egt-core --features jit --lib --test core
-	cargo test -p egt-core --lib
 
 $(VENV)/.ready: crates/egt-py/requirements-dev.txt
 	$(PYTHON) -m venv $(VENV)
@@ -61,10 +61,10 @@ test-python: wheel ## Python tests against the built wheel (pytest, warnings as 
 fmt: ## Format the Rust code
 	cargo fmt --all
 
-lint: ## Clippy (the workspace, and egt-core alone without the jit feature), format check, the core's docs (no broken links, no missing docs) and the minimum Rust version
+lint: ## Clippy (the workspace, and egt-core with the opt-in jit feature), format check, the core's docs (no broken links, no missing docs) and the minimum Rust version
 	cargo fmt --all -- --check
 	cargo clippy --workspace --all-targets -- -D warnings
-	cargo clippy -p egt-core --all-targets -- -D warnings
+	cargo clippy -p egt-core --all-targets --features jit -- -D warnings
 	RUSTDOCFLAGS="-D warnings" cargo doc -p egt-core --no-deps
 	python3 scripts/msrv.py
 	python3 scripts/layers.py

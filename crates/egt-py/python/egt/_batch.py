@@ -229,8 +229,9 @@ class BatchPlan:
     @property
     def program(self) -> Optional[str]:
         """The plan's straight-line program: ``"compiled"`` (to machine code
-        for the train), ``"interpreted"`` (``executor="interpreted"``, a
-        machine without AVX-512 or AVX2, or ``EGT_JIT=0``), or None (no
+        for the train: a wheel built with ``--features jit``), ``"interpreted"``
+        (the default build, ``executor="interpreted"``, a machine without
+        AVX-512 or AVX2, or ``EGT_JIT=0``), or None (no
         program: rows are solved in
         SIMD groups of eight; see ``condition_bounds`` in
         :meth:`egt.Train.batch`). Rows that vary only loads, speeds or
