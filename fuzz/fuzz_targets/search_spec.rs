@@ -21,10 +21,18 @@ static C4: LazyLock<Spec> =
     LazyLock::new(|| base(include_str!("../../examples/ford_c4_simpson.toml"), "c4"));
 static ZF8: LazyLock<Spec> =
     LazyLock::new(|| base(include_str!("../../examples/zf_8hp70.toml"), "8hp70"));
-static AOD: LazyLock<Spec> =
-    LazyLock::new(|| base(include_str!("../../examples/ford_aod_ravigneaux.toml"), "aod"));
-static ZF6: LazyLock<Spec> =
-    LazyLock::new(|| base(include_str!("../../examples/zf_6hp26_lepelletier.toml"), "6hp26"));
+static AOD: LazyLock<Spec> = LazyLock::new(|| {
+    base(
+        include_str!("../../examples/ford_aod_ravigneaux.toml"),
+        "aod",
+    )
+});
+static ZF6: LazyLock<Spec> = LazyLock::new(|| {
+    base(
+        include_str!("../../examples/zf_6hp26_lepelletier.toml"),
+        "6hp26",
+    )
+});
 
 fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else {
