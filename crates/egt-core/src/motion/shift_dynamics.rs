@@ -18,7 +18,8 @@
 //!   element releases, the on-coming one slips and locks, one-way elements
 //!   overrun and engage; modes of [`mode`], events located on the dense
 //!   output of [`ode`], lock-ups by momentum-consistent projection. Private
-//!   pieces: `train_mode` (one mode of the train: forces, multipliers,
+//!   pieces: `request` (the shift asked for, checked: numbers, budgets,
+//!   each changing element's ramp), `train_mode` (one mode of the train: forces, multipliers,
 //!   events), `consistent` (the consistent mode at `t = 0` and after every
 //!   event: release what cannot hold, lock what can) and `extremes` (the
 //!   reported ranges, over both sides of every event and between samples).
@@ -33,6 +34,7 @@ pub mod friction;
 pub mod lockup;
 pub mod mode;
 pub mod ode;
+mod request;
 pub mod shift;
 mod train_mode;
 
