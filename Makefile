@@ -84,7 +84,7 @@ clean: ## Remove build outputs and the virtualenv
 FUZZ_SECONDS ?= 30
 FUZZ_TARGETS := spec adjacency input_value program search_spec batch_args shift_sim_args
 
-.PHONY: fuzz-seed fuzz-smoke
+.PHONY: fuzz-seed fuzz-build fuzz-smoke
 fuzz-seed: ## Seed fuzz/corpus/* from examples/ (specs, adjacency strings, input values) and a few trains for the program target
 	bash fuzz/seed-corpus.sh
 
@@ -97,8 +97,11 @@ fuzz-seed: ## Seed fuzz/corpus/* from examples/ (specs, adjacency strings, input
 # times fewer runs a second. Long runs use FUZZ_BUILD=-O (docs/fuzzing.md).
 FUZZ_SANITIZER ?= none
 FUZZ_BUILD ?= --dev
-fuzz-smoke: fuzz-seed ## A short libFuzzer run of every fuzz target (FUZZ_SECONDS each; installs cargo-fuzz; see docs/fuzzing.md)
+fuzz-build: ## Build every fuzz harness (FUZZ_BUILD, FUZZ_SANITIZER; installs cargo-fuzz), which `fuzz-smoke` then runs without building
 	@command -v cargo-fuzz >/dev/null || cargo install cargo-fuzz --locked
+	cd fuzz && RUSTC_BOOTSTRAP=1 cargo fuzz build --sanitizer $(FUZZ_SANITIZER) $(FUZZ_BUILD)
+
+fuzz-smoke: fuzz-seed fuzz-build ## A short libFuzzer run of every fuzz target (FUZZ_SECONDS each; see docs/fuzzing.md)
 	cd fuzz && for t in $(FUZZ_TARGETS); do \
 		RUSTC_BOOTSTRAP=1 cargo fuzz run --sanitizer $(FUZZ_SANITIZER) $(FUZZ_BUILD) $$t corpus/$$t -- -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 > $$t.log 2>&1 \
 			|| { tail -n 60 $$t.log; echo "fuzz target $$t failed: full log fuzz/$$t.log, crash in fuzz/artifacts/$$t/"; exit 1; }; \

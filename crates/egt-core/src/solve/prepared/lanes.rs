@@ -9,7 +9,7 @@
 use super::{Compute, MassModel, PreparedTrain};
 use crate::model::equations::willis_row;
 use crate::numerics::lanes::{LANES, Lane, LaneLu, Live};
-use crate::numerics::linalg::{COND_WARN, Dim, Dynamic, Fixed, dispatch};
+use crate::numerics::linalg::{COND_WARN, Dim, Dynamic, Fixed};
 
 /// The scenarios of one group, structure of arrays, and the buffers of their
 /// solve; results are read from here.
@@ -285,7 +285,19 @@ impl pulp::WithSimd for Group<'_> {
             what,
             bounds,
         } = self;
-        dispatch!(plan.n, d => plan.solve_lanes_in(d, w, live, what, bounds));
+        // Unrolled for the smallest orders only: each order is one more
+        // copy of the whole group inlined per instruction set, and those
+        // copies were most of the crate's optimised build time
+        // (docs/performance.md, "Build time").
+        macro_rules! unrolled {
+            ($($k:literal)*) => {
+                match plan.n {
+                    $($k => plan.solve_lanes_in(Fixed::<$k>, w, live, what, bounds),)*
+                    n => plan.solve_lanes_in(Dynamic(n), w, live, what, bounds),
+                }
+            };
+        }
+        unrolled!(1 2 3 4 5 6);
     }
 }
 
