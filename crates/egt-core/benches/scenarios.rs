@@ -12,7 +12,7 @@ use std::hint::black_box;
 
 use divan::Bencher;
 use divan::counter::ItemsCount;
-use egt_core::batch::{BatchPlan, BatchSpec, Executor};
+use egt_core::batch::{BatchPlan, BatchSpec, Executor, Layout, Threads};
 use egt_core::solve::prepared::Compute;
 use egt_core::{Format, Train, parse_spec};
 
@@ -131,7 +131,7 @@ fn sweep(b: Bencher, t: &Train, ratio_ulps: bool, bounds: bool) {
     sweep_layout(b, t, ratio_ulps, bounds, false, Executor::Auto);
 }
 
-/// [`sweep`] with the matrices column-major or not (`BatchPlan::run_columns`),
+/// [`sweep`] with the matrices column-major or not (`Layout::Columns`),
 /// the straight-line program (with bounds) run by `executor`.
 fn sweep_layout(
     b: Bencher,
@@ -160,9 +160,19 @@ fn sweep_layout(
     b.counter(ItemsCount::new(ROWS)).bench_local(|| {
         pool.install(|| {
             if columns {
-                p.run_columns(black_box(&params), black_box(&mut out))
+                p.run(
+                    Layout::Columns(black_box(&params)),
+                    black_box(&mut out),
+                    Threads::Pool,
+                )
+                .errors
             } else {
-                p.run(black_box(&params), black_box(&mut out))
+                p.run(
+                    Layout::Rows(black_box(&params)),
+                    black_box(&mut out),
+                    Threads::Pool,
+                )
+                .errors
             }
         })
     });
@@ -240,7 +250,7 @@ macro_rules! phases {
                 sweep(b, &build(&$make(links)), true, true);
             }
 
-            /// The same, column-major (`BatchPlan::run_columns`): the
+            /// The same, column-major (`Layout::Columns`): the
             /// straight-line program compiled (with the `jit` feature, where
             /// the machine runs the code).
             #[divan::bench(args = $sizes)]
@@ -432,7 +442,9 @@ mod batch {
         let n = rows.len() / p.parameters().len();
         let mut out = vec![0.0; n * p.outputs().len()];
         b.counter(ItemsCount::new(n)).bench_local(|| {
-            let errors = p.run(black_box(rows), &mut out);
+            let errors = p
+                .run(Layout::Rows(black_box(rows)), &mut out, Threads::Pool)
+                .errors;
             assert!(errors.is_empty());
         });
     }
@@ -483,7 +495,7 @@ mod batch {
         );
     }
 
-    /// The same, column-major (`BatchPlan::run_columns`), as `egt batch`
+    /// The same, column-major (`Layout::Columns`), as `egt batch`
     /// holds a Parquet or Arrow block: the in-process rate its end-to-end
     /// rate is compared with (docs/performance.md (history: git log -p -- docs/benchmarks.md)).
     #[divan::bench(sample_count = 10)]
@@ -504,18 +516,24 @@ mod batch {
         let n = rows.len() / np;
         let mut out = vec![0.0; n * p.outputs().len()];
         b.counter(ItemsCount::new(n)).bench_local(|| {
-            let errors = p.run_columns(black_box(&columns), &mut out);
+            let errors = p
+                .run(
+                    Layout::Columns(black_box(&columns)),
+                    &mut out,
+                    Threads::Pool,
+                )
+                .errors;
             assert!(errors.is_empty());
         });
     }
 
     /// `egt batch`'s own job in process: the input torque alone chosen
     /// (`--columns driving_torque.s1`), the load and the ratio given row by
-    /// row and every other parameter as one value (`run_column_set`, as
+    /// row and every other parameter as one value (`Layout::ColumnSet`, as
     /// `egt batch` holds a grid's Parquet block; docs/performance.md (history: git log -p -- docs/benchmarks.md)).
     #[divan::bench(sample_count = 10)]
     fn chain6_inverse_dynamics_new_ratios_bounded_driving_torque_column_set(b: Bencher) {
-        use egt_core::batch::{Column, Threads};
+        use egt_core::batch::Column;
         let (p, rows) = new_ratio_rows(true, &["driving_torque.s1"]);
         let np = p.parameters().len();
         let n = rows.len() / np;
@@ -534,7 +552,16 @@ mod batch {
             .collect();
         let mut out = vec![0.0; n * p.outputs().len()];
         b.counter(ItemsCount::new(n)).bench_local(|| {
-            let errors = p.run_column_set(Threads::Pool, black_box(&columns), n, &mut out);
+            let errors = p
+                .run(
+                    Layout::ColumnSet {
+                        columns: black_box(&columns),
+                        rows: n,
+                    },
+                    &mut out,
+                    Threads::Pool,
+                )
+                .errors;
             assert!(errors.is_empty());
         });
     }
@@ -598,7 +625,11 @@ mod batch {
         b.counter(ItemsCount::new(per * states.len()))
             .bench_local(|| {
                 for ((p, _), (rows, out)) in states.iter().zip(inputs.iter().zip(&mut outs)) {
-                    assert!(p.run(black_box(rows), out).is_empty());
+                    assert!(
+                        p.run(Layout::Rows(black_box(rows)), out, Threads::Pool)
+                            .errors
+                            .is_empty()
+                    );
                 }
             });
     }

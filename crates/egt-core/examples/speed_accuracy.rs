@@ -14,6 +14,7 @@ use std::time::Instant;
 
 #[path = "../lab/mod.rs"]
 mod lab;
+use egt_core::batch::{Layout, Threads};
 use egt_core::numerics::linalg::COND_REFUSE;
 use egt_core::{Format, Train};
 use lab::accuracy::{Method, Problem};
@@ -89,9 +90,15 @@ fn batch_seconds(
     // On the calling thread: the global pool has one thread (`main`).
     let seconds = time(0.2, || {
         if columns {
-            black_box(plan.run_columns(black_box(&rows), &mut out));
+            black_box(
+                plan.run(Layout::Columns(black_box(&rows)), &mut out, Threads::Pool)
+                    .errors,
+            );
         } else {
-            black_box(plan.run(black_box(&rows), &mut out));
+            black_box(
+                plan.run(Layout::Rows(black_box(&rows)), &mut out, Threads::Pool)
+                    .errors,
+            );
         }
     }) / ROWS as f64;
     if columns {

@@ -9,7 +9,7 @@
 //! The one NaN a valid row could carry, `power.efficiency` without input
 //! power, is written as 0.0 too (documented in `egt.BatchResult`).
 
-use egt_core::batch::{BatchPlan, BatchSpec, Column, Executor, Threads};
+use egt_core::batch::{BatchPlan, BatchSpec, Column, Executor, Layout, Threads};
 use egt_core::solve::prepared::Compute;
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -154,7 +154,7 @@ impl BatchPlanCore {
     /// sizes a private pool (default: rayon's global pool), and
     /// `threads=1` solves on the calling thread with no pool. Returns the
     /// outputs (rows x outputs, in the order of `params`: a Fortran-ordered
-    /// input is solved column by column, `BatchPlan::run_columns`, and each
+    /// input is solved column by column, `Layout::Columns`, and each
     /// output column comes back contiguous; 0.0 in failed rows) and the
     /// failed rows as (row, kind, message).
     #[pyo3(signature = (params, threads = None))]
@@ -181,9 +181,9 @@ impl BatchPlanCore {
             .map_err(|_| value_error("params must be C- or Fortran-contiguous"))?;
         self.solve(py, rows, columns, threads, |threads, out| {
             if columns {
-                self.plan.run_columns_with(threads, input, out)
+                self.plan.run(Layout::Columns(input), out, threads).errors
             } else {
-                self.plan.run_with(threads, input, out)
+                self.plan.run(Layout::Rows(input), out, threads).errors
             }
         })
     }
@@ -192,7 +192,7 @@ impl BatchPlanCore {
     /// columns `varied` given row by row ((column, values), each `rows`
     /// long; the later of two for one column wins) and every other column
     /// at its `base` value, which no matrix holds
-    /// (`BatchPlan::run_column_set`). Returns what `run` returns for a
+    /// (`Layout::ColumnSet`). Returns what `run` returns for a
     /// Fortran-ordered input.
     #[pyo3(signature = (base, varied, rows, threads = None))]
     fn run_set<'py>(
@@ -230,7 +230,16 @@ impl BatchPlanCore {
             set[*k] = Column::Rows(v);
         }
         self.solve(py, rows, true, threads, |threads, out| {
-            self.plan.run_column_set(threads, &set, rows, out)
+            self.plan
+                .run(
+                    Layout::ColumnSet {
+                        columns: &set,
+                        rows,
+                    },
+                    out,
+                    threads,
+                )
+                .errors
         })
     }
 

@@ -12,15 +12,15 @@
 //! non-finite parameter, a singular or ill-conditioned system, a self-locking
 //! train) is reported with its index, its outputs are NaN, and the others go on.
 //!
-//! The layout is row-major `f64` ([`BatchPlan::run`]) or column-major
-//! ([`BatchPlan::run_columns`]: each parameter and each output a contiguous
-//! column, as a Fortran-ordered NumPy array or Arrow's columns), so a NumPy
-//! array maps onto it without copying. Both give the same numbers bit for
-//! bit; the straight-line program and the linear path read and write
-//! columns without transposing them, so column-major is the quicker (about
-//! 20 % at 6 links with the program).
-//! [`BatchPlan::run_column_set`] takes each parameter column row by row or
-//! as one value for every row ([`Column`]): a sweep of a few parameters
+//! [`BatchPlan::run`] is the one entry point; its [`Layout`] is row-major
+//! `f64` ([`Layout::Rows`]) or column-major ([`Layout::Columns`]: each
+//! parameter and each output a contiguous column, as a Fortran-ordered
+//! NumPy array or Arrow's columns), so a NumPy array maps onto it without
+//! copying. Both give the same numbers bit for bit; the straight-line
+//! program and the linear path read and write columns without transposing
+//! them, so column-major is the quicker (about 20 % at 6 links with the
+//! program). [`Layout::ColumnSet`] takes each parameter column row by row
+//! or as one value for every row ([`Column`]): a sweep of a few parameters
 //! holds and reads those few columns only, with the same numbers bit for bit.
 //! A row allocates nothing unless it fails.
 //!
@@ -82,7 +82,7 @@
 //! AVX2, with the same numbers bit for bit ([`Executor`]).
 //!
 //! ```
-//! use egt_core::batch::{BatchPlan, BatchSpec};
+//! use egt_core::batch::{BatchPlan, BatchSpec, Layout, Threads};
 //! use egt_core::solve::prepared::Compute;
 //! use egt_core::{Format, Train};
 //!
@@ -127,7 +127,7 @@
 //!     params.extend(row);
 //! }
 //! let mut out = vec![0.0; 3 * plan.outputs().len()];
-//! let errors = plan.run(&params, &mut out);
+//! let errors = plan.run(Layout::Rows(&params), &mut out, Threads::Pool).errors;
 //! // The NaN row is reported; the others are solved.
 //! assert_eq!(errors.len(), 1);
 //! assert_eq!(errors[0].row, 2);
@@ -145,7 +145,7 @@ mod run;
 mod worker;
 
 pub use plan::{BatchPlan, Executor};
-pub use run::{Column, RowError, Threads, worker_threads};
+pub use run::{Column, Layout, RowError, Solved, Threads, worker_threads};
 pub use worker::{LANES_MIN_ROWS, PROGRAM_MAX_COORDINATES, Worker};
 
 use crate::error::{AnalysisError, Error, Result};

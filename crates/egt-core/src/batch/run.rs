@@ -1,6 +1,7 @@
-//! Running a batch: the `run*` entry points (row- and column-major, on the
-//! pool or the calling thread), their tasks and the tasks' states, and the
-//! spare states a plan keeps between calls.
+//! Running a batch: the one entry point [`BatchPlan::run`] (row-major,
+//! column-major or a set of columns; on the pool or the calling thread),
+//! its tasks and the tasks' states, and the spare states a plan keeps
+//! between calls.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -70,24 +71,57 @@ impl BatchPlan {
         rows
     }
 
-    /// Solve every row of `params` (row-major, `parameters().len()` columns)
-    /// into `out` (row-major, `outputs().len()` columns), in parallel on the
-    /// current rayon pool; on the calling thread when the batch is one task
-    /// (256 rows or fewer) or the pool has one thread (`RAYON_NUM_THREADS=1`).
-    /// Failed rows get NaN outputs and are returned, in row order.
+    /// Solve every row of a batch into `out`, in parallel on the current
+    /// rayon pool ([`Threads::Pool`]; on the calling thread when the batch
+    /// is one task, 256 rows or fewer, or the pool has one thread) or on the
+    /// calling thread only ([`Threads::Calling`]): the same numbers and
+    /// errors, bit for bit, on either and in every [`Layout`]. Failed rows
+    /// get NaN outputs and are returned, in row order, with whether every
+    /// row was shown well-conditioned ([`Solved::bounded`]).
+    ///
+    /// The linear path (a block whose ratios, inertias, masses and
+    /// efficiencies are equal in every row) and, with condition bounds, the
+    /// straight-line program read and write a column-major block a column
+    /// at a time with no transposition; other blocks' rows are transposed
+    /// into the row-major solve and back.
     ///
     /// # Panics
-    /// When the slice lengths do not match the column counts.
-    pub fn run(&self, params: &[f64], out: &mut [f64]) -> Vec<RowError> {
-        self.run_with(Threads::Pool, params, out)
+    /// When the lengths do not match the column counts: `out` must be the
+    /// rows times `outputs().len()`, a row-major or column-major `params`
+    /// a whole number of rows of `parameters().len()` values, a
+    /// [`Layout::ColumnSet`] a column for each parameter with every
+    /// [`Column::Rows`] `rows` long.
+    pub fn run(&self, layout: Layout<'_>, out: &mut [f64], threads: Threads) -> Solved {
+        let unbounded = AtomicUsize::new(0);
+        let errors = match layout {
+            Layout::Rows(params) => self.run_rows(threads, params, out, &unbounded),
+            Layout::Columns(params) => {
+                let rows = self.rows_of(params, out);
+                if rows == 0 {
+                    Vec::new()
+                } else {
+                    let inputs = params.chunks(rows).map(|c| (c, false)).collect();
+                    self.run_inputs(threads, inputs, rows, out, &unbounded)
+                }
+            }
+            Layout::ColumnSet { columns, rows } => {
+                self.column_set(threads, columns, rows, out, &unbounded)
+            }
+        };
+        Solved {
+            errors,
+            bounded: unbounded.into_inner() == 0,
+        }
     }
 
-    /// [`BatchPlan::run`], on the rayon pool or on the calling thread only
-    /// (the same numbers and errors, bit for bit).
-    ///
-    /// # Panics
-    /// When the slice lengths do not match the column counts.
-    pub fn run_with(&self, threads: Threads, params: &[f64], out: &mut [f64]) -> Vec<RowError> {
+    /// [`BatchPlan::run`] of a row-major batch.
+    fn run_rows(
+        &self,
+        threads: Threads,
+        params: &[f64],
+        out: &mut [f64],
+        unbounded: &AtomicUsize,
+    ) -> Vec<RowError> {
         let (p, q) = (self.parameters.len(), self.names.len());
         self.rows_of(params, out);
         let tasks: Vec<(&[f64], &mut [f64])> = params
@@ -97,7 +131,10 @@ impl BatchPlan {
         each_task(threads, tasks, self, |t, task, (pin, pout)| {
             let mut errors = Vec::new();
             let first = task * ROWS_PER_TASK;
-            t.w.eval_task(&mut t.lin, &mut t.lanes, pin, pout, first, &mut errors);
+            let n = pin.len() / p.max(1);
+            let solved =
+                t.w.eval_task(&mut t.lin, &mut t.lanes, pin, pout, first, &mut errors);
+            unbounded.fetch_add(n - solved, Ordering::Relaxed);
             if !all_finite(pout) {
                 let n = pout.len() / q;
                 let bad = overflowed(self, n, first, |r, o| pout[r * q + o], &errors);
@@ -111,8 +148,45 @@ impl BatchPlan {
     }
 }
 
-/// One parameter column of a column-major batch
-/// ([`BatchPlan::run_column_set`]).
+/// How a batch's parameters are laid out ([`BatchPlan::run`]); `out` has the
+/// same layout, one column per output.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Layout<'a> {
+    /// Row-major: row `r`'s parameters are `params[r * p..(r + 1) * p]`
+    /// (`p` = `parameters().len()`), and its outputs likewise in `out`.
+    Rows(&'a [f64]),
+    /// Column-major: parameter column `k` is `params[k * rows..(k + 1) *
+    /// rows]`, output column `o` is `out[o * rows..(o + 1) * rows]` (a NumPy
+    /// array in Fortran order, or the columns of an Arrow record batch).
+    Columns(&'a [f64]),
+    /// Column-major, each parameter column given row by row or as one value
+    /// for every row ([`Column`]): a sweep of a few parameters of a train
+    /// passes those few columns and the others' values, and no column of
+    /// repeated values is built or read (a fixed column is read from a short
+    /// buffer of its value, at most 256 rows long, that stays in cache).
+    ColumnSet {
+        /// One per parameter.
+        columns: &'a [Column<'a>],
+        /// The rows of the batch.
+        rows: usize,
+    },
+}
+
+/// What [`BatchPlan::run`] reports beside its outputs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Solved {
+    /// The rows that failed (their outputs NaN), in row order.
+    pub errors: Vec<RowError>,
+    /// Whether every row's `cond.*` values are at most `COND_WARN` / 2, so
+    /// that no row is warned about: true when the straight-line program,
+    /// with condition bounds, solved every row (a row it leaves, which is
+    /// estimated or refused, or a block another path solves, makes it
+    /// false). A caller that warns about a large condition number need not
+    /// read those columns then.
+    pub bounded: bool,
+}
+
+/// One parameter column of a column-major batch ([`Layout::ColumnSet`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Column<'a> {
     /// A value for each row.
@@ -121,7 +195,7 @@ pub enum Column<'a> {
     Every(f64),
 }
 
-/// Where a batch call ([`BatchPlan::run_with`], [`BatchPlan::run_columns_with`]) runs.
+/// Where a batch call ([`BatchPlan::run`]) runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Threads {
     /// In parallel on the current rayon pool; on the calling thread when
@@ -167,88 +241,8 @@ pub(super) fn each_task<T: Send>(
 }
 
 impl BatchPlan {
-    /// [`BatchPlan::run`] with both matrices column-major: parameter column
-    /// `k` is `params[k * rows..(k + 1) * rows]`, output column `o` is
-    /// `out[o * rows..(o + 1) * rows]` (a NumPy array in Fortran order, or
-    /// the columns of an Arrow record batch). The linear path (a block
-    /// whose ratios, inertias, masses and efficiencies are equal in every
-    /// row) and, with condition bounds, the straight-line program read and
-    /// write blocks a column at a time with no transposition, the linear
-    /// path computing only the chosen outputs; other blocks' rows are
-    /// transposed into the row-major solve and back. The numbers and the errors are those of
-    /// [`BatchPlan::run`] on the same rows, bit for bit.
-    ///
-    /// # Panics
-    /// When the slice lengths do not match the column counts.
-    pub fn run_columns(&self, params: &[f64], out: &mut [f64]) -> Vec<RowError> {
-        self.run_columns_with(Threads::Pool, params, out)
-    }
-
-    /// [`BatchPlan::run_columns`], on the rayon pool or on the calling
-    /// thread only (the same numbers and errors, bit for bit).
-    ///
-    /// # Panics
-    /// When the slice lengths do not match the column counts.
-    pub fn run_columns_with(
-        &self,
-        threads: Threads,
-        params: &[f64],
-        out: &mut [f64],
-    ) -> Vec<RowError> {
-        let rows = self.rows_of(params, out);
-        if rows == 0 {
-            return Vec::new();
-        }
-        let inputs = params.chunks(rows).map(|c| (c, false)).collect();
-        self.run_inputs(threads, inputs, rows, out, &AtomicUsize::new(0))
-    }
-
-    /// [`BatchPlan::run_columns_with`] with each parameter column given
-    /// row by row or as one value for every row ([`Column`]): a sweep of a
-    /// few parameters of a train passes those few columns and the others'
-    /// values, and no column of repeated values is built or read. The
-    /// numbers and errors are those of [`BatchPlan::run_columns`] on the
-    /// same rows with every column written out, bit for bit (the same
-    /// operations read the same values; a fixed column is read from a
-    /// short buffer of its value, at most 256 rows long, that stays in cache).
-    ///
-    /// # Panics
-    /// When `params` does not hold a column for each parameter, a
-    /// [`Column::Rows`] is not `rows` long, or `out` is not `rows` times
-    /// the output columns.
-    pub fn run_column_set(
-        &self,
-        threads: Threads,
-        params: &[Column<'_>],
-        rows: usize,
-        out: &mut [f64],
-    ) -> Vec<RowError> {
-        self.column_set(threads, params, rows, out, &AtomicUsize::new(0))
-    }
-
-    /// [`BatchPlan::run_column_set`], and whether every row's `cond.*`
-    /// values are at most `COND_WARN` / 2, so that no row is warned about:
-    /// true when the straight-line program, with condition bounds, solved
-    /// every row (a row it leaves, which is estimated or refused, or a block
-    /// another path solves, makes it false). A caller that warns about a
-    /// large condition number need not read those columns then.
-    ///
-    /// # Panics
-    /// As [`BatchPlan::run_column_set`].
-    pub fn run_column_set_bounded(
-        &self,
-        threads: Threads,
-        params: &[Column<'_>],
-        rows: usize,
-        out: &mut [f64],
-    ) -> (Vec<RowError>, bool) {
-        let unbounded = AtomicUsize::new(0);
-        let errors = self.column_set(threads, params, rows, out, &unbounded);
-        (errors, unbounded.into_inner() == 0)
-    }
-
-    /// [`BatchPlan::run_column_set`], counting in `unbounded` the rows the
-    /// program did not solve.
+    /// [`BatchPlan::run`] of a [`Layout::ColumnSet`], counting in `unbounded`
+    /// the rows the program did not solve.
     fn column_set(
         &self,
         threads: Threads,
@@ -294,10 +288,10 @@ impl BatchPlan {
         self.run_inputs(threads, inputs, rows, out, unbounded)
     }
 
-    /// [`BatchPlan::run_column_set`] of `inputs`: each parameter column
+    /// [`BatchPlan::run`] of column-major `inputs`: each parameter column
     /// whole (`(column, false)`) or, fixed, as long as a task (`true`).
     /// `unbounded` counts the rows the straight-line program did not solve
-    /// ([`BatchPlan::run_column_set_bounded`]).
+    /// ([`Solved::bounded`]).
     fn run_inputs(
         &self,
         threads: Threads,

@@ -106,7 +106,7 @@ fn the_program_solves_the_rows_it_can_vouch_for() {
     }
 }
 
-/// `run_column_set_bounded` vouches for a block only when the program
+/// `Solved::bounded` vouches for a block only when the program
 /// solved every row, and then every row's `cond.*` is at most
 /// `COND_WARN` / 2: a row near the lock of Fig. 3 (past the warning) in
 /// the third task of the block makes it false, and so does a plan
@@ -149,7 +149,15 @@ fn a_block_is_bounded_only_when_the_program_solved_every_row() {
                 })
                 .collect();
             let mut out = vec![0.0; rows * p.outputs().len()];
-            let (errors, said) = p.run_column_set_bounded(threads, &columns, rows, &mut out);
+            let solved = p.run(
+                Layout::ColumnSet {
+                    columns: &columns,
+                    rows,
+                },
+                &mut out,
+                threads,
+            );
+            let (errors, said) = (solved.errors, solved.bounded);
             assert!(errors.is_empty(), "{errors:?}");
             let locked = at_550.is_some();
             assert_eq!(said, vouched, "{threads:?}, near the lock: {locked}");
@@ -352,13 +360,21 @@ fn compare(name: &str, p: &BatchPlan, interpreted: &BatchPlan) {
         };
         let mut a = vec![0.0; rows * nq];
         let mut b = vec![0.0; rows * nq];
-        let (ea, eb) = (p.run(&params, &mut a), interpreted.run(&params, &mut b));
+        let (ea, eb) = (
+            p.run(Layout::Rows(&params), &mut a, Threads::Pool).errors,
+            interpreted
+                .run(Layout::Rows(&params), &mut b, Threads::Pool)
+                .errors,
+        );
         same(&a, &b, "rows");
         assert_eq!(errors(&ea), errors(&eb), "{name}");
         assert!(ea.iter().any(|e| e.row == 3), "{name}: the NaN row refused");
         let (ea, eb) = (
-            p.run_columns(&columns, &mut a),
-            interpreted.run_columns(&columns, &mut b),
+            p.run(Layout::Columns(&columns), &mut a, Threads::Pool)
+                .errors,
+            interpreted
+                .run(Layout::Columns(&columns), &mut b, Threads::Pool)
+                .errors,
         );
         same(&a, &b, "columns");
         assert_eq!(errors(&ea), errors(&eb), "{name} columns");
@@ -428,13 +444,17 @@ fn column_major_runs_give_the_row_major_numbers_bit_for_bit() {
             params[71 * np + g1] = t1;
             params[71 * np + g2] = 1.0 / t1;
             let mut by_rows = vec![0.0; rows * nq];
-            let errors = p.run(&params, &mut by_rows);
+            let errors = p
+                .run(Layout::Rows(&params), &mut by_rows, Threads::Pool)
+                .errors;
             assert!(errors.len() >= 2, "{compute:?} {errors:?}");
             let columns: Vec<f64> = (0..np)
                 .flat_map(|k| params[k..].iter().step_by(np).copied())
                 .collect();
             let mut by_columns = vec![0.0; rows * nq];
-            let column_errors = p.run_columns(&columns, &mut by_columns);
+            let column_errors = p
+                .run(Layout::Columns(&columns), &mut by_columns, Threads::Pool)
+                .errors;
             // Debug forms: an error may hold the NaN it refused.
             assert_eq!(
                 format!("{errors:?}"),
@@ -481,7 +501,7 @@ fn rows_whose_results_overflow_fail_by_name() {
         params[r * np + inertia] = 1e308;
     }
     let mut out = vec![0.0; rows * q];
-    let errors = p.run(&params, &mut out);
+    let errors = p.run(Layout::Rows(&params), &mut out, Threads::Pool).errors;
     let failed: Vec<usize> = errors.iter().map(|e| e.row).collect();
     assert_eq!(failed, [1, 450]);
     assert_eq!(errors[0].error.code(), "non_finite_result");
@@ -500,7 +520,9 @@ fn rows_whose_results_overflow_fail_by_name() {
         }
     }
     let mut col_out = vec![0.0; rows * q];
-    let col_errors = p.run_columns(&columns, &mut col_out);
+    let col_errors = p
+        .run(Layout::Columns(&columns), &mut col_out, Threads::Pool)
+        .errors;
     assert_eq!(
         col_errors.iter().map(|e| e.row).collect::<Vec<_>>(),
         [1, 450]

@@ -196,7 +196,8 @@ impl Worker<'_> {
     }
 
     /// One task's rows (row-major) by the quickest path that applies: the
-    /// linear path, the program, the lanes, or row by row.
+    /// linear path, the program, the lanes, or row by row; how many rows
+    /// the program solved.
     pub(super) fn eval_task(
         &mut self,
         lin: &mut Linear,
@@ -205,7 +206,7 @@ impl Worker<'_> {
         out: &mut [f64],
         first: usize,
         errors: &mut Vec<RowError>,
-    ) {
+    ) -> usize {
         let plan = self.plan;
         // The paths other than the program write every output: into `out`
         // when all are chosen, else into `lanes.all` and then the chosen.
@@ -217,11 +218,12 @@ impl Worker<'_> {
         }
         let target = if whole { &mut *out } else { &mut all[..] };
         let program = plan.program.is_some();
+        let mut solved = 0;
         let wrote = if self.eval_linear(lin, rows, target, first, errors) {
             // Solved as y0 + sum p_j R_j.
             true
         } else if plan.lanes_apply(rows) && program {
-            self.eval_program(lanes, rows, out, first, errors);
+            solved = self.eval_program(lanes, rows, out, first, errors);
             false
         } else {
             let target = if whole { &mut *out } else { &mut all[..] };
@@ -236,6 +238,7 @@ impl Worker<'_> {
             plan.gather_rows(&all, out);
         }
         lanes.all = all;
+        solved
     }
 
     /// A block of rows by the straight-line program ([`PROGRAM_BLOCK`] rows at

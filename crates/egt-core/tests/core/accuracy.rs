@@ -6,6 +6,7 @@
 
 use crate::lab::accuracy::{Method, Problem, relative_error, residual, row_errors};
 use crate::lab::families;
+use egt_core::batch::{Layout, Threads};
 use egt_core::numerics::linalg::{COND_REFUSE, COND_WARN};
 use egt_core::{AnalysisError, Error, SpeedInput, Train};
 
@@ -80,7 +81,9 @@ fn the_straight_line_program_is_within_1e_13_of_exact() {
             params.extend(row);
         }
         let mut out = vec![0.0; 64 * nq];
-        let errors = plan.run(&params, &mut out);
+        let errors = plan
+            .run(Layout::Rows(&params), &mut out, Threads::Pool)
+            .errors;
         assert!(errors.is_empty(), "{name}: {errors:?}");
         let e = row_errors(&plan, &t, &out[..nq], &exact);
         assert!(e.max() <= 1e-13, "{name}: {e:?}");

@@ -143,7 +143,7 @@ fn batch_rows_allocate_nothing() {
 /// the lanes, and the linear path (a load sweep); kinematics and dynamics.
 #[test]
 fn small_batch_calls_reuse_the_plans_buffers() {
-    use egt_core::batch::Threads;
+    use egt_core::batch::{Layout, Threads};
     for (name, t) in one_dof_trains() {
         for compute in [Compute::Kinematics, Compute::Dynamics] {
             for bounds in [false, true] {
@@ -165,11 +165,18 @@ fn small_batch_calls_reuse_the_plans_buffers() {
                     bad[5 * np + c] = f64::NAN;
                     let what = format!("{name} {compute:?} bounds {bounds} {sweep}");
                     let (mut first, mut again) = (vec![0.0; rows * nq], vec![0.0; rows * nq]);
-                    let e = p.run_with(Threads::Calling, &params, &mut first);
+                    let e = p
+                        .run(Layout::Rows(&params), &mut first, Threads::Calling)
+                        .errors;
                     assert!(e.is_empty(), "{what}: {e:?}");
-                    let e = p.run_with(Threads::Calling, &bad, &mut again);
+                    let e = p
+                        .run(Layout::Rows(&bad), &mut again, Threads::Calling)
+                        .errors;
                     assert_eq!(e.iter().map(|e| e.row).collect::<Vec<_>>(), [5], "{what}");
-                    let (n, e) = allocations(|| p.run_with(Threads::Calling, &params, &mut again));
+                    let (n, e) = allocations(|| {
+                        p.run(Layout::Rows(&params), &mut again, Threads::Calling)
+                            .errors
+                    });
                     assert!(e.is_empty(), "{what}");
                     assert!(n <= 1, "{what}: {n} allocations row-major");
                     let same = first
@@ -177,9 +184,11 @@ fn small_batch_calls_reuse_the_plans_buffers() {
                         .zip(&again)
                         .all(|(a, b)| a.to_bits() == b.to_bits());
                     assert!(same, "{what}: the kept buffers changed the numbers");
-                    p.run_columns_with(Threads::Calling, &columns, &mut again);
-                    let (n, e) =
-                        allocations(|| p.run_columns_with(Threads::Calling, &columns, &mut again));
+                    p.run(Layout::Columns(&columns), &mut again, Threads::Calling);
+                    let (n, e) = allocations(|| {
+                        p.run(Layout::Columns(&columns), &mut again, Threads::Calling)
+                            .errors
+                    });
                     assert!(e.is_empty(), "{what}");
                     assert!(n <= 3, "{what}: {n} allocations column-major");
                     let same = (0..rows).all(|r| {

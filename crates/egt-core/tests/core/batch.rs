@@ -3,7 +3,7 @@
 //! `Train::power_flow` give for a train written with that row's values;
 //! parallel runs equal row-by-row runs; bad rows are reported and the rest go on.
 
-use egt_core::batch::{BatchPlan, Executor, Threads};
+use egt_core::batch::{BatchPlan, Executor, Layout, Threads};
 use egt_core::solve::prepared::Compute;
 use egt_core::{AnalysisError, Error, LinkId, Train};
 use proptest::prelude::*;
@@ -206,7 +206,7 @@ fn parallel_run_equals_row_by_row_and_reports_bad_rows() {
     params[1234 * np + inertia] = -1.0;
     params[2999 * np + ratio] = 0.0;
     let mut out = vec![0.0; rows * nq];
-    let errors = p.run(&params, &mut out);
+    let errors = p.run(Layout::Rows(&params), &mut out, Threads::Pool).errors;
     let bad: Vec<usize> = errors.iter().map(|e| e.row).collect();
     assert_eq!(bad, vec![17, 1234, 2999]);
     assert!(errors.iter().all(|e| matches!(e.error, Error::Spec { .. })));
@@ -217,7 +217,10 @@ fn parallel_run_equals_row_by_row_and_reports_bad_rows() {
         .build()
         .unwrap_or_else(|e| panic!("{e}"));
     let mut serial = vec![0.0; rows * nq];
-    let serial_errors = one_thread.install(|| p.run(&params, &mut serial));
+    let serial_errors = one_thread.install(|| {
+        p.run(Layout::Rows(&params), &mut serial, Threads::Pool)
+            .errors
+    });
     assert_eq!(show(&errors), show(&serial_errors));
     assert!(
         out.iter()
@@ -228,7 +231,9 @@ fn parallel_run_equals_row_by_row_and_reports_bad_rows() {
     assert_columns_agree("pool", &p, &params, &out, &errors);
     // On the calling thread only, from outside any pool: the same again.
     let mut here = vec![0.0; rows * nq];
-    let here_errors = p.run_with(Threads::Calling, &params, &mut here);
+    let here_errors = p
+        .run(Layout::Rows(&params), &mut here, Threads::Calling)
+        .errors;
     assert_eq!(show(&errors), show(&here_errors));
     assert!(
         out.iter()
@@ -385,7 +390,7 @@ fn linear_blocks_equal_row_by_row_solves() {
             mixed[3 * np] *= 1.5; // a ratio differs: solved row by row
             assert!(!p.is_linear_block(&mixed));
             let mut out = vec![0.0; rows * nq];
-            let errors = p.run(&params, &mut out);
+            let errors = p.run(Layout::Rows(&params), &mut out, Threads::Pool).errors;
             assert_eq!(errors.iter().map(|e| e.row).collect::<Vec<_>>(), [5, 300]);
             let first = &p.parameters()[linear[0]];
             assert!(
@@ -522,7 +527,7 @@ fn show(errors: &[egt_core::batch::RowError]) -> Vec<String> {
         .collect()
 }
 
-/// `BatchPlan::run_columns` on `params` (row-major here, transposed for
+/// `Layout::Columns` on `params` (row-major here, transposed for
 /// it) gives `out` and `errors` of `run` bit for bit.
 fn assert_columns_agree(
     name: &str,
@@ -538,7 +543,9 @@ fn assert_columns_agree(
         .collect();
     for threads in [Threads::Pool, Threads::Calling] {
         let mut by_columns = vec![0.0; rows * nq];
-        let column_errors = p.run_columns_with(threads, &columns, &mut by_columns);
+        let column_errors = p
+            .run(Layout::Columns(&columns), &mut by_columns, threads)
+            .errors;
         assert_eq!(
             show(errors),
             show(&column_errors),
@@ -586,7 +593,9 @@ fn assert_choice_agrees(
         assert!(some < all, "{name}: {some} operations chosen, {all} in all");
     }
     let mut chosen = vec![0.0; rows * picks.len()];
-    let chosen_errors = c.run(params, &mut chosen);
+    let chosen_errors = c
+        .run(Layout::Rows(params), &mut chosen, Threads::Pool)
+        .errors;
     assert_eq!(show(errors), show(&chosen_errors), "{name}: chosen outputs");
     for r in 0..rows {
         for (k, &o) in picks.iter().enumerate() {
@@ -621,7 +630,7 @@ fn chosen_outputs_of_power_flow_and_bad_choices() {
     }
     params[7 * np] = f64::NAN;
     let mut out = vec![0.0; params.len() / np * p.outputs().len()];
-    let errors = p.run(&params, &mut out);
+    let errors = p.run(Layout::Rows(&params), &mut out, Threads::Pool).errors;
     assert_eq!(
         errors.len(),
         1,
@@ -649,7 +658,7 @@ fn chosen_outputs_of_power_flow_and_bad_choices() {
 /// every output column, the conditions included, with rows that pivot
 /// differently from their group, singular rows (a ratio of 1 locks a
 /// planetary set's sun to its carrier) and rows with a bad value in among
-/// them (and `run_columns` gives the same, bit for bit). Trains: a nest, a chain, Fig. 3, the two-motor Fig. 5 with
+/// them (and `Layout::Columns` gives the same, bit for bit). Trains: a nest, a chain, Fig. 3, the two-motor Fig. 5 with
 /// accelerations prescribed on other links than the speeds (eq. 8 factored
 /// apart) and torques solved on a third pair (eq. 10 apart), and every gear
 /// state of the 8HP70 (engaged elements as extra rows, output torque solved).
@@ -663,7 +672,7 @@ fn lanes_equal_fresh_row_by_row_solves_bit_for_bit() {
             assert!(!p.is_linear_block(block) && p.lanes_apply(block), "{name}");
         }
         let mut out = vec![0.0; rows * nq];
-        let errors = p.run(&params, &mut out);
+        let errors = p.run(Layout::Rows(&params), &mut out, Threads::Pool).errors;
         assert_columns_agree(name, p, &params, &out, &errors);
         assert_choice_agrees(name, p, &params, &out, &errors);
         let mut failed = Vec::new();
@@ -794,8 +803,12 @@ fn condition_bounds_change_only_small_conditions() {
             }
         }
         let (mut full, mut fast) = (vec![0.0; rows * nq], vec![0.0; rows * nq]);
-        let errors = p.run(&params, &mut full);
-        let errors_bounded = b.run(&params, &mut fast);
+        let errors = p
+            .run(Layout::Rows(&params), &mut full, Threads::Pool)
+            .errors;
+        let errors_bounded = b
+            .run(Layout::Rows(&params), &mut fast, Threads::Pool)
+            .errors;
         assert_eq!(show(&errors), show(&errors_bounded), "{name}");
         // Column-major, the program reads and writes whole columns.
         assert_columns_agree(name, &b, &params, &fast, &errors_bounded);
@@ -897,7 +910,8 @@ fn the_program_runs_compiled_or_interpreted_with_the_same_bits() {
         );
         let mut out = vec![0.0; rows * nq];
         let failed = q
-            .run_columns(&columns, &mut out)
+            .run(Layout::Columns(&columns), &mut out, Threads::Pool)
+            .errors
             .iter()
             .map(|e| e.row)
             .collect();
@@ -926,8 +940,8 @@ fn the_program_runs_compiled_or_interpreted_with_the_same_bits() {
     assert!(!none.has_program() && !none.program_compiled());
 }
 
-/// `BatchPlan::run_column_set` with some columns given as one value for
-/// every row gives `run_columns` on the same columns written out, bit for
+/// `Layout::ColumnSet` with some columns given as one value for
+/// every row gives `Layout::Columns` on the same columns written out, bit for
 /// bit, with the same errors: on the program (condition bounds), the lanes,
 /// the linear path (only loads vary) and the transposed row-by-row path;
 /// with nothing varied; with a bad value in a fixed column (every row
@@ -967,7 +981,9 @@ fn fixed_columns_give_the_numbers_of_the_columns_written_out() {
                     .map(|(from_rows, r, k)| if from_rows { full[r * np + k] } else { base[k] })
                     .collect();
                 let mut expected = vec![0.0; rows * nq];
-                let expected_errors = p.run_columns(&columns, &mut expected);
+                let expected_errors = p
+                    .run(Layout::Columns(&columns), &mut expected, Threads::Pool)
+                    .errors;
                 let set: Vec<Column<'_>> = (0..np)
                     .map(|k| {
                         if varied.contains(&k) {
@@ -979,7 +995,16 @@ fn fixed_columns_give_the_numbers_of_the_columns_written_out() {
                     .collect();
                 for threads in [Threads::Pool, Threads::Calling] {
                     let mut out = vec![0.0; rows * nq];
-                    let errors = p.run_column_set(threads, &set, rows, &mut out);
+                    let errors = p
+                        .run(
+                            Layout::ColumnSet {
+                                columns: &set,
+                                rows,
+                            },
+                            &mut out,
+                            threads,
+                        )
+                        .errors;
                     assert_eq!(show(&expected_errors), show(&errors), "{label} {threads:?}");
                     for (i, (a, b)) in out.iter().zip(&expected).enumerate() {
                         assert!(

@@ -2,7 +2,7 @@
 //! filled from the design, its rows solved, and the block encoded as text,
 //! Parquet or Arrow.
 
-use egt_core::batch::{BatchPlan, Column, Threads};
+use egt_core::batch::{self, BatchPlan, Column, Threads};
 use rayon::prelude::*;
 
 use super::Encoded;
@@ -210,11 +210,27 @@ impl Sweep<'_> {
                     None => Column::Every(v),
                 })
                 .collect();
-            plan.run_column_set_bounded(within, &columns, len, results)
+            let solved = plan.run(
+                batch::Layout::ColumnSet {
+                    columns: &columns,
+                    rows: len,
+                },
+                results,
+                within,
+            );
+            (solved.errors, solved.bounded)
         } else if shape.by_columns {
-            (plan.run_columns_with(within, params, results), false)
+            (
+                plan.run(batch::Layout::Columns(params), results, within)
+                    .errors,
+                false,
+            )
         } else {
-            (plan.run_with(within, params, results), false)
+            (
+                plan.run(batch::Layout::Rows(params), results, within)
+                    .errors,
+                false,
+            )
         };
         // Most blocks have no failed row: a buffer of the same length is
         // cleared only where the last block set it (a block's 16 384

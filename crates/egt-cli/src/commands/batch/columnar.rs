@@ -78,7 +78,7 @@ pub(super) struct Block<'a> {
     /// Some of `messages` are set.
     pub(super) any_failed: bool,
     /// Every row's condition numbers are below the warning's
-    /// ([`egt_core::batch::BatchPlan::run_column_set_bounded`]).
+    /// ([`egt_core::batch::Solved::bounded`]).
     pub(super) bounded: bool,
 }
 
