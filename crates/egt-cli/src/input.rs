@@ -26,18 +26,32 @@ pub struct Loaded {
 /// Semantic errors carry the source name as context; syntax errors already
 /// say `file:line:col`.
 pub fn load(args: &SpecArgs) -> anyhow::Result<Loaded> {
-    let (text, source) = read_text(&args.spec)?;
-    let format = match args.spec_format {
-        Some(SpecFormat::Toml) => Format::Toml,
-        Some(SpecFormat::Json) => Format::Json,
-        None if is_stdin(&args.spec) => Format::sniff(&text),
-        None => Format::from_path(&source),
-    };
+    let (text, source, format) = read_spec(&args.spec, args.spec_format)?;
     match Train::from_str(&text, format, &source) {
         Ok(train) => Ok(Loaded { train, source }),
         Err(e @ egt_core::Error::Syntax(_)) => Err(e.into()),
         Err(e) => Err(anyhow::Error::new(e).context(source)),
     }
+}
+
+/// The text of a spec ([`read_text`]), its name for messages and its
+/// format: `choice` (`--spec-format`) when given, else sniffed from the
+/// text on standard input, else by the file extension.
+///
+/// # Errors
+/// Those of [`read_text`].
+pub fn read_spec(
+    path: &Path,
+    choice: Option<SpecFormat>,
+) -> anyhow::Result<(String, String, Format)> {
+    let (text, source) = read_text(path)?;
+    let format = match choice {
+        Some(SpecFormat::Toml) => Format::Toml,
+        Some(SpecFormat::Json) => Format::Json,
+        None if is_stdin(path) => Format::sniff(&text),
+        None => Format::from_path(&source),
+    };
+    Ok((text, source, format))
 }
 
 /// Whether `path` means standard input (`-`).

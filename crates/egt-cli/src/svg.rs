@@ -82,6 +82,17 @@ pub struct Line<'a> {
     pub level: Option<f64>,
 }
 
+/// One line without a level for each of `series`.
+pub fn plain_lines<'a>(series: &'a [Box<dyn Fn(usize) -> f64 + 'a>]) -> Vec<Line<'a>> {
+    series
+        .iter()
+        .map(|f| Line {
+            value: f.as_ref(),
+            level: None,
+        })
+        .collect()
+}
+
 /// One panel: axes, ticks against time, a coloured line per `lines` entry
 /// (colours in order of `PALETTE`), dashed levels.
 pub fn panel(

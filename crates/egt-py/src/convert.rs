@@ -5,11 +5,12 @@
 use egt_core::Extra;
 use egt_core::numerics::exact::{self, Q};
 use egt_core::spec::ElementKind;
-use egt_core::{LinkId, Train};
+use egt_core::{LinkId, Ratio, Train};
 use nalgebra::DMatrix;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 use crate::errors::{Error, Result, value_error};
 
@@ -80,6 +81,17 @@ pub fn rational(text: &str, where_: &str) -> Result<Q> {
 /// `p/q` text of an exact value.
 pub fn q_text(x: &Q) -> String {
     exact::display(x)
+}
+
+/// Set a gear pair's Willis ratio on `d`: `ratio` (float) and `ratio_exact`
+/// (`p/q` text), each `None` when not known.
+pub fn set_ratio(d: &Bound<'_, PyDict>, ratio: Option<&Ratio>) -> Result<()> {
+    d.set_item("ratio", ratio.map(|r| r.value))?;
+    d.set_item(
+        "ratio_exact",
+        ratio.and_then(|r| r.exact.as_ref()).map(q_text),
+    )?;
+    Ok(())
 }
 
 /// A vector as a 1-D NumPy array.

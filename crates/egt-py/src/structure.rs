@@ -60,14 +60,7 @@ pub fn structure<'py>(py: Python<'py>, core: &TrainCore) -> Result<Bound<'py, Py
             cd.set_item("carrier", name(c.carrier))?;
             cd.set_item("level_i", level(c.level_i))?;
             cd.set_item("level_j", level(c.level_j))?;
-            cd.set_item("ratio", g.ratio.as_ref().map(|r| r.value))?;
-            cd.set_item(
-                "ratio_exact",
-                g.ratio
-                    .as_ref()
-                    .and_then(|r| r.exact.as_ref())
-                    .map(convert::q_text),
-            )?;
+            convert::set_ratio(&cd, g.ratio.as_ref())?;
             cd.set_item("radii", g.radii.map(|r| (r[0], r[1])))?;
             circuits.append(cd)?;
         }

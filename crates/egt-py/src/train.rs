@@ -6,6 +6,7 @@ use egt_core::analysis::power::PowerRequest;
 use egt_core::model::mass::MassMatrix;
 use egt_core::{DynamicsRequest, Extra, LoadOverrides};
 use egt_core::{Format, SpeedInput, Train};
+use nalgebra::DMatrix;
 use numpy::PyArray2;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -36,6 +37,9 @@ pub(crate) fn format_of(format: &str) -> Result<Format> {
         ))),
     }
 }
+
+/// A matrix of a train for given independent inputs and engaged elements.
+type InputMatrix = fn(&Train, &[egt_core::LinkId], &[Extra]) -> egt_core::Result<DMatrix<f64>>;
 
 impl TrainCore {
     fn speed_inputs(&self, inputs: &[InputArg]) -> Result<Vec<SpeedInput>> {
@@ -89,6 +93,22 @@ impl TrainCore {
             return Ok(None);
         }
         Ok(self.train.mass_for(req)?)
+    }
+
+    /// A matrix of the train for the independent `inputs` with the
+    /// `engaged` elements (as [`Train::velocity_matrix`]), as a NumPy array.
+    fn input_matrix<'py>(
+        &self,
+        py: Python<'py>,
+        inputs: &[String],
+        engaged: &[String],
+        matrix: InputMatrix,
+    ) -> Result<Bound<'py, PyArray2<f64>>> {
+        guard(|| {
+            let ids = convert::links(&self.train, inputs, "inputs")?;
+            let extras: Vec<Extra> = convert::engaged(&self.train, engaged)?;
+            dmatrix(py, &matrix(&self.train, &ids, &extras)?)
+        })
     }
 
     fn link_name(&self, l: egt_core::LinkId) -> &str {
@@ -184,14 +204,7 @@ impl TrainCore {
             d.set_item("name", g.name.as_str())?;
             d.set_item("gear_i", self.link_name(g.gear_i))?;
             d.set_item("gear_j", self.link_name(g.gear_j))?;
-            d.set_item("ratio", g.ratio.as_ref().map(|r| r.value))?;
-            d.set_item(
-                "ratio_exact",
-                g.ratio
-                    .as_ref()
-                    .and_then(|r| r.exact.as_ref())
-                    .map(convert::q_text),
-            )?;
+            convert::set_ratio(&d, g.ratio.as_ref())?;
             d.set_item("teeth", g.teeth.map(|t| (t[0], t[1])))?;
             d.set_item(
                 "mesh",
@@ -393,11 +406,7 @@ impl TrainCore {
         inputs: Vec<String>,
         engaged: Vec<String>,
     ) -> Result<Bound<'py, PyArray2<f64>>> {
-        guard(|| {
-            let ids = convert::links(&self.train, &inputs, "inputs")?;
-            let extras: Vec<Extra> = convert::engaged(&self.train, &engaged)?;
-            dmatrix(py, &self.train.velocity_matrix(&ids, &extras)?)
-        })
+        self.input_matrix(py, &inputs, &engaged, Train::velocity_matrix)
     }
 
     /// V^T M V (eq. 25).
@@ -408,11 +417,7 @@ impl TrainCore {
         inputs: Vec<String>,
         engaged: Vec<String>,
     ) -> Result<Bound<'py, PyArray2<f64>>> {
-        guard(|| {
-            let ids = convert::links(&self.train, &inputs, "inputs")?;
-            let extras: Vec<Extra> = convert::engaged(&self.train, &engaged)?;
-            dmatrix(py, &self.train.reduced_mass_matrix(&ids, &extras)?)
-        })
+        self.input_matrix(py, &inputs, &engaged, Train::reduced_mass_matrix)
     }
 
     /// Equivalent inertia of a 1-DOF train reduced to `link`.

@@ -19,7 +19,7 @@ use egt_core::shift_dynamics::{
 use crate::args::{OutputFormat, SpecArgs};
 use crate::input;
 use crate::report::{self, Table};
-use crate::svg::{GAP, Line, PLOT_H, Panel, TOP, legend, panel};
+use crate::svg::{GAP, Line, PLOT_H, Panel, TOP, legend, panel, plain_lines};
 
 /// How `egt shift-sim` prints its result.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -421,13 +421,7 @@ fn plot(train: &Train, title: &str, r: &ShiftResult) -> String {
         .iter()
         .map(|&l| Box::new(move |i: usize| s[i].speed[l]) as Box<dyn Fn(usize) -> f64>)
         .collect();
-    let lines: Vec<Line<'_>> = speeds
-        .iter()
-        .map(|f| Line {
-            value: f.as_ref(),
-            level: None,
-        })
-        .collect();
+    let lines = plain_lines(&speeds);
     panel(
         &mut svg,
         &Panel {
@@ -464,13 +458,7 @@ fn plot(train: &Train, title: &str, r: &ShiftResult) -> String {
         },
         s.len(),
         &time,
-        &torques
-            .iter()
-            .map(|f| Line {
-                value: f.as_ref(),
-                level: None,
-            })
-            .collect::<Vec<_>>(),
+        &plain_lines(&torques),
         t_end,
     );
     let output = |i: usize| s[i].output_torque;

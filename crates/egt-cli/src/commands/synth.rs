@@ -23,7 +23,7 @@ const PROGRESS_PARTS: usize = 32;
 
 use crate::args::parse_part;
 use crate::args::{OutputFormat, SpecFormat};
-use crate::input::{is_stdin, read_text};
+use crate::input::{is_stdin, read_spec};
 use crate::report::{self, Table};
 
 /// Arguments of `egt synth`.
@@ -123,13 +123,7 @@ struct Report {
 /// Syntax and field errors of the search spec (exit 2), the base train's own
 /// errors, I/O.
 pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
-    let (text, source) = read_text(&args.spec)?;
-    let format = match args.spec_format {
-        Some(SpecFormat::Toml) => Format::Toml,
-        Some(SpecFormat::Json) => Format::Json,
-        None if is_stdin(&args.spec) => Format::sniff(&text),
-        None => Format::from_path(&source),
-    };
+    let (text, source, format) = read_spec(&args.spec, args.spec_format)?;
     let mut spec = SynthSpec::from_str(&text, format, &source)?;
     if let Some(top) = args.top {
         spec.top = top;

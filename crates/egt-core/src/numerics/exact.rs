@@ -8,6 +8,8 @@ use num_bigint::BigInt;
 use num_rational::BigRational;
 use num_traits::{One, Signed, ToPrimitive, Zero};
 
+use super::field;
+
 /// Exact rational number.
 pub type Q = BigRational;
 
@@ -257,43 +259,22 @@ pub fn display(x: &Q) -> String {
 
 /// Reduce `m` to reduced row-echelon form in place; return the pivot columns.
 pub fn rref(m: &mut QMatrix) -> Vec<usize> {
-    let rows = m.len();
-    let cols = m.first().map_or(0, Vec::len);
-    let mut pivots = Vec::new();
-    let mut r = 0;
-    for c in 0..cols {
-        if r == rows {
-            break;
-        }
-        let Some(p) = (r..rows).find(|&i| !m[i][c].is_zero()) else {
-            continue;
-        };
-        m.swap(r, p);
-        let inv = m[r][c].recip();
-        for x in m[r].iter_mut() {
-            *x *= &inv;
-        }
-        for i in 0..rows {
-            if i != r && !m[i][c].is_zero() {
-                let f = m[i][c].clone();
-                let (pivot_row, row_i) = if i < r {
-                    let (a, b) = m.split_at_mut(r);
-                    (&b[0], &mut a[i])
-                } else {
-                    let (a, b) = m.split_at_mut(i);
-                    (&a[r], &mut b[0])
-                };
-                for (x, y) in row_i.iter_mut().zip(pivot_row) {
-                    if !y.is_zero() {
-                        *x -= &f * y;
-                    }
-                }
-            }
-        }
-        pivots.push(c);
-        r += 1;
+    field::rref(m)
+}
+
+impl field::Field for Q {
+    fn is_zero(&self) -> bool {
+        Zero::is_zero(self)
     }
-    pivots
+    fn inverse(&self) -> Self {
+        self.recip()
+    }
+    fn scale(&mut self, by: &Self) {
+        *self *= by;
+    }
+    fn sub_mul(&mut self, f: &Self, y: &Self) {
+        *self -= f * y;
+    }
 }
 
 /// Rank of a matrix.

@@ -29,9 +29,7 @@ pub struct Lu {
     lo: Vec<usize>,
     hi: Vec<usize>,
     anorm: f64,
-    work: Vec<f64>,
-    work2: Vec<f64>,
-    signs: Vec<f64>,
+    norm1: Norm1Work,
 }
 
 /// A zero pivot: the matrix is singular at this column.
@@ -71,9 +69,7 @@ impl Lu {
             lo: (0..n).collect(),
             hi: (1..=n).collect(),
             anorm: 0.0,
-            work: vec![0.0; n],
-            work2: vec![0.0; n],
-            signs: vec![0.0; n],
+            norm1: Norm1Work::new(n),
         }
     }
 
@@ -143,19 +139,42 @@ impl Lu {
     /// vector (LAPACK's `dlacn2`), a lower bound in practice within a factor
     /// of 3 of the true value. Allocates nothing.
     pub fn condition(&mut self) -> f64 {
-        if self.n == 0 {
-            return 1.0;
-        }
-        let mut x = std::mem::take(&mut self.work);
-        let mut alt = std::mem::take(&mut self.work2);
-        let mut sign = std::mem::take(&mut self.signs);
-        let est = inverse_norm1(&mut &*self, &mut x, &mut alt, &mut sign);
-        self.work = x;
-        self.work2 = alt;
-        self.signs = sign;
-        let c = self.anorm * est;
-        if c.is_finite() { c } else { f64::INFINITY }
+        let mut work = std::mem::take(&mut self.norm1);
+        let c = condition(&mut &*self, self.anorm, &mut work);
+        self.norm1 = work;
+        c
     }
+}
+
+/// The work vectors of the condition estimate, of the system's order.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Norm1Work {
+    x: Vec<f64>,
+    alt: Vec<f64>,
+    sign: Vec<f64>,
+}
+
+impl Norm1Work {
+    /// Work vectors for a system of order `n`.
+    pub(crate) fn new(n: usize) -> Self {
+        Norm1Work {
+            x: vec![0.0; n],
+            alt: vec![0.0; n],
+            sign: vec![0.0; n],
+        }
+    }
+}
+
+/// The 1-norm condition estimate ||A||_1 ||A^-1||_1 of a factored A whose
+/// 1-norm is `anorm`, with work vectors of its order: `1` for an empty
+/// system, infinite when the product is not finite.
+pub(crate) fn condition(a: &mut impl Factored, anorm: f64, work: &mut Norm1Work) -> f64 {
+    if work.x.is_empty() {
+        return 1.0;
+    }
+    let est = inverse_norm1(a, &mut work.x, &mut work.alt, &mut work.sign);
+    let c = anorm * est;
+    if c.is_finite() { c } else { f64::INFINITY }
 }
 
 /// A factored square system, as the condition estimate sees it.

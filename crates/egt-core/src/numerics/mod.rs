@@ -2,6 +2,7 @@
 //! checked dense LU. Nothing here knows what a gear train is.
 
 pub mod exact;
+mod field;
 pub(crate) mod lanes;
 pub mod linalg;
 pub mod modp;

@@ -10,6 +10,8 @@
 //! ratios and exact `BigRational` elimination the decision is the same and
 //! costs machine-word arithmetic instead of growing fractions.
 
+use super::field;
+
 /// The Mersenne prime 2^61 - 1.
 pub const P: u64 = (1 << 61) - 1;
 
@@ -69,37 +71,23 @@ pub fn generic(k: u64) -> u64 {
 
 /// Reduce to reduced row-echelon form in place; return the pivot columns.
 pub fn rref(m: &mut [Vec<u64>]) -> Vec<usize> {
-    let rows = m.len();
-    let cols = m.first().map_or(0, Vec::len);
-    let mut pivots = Vec::new();
-    let mut r = 0;
-    for c in 0..cols {
-        if r == rows {
-            break;
-        }
-        let Some(p) = (r..rows).find(|&i| m[i][c] != 0) else {
-            continue;
-        };
-        m.swap(r, p);
-        let iv = inv(m[r][c]);
-        for x in m[r].iter_mut() {
-            *x = mul(*x, iv);
-        }
-        let pivot_row = m[r].clone();
-        for (i, row) in m.iter_mut().enumerate() {
-            let f = row[c];
-            if i != r && f != 0 {
-                for (x, &y) in row.iter_mut().zip(&pivot_row) {
-                    if y != 0 {
-                        *x = sub(*x, mul(f, y));
-                    }
-                }
-            }
-        }
-        pivots.push(c);
-        r += 1;
+    field::rref(m)
+}
+
+/// A residue in [0, P) as an element of GF(P).
+impl field::Field for u64 {
+    fn is_zero(&self) -> bool {
+        *self == 0
     }
-    pivots
+    fn inverse(&self) -> Self {
+        inv(*self)
+    }
+    fn scale(&mut self, by: &Self) {
+        *self = mul(*self, *by);
+    }
+    fn sub_mul(&mut self, f: &Self, y: &Self) {
+        *self = sub(*self, mul(*f, *y));
+    }
 }
 
 /// A basis of the right null space of `m` (`cols` wide), and the rank.

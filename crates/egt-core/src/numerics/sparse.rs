@@ -16,7 +16,7 @@ use faer::sparse::linalg::lu::{
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par};
 
-use super::linalg::{Factored, inverse_norm1, refuse, singular};
+use super::linalg::{Factored, Norm1Work, condition, refuse, singular};
 use crate::error::AnalysisError;
 
 /// The pattern could not be analysed (faer ran out of memory or index room).
@@ -47,9 +47,7 @@ pub struct SparseLu {
     stack: MemBuffer,
     factored: bool,
     anorm: f64,
-    work: Vec<f64>,
-    work2: Vec<f64>,
-    signs: Vec<f64>,
+    norm1: Norm1Work,
 }
 
 impl std::fmt::Debug for SparseLu {
@@ -75,9 +73,7 @@ impl Clone for SparseLu {
             stack,
             factored: false,
             anorm: 0.0,
-            work: self.work.clone(),
-            work2: self.work2.clone(),
-            signs: self.signs.clone(),
+            norm1: self.norm1.clone(),
         }
     }
 }
@@ -140,9 +136,7 @@ impl SparseLu {
                 stack,
                 factored: false,
                 anorm: 0.0,
-                work: vec![0.0; n],
-                work2: vec![0.0; n],
-                signs: vec![0.0; n],
+                norm1: Norm1Work::new(n),
             },
             slots,
         ))
@@ -255,18 +249,10 @@ impl SparseLu {
     /// (the estimate of the dense LU: a few solves with A and A^T). Infinite
     /// when a pivot was zero.
     pub fn condition(&mut self) -> f64 {
-        if self.n == 0 {
-            return 1.0;
-        }
-        let mut x = std::mem::take(&mut self.work);
-        let mut alt = std::mem::take(&mut self.work2);
-        let mut sign = std::mem::take(&mut self.signs);
-        let est = inverse_norm1(self, &mut x, &mut alt, &mut sign);
-        self.work = x;
-        self.work2 = alt;
-        self.signs = sign;
-        let c = self.anorm * est;
-        if c.is_finite() { c } else { f64::INFINITY }
+        let mut work = std::mem::take(&mut self.norm1);
+        let c = condition(self, self.anorm, &mut work);
+        self.norm1 = work;
+        c
     }
 }
 

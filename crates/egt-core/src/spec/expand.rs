@@ -317,19 +317,15 @@ fn expand_planetary(d: &mut Draft, set: &PlanetarySpec, frame: &str, path: &str)
     }
 
     let zs = Some(need(t.sun, "sun")?);
+    // Every kind meshes the sun with the (first) planet.
+    let sun_planet =
+        |zp: Option<i64>| mesh(&set.sun, zs, &planet, zp, MeshKind::External, "sun-planet");
     match set.kind {
         PlanetaryKind::Simple => {
             let ring = need_link(&set.ring, "ring")?;
             let zr = Some(need(t.ring, "ring")?);
             add_planet(d, &planet, t.planet)?;
-            d.gears.push(mesh(
-                &set.sun,
-                zs,
-                &planet,
-                t.planet,
-                MeshKind::External,
-                "sun-planet",
-            ));
+            d.gears.push(sun_planet(t.planet));
             d.gears.push(mesh(
                 &planet,
                 t.planet,
@@ -352,14 +348,7 @@ fn expand_planetary(d: &mut Draft, set: &PlanetarySpec, frame: &str, path: &str)
             };
             add_planet(d, &planet, t.planet)?;
             add_planet(d, &planet2, t.planet2)?;
-            d.gears.push(mesh(
-                &set.sun,
-                zs,
-                &planet,
-                t.planet,
-                MeshKind::External,
-                "sun-planet",
-            ));
+            d.gears.push(sun_planet(t.planet));
             d.gears.push(mesh(
                 &planet,
                 t.planet,
@@ -394,14 +383,7 @@ fn expand_planetary(d: &mut Draft, set: &PlanetarySpec, frame: &str, path: &str)
             if let Some(l) = d.links.get_mut(&planet) {
                 l.data.wheels.get_or_insert(2);
             }
-            d.gears.push(mesh(
-                &set.sun,
-                zs,
-                &planet,
-                zp,
-                MeshKind::External,
-                "sun-planet",
-            ));
+            d.gears.push(sun_planet(zp));
             match (&set.ring, &set.sun2) {
                 (Some(ring), None) => {
                     let zr = Some(need(t.ring, "ring")?);

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any, Dict, List, Mapping, Optional, Sequence, 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from . import _dask
 from ._args import ArgumentError, ArgumentKeyError, ArgumentTypeError, count
 from ._egt import BatchPlanCore, TrainCore
 from ._egt import ratios_from_teeth as _ratios_from_teeth
@@ -469,10 +470,7 @@ def run_distributed(
     ``LocalCluster`` by default), the plan rebuilt once per worker from its
     spec; the results are concatenated in row order, failed rows and their
     errors kept with their global row numbers. Needs ``egt-gears[dask]``."""
-    try:
-        from dask.distributed import Client, LocalCluster
-    except ImportError as e:  # pragma: no cover - depends on the environment
-        raise ImportError("run_distributed needs Dask: pip install 'egt-gears[dask]'") from e
+    _dask.require("run_distributed")
     refused: Dict[int, RowError] = {}
     if isinstance(params, tuple) and len(params) == 2 and isinstance(params[1], dict):
         params, refused = params
@@ -499,12 +497,7 @@ def run_distributed(
         ok[list(refused)] = False
         return BatchResult(plan.outputs, values, ok, errors)
 
-    if client is not None:
-        return run(client)
-    with LocalCluster(  # type: ignore[no-untyped-call]
-        n_workers=os.cpu_count() or 1, threads_per_worker=1, processes=True, dashboard_address=None
-    ) as cluster, Client(cluster) as c:  # type: ignore[no-untyped-call]
-        return run(c)
+    return _dask.on_cluster(client, run)
 
 
 def _known_columns(

@@ -13,6 +13,7 @@ from fractions import Fraction
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
+from . import _dask
 from ._args import ArgumentError, count
 from ._egt import SearchCore, search_inputs
 from ._results import _html_table, _pandas
@@ -216,10 +217,7 @@ def synth_distributed(
     worker is lost is run again elsewhere, and each partition is counted
     once, so the result equals :func:`synth`'s. Needs
     ``pip install 'egt-gears[dask]'``."""
-    try:
-        from dask.distributed import Client, LocalCluster
-    except ImportError as e:  # pragma: no cover - depends on the environment
-        raise ImportError("synth_distributed needs Dask: pip install 'egt-gears[dask]'") from e
+    _dask.require("synth_distributed")
     job = _job(search, top, format)
     core = _prepared(job)
     n = partitions if partitions is not None else min(core.max_partitions, 4 * (os.cpu_count() or 1))
@@ -233,9 +231,4 @@ def synth_distributed(
         results = c.gather(futures)
         return _merge(core, results, core.top, time.perf_counter() - start)
 
-    if client is not None:
-        return run(client)
-    with LocalCluster(  # type: ignore[no-untyped-call]
-        n_workers=os.cpu_count() or 1, threads_per_worker=1, processes=True, dashboard_address=None
-    ) as cluster, Client(cluster) as c:  # type: ignore[no-untyped-call]
-        return run(c)
+    return _dask.on_cluster(client, run)

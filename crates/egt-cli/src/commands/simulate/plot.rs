@@ -6,7 +6,7 @@
 
 use std::fmt::Write as _;
 
-use crate::svg::{GAP, LEFT, Line, PLOT_H, Panel, TOP, panel};
+use crate::svg::{GAP, LEFT, Line, PLOT_H, Panel, TOP, panel, plain_lines};
 use egt_core::{LinkId, Simulation, Train};
 
 /// The plot as an SVG document: the link speeds, and their deviation from
@@ -69,13 +69,7 @@ pub fn speeds_svg(
                     as Box<dyn Fn(usize) -> f64>
             })
             .collect();
-        let lines: Vec<Line<'_>> = devs
-            .iter()
-            .map(|f| Line {
-                value: f.as_ref(),
-                level: None,
-            })
-            .collect();
+        let lines = plain_lines(&devs);
         panel(
             &mut svg,
             &Panel {
