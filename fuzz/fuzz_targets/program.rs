@@ -9,7 +9,7 @@
 //! machine both are the interpreter, and the target only runs the program.
 #![no_main]
 
-use egt_core::batch::{BatchPlan, BatchSpec, Executor};
+use egt_core::batch::{BatchPlan, BatchSpec, Executor, Layout, Threads};
 use egt_core::solve::prepared::Compute;
 use egt_core::{Format, Train};
 use libfuzzer_sys::fuzz_target;
@@ -102,8 +102,14 @@ fuzz_target!(|data: &[u8]| {
                 .map(|e| (e.row, e.error.to_string()))
                 .collect::<Vec<_>>()
         };
-        let e_rows = errors(p.run(&params, &mut by_rows));
-        let e_columns = errors(p.run_columns(&columns, &mut by_columns));
+        let e_rows = errors(
+            p.run(Layout::Rows(&params), &mut by_rows, Threads::Pool)
+                .errors,
+        );
+        let e_columns = errors(
+            p.run(Layout::Columns(&columns), &mut by_columns, Threads::Pool)
+                .errors,
+        );
         (p.program_compiled(), by_rows, by_columns, e_rows, e_columns)
     };
     let interpreted = run(Executor::Interpreted);

@@ -9,7 +9,7 @@
 //! change a number are bugs.
 #![no_main]
 
-use egt_core::batch::{BatchPlan, BatchSpec, Column, Executor, Threads};
+use egt_core::batch::{BatchPlan, BatchSpec, Column, Executor, Layout, Threads};
 use egt_core::solve::prepared::Compute;
 use egt_core::{Format, Train};
 use libfuzzer_sys::fuzz_target;
@@ -26,15 +26,21 @@ fuzz_target!(|data: &[u8]| {
         if let Ok(spec) = BatchSpec::from_analysis(&train, compute) {
             if let Ok(plan) = BatchPlan::new(&train, &spec) {
                 let mut out = vec![0.0; plan.outputs().len()];
-                let _ = plan.run(plan.base(), &mut out);
+                let _ = plan
+                    .run(Layout::Rows(plan.base()), &mut out, Threads::Pool)
+                    .errors;
                 // The straight-line program, compiled to machine code where
                 // the machine has AVX-512 or AVX2: a whole block of the base
                 // row (rows), and of the base row's values mixed (columns).
                 let plan = plan.with_condition_bounds(true);
                 let rows: Vec<f64> = (0..64).flat_map(|_| plan.base().iter().copied()).collect();
                 let mut out = vec![0.0; 64 * plan.outputs().len()];
-                let _ = plan.run_columns(&rows, &mut out);
-                let _ = plan.run(&rows, &mut out);
+                let _ = plan
+                    .run(Layout::Columns(&rows), &mut out, Threads::Pool)
+                    .errors;
+                let _ = plan
+                    .run(Layout::Rows(&rows), &mut out, Threads::Pool)
+                    .errors;
                 // Compiled (where the machine runs the code) and
                 // interpreted: the same bits and the same refused rows.
                 let mut first: Option<(Vec<f64>, Vec<usize>)> = None;
@@ -42,7 +48,8 @@ fuzz_target!(|data: &[u8]| {
                     let p = plan.clone().with_executor(code);
                     let mut out = vec![0.0; 64 * p.outputs().len()];
                     let failed: Vec<usize> = p
-                        .run_columns(&rows, &mut out)
+                        .run(Layout::Columns(&rows), &mut out, Threads::Pool)
+                        .errors
                         .iter()
                         .map(|e| e.row)
                         .collect();
@@ -77,12 +84,21 @@ fuzz_target!(|data: &[u8]| {
                 let q = plan.outputs().len();
                 let (mut a, mut b) = (vec![0.0; 64 * q], vec![0.0; 64 * q]);
                 let rows_a: Vec<usize> = plan
-                    .run_columns(&fixed, &mut a)
+                    .run(Layout::Columns(&fixed), &mut a, Threads::Pool)
+                    .errors
                     .iter()
                     .map(|e| e.row)
                     .collect();
                 let rows_b: Vec<usize> = (plan
-                    .run_column_set(Threads::Calling, &set, 64, &mut b)
+                    .run(
+                        Layout::ColumnSet {
+                            columns: &set,
+                            rows: 64,
+                        },
+                        &mut b,
+                        Threads::Calling,
+                    )
+                    .errors
                     .iter())
                 .map(|e| e.row)
                 .collect();
