@@ -111,7 +111,7 @@ fn the_program_solves_the_rows_it_can_vouch_for() {
 /// `COND_WARN` / 2: a row near the lock of Fig. 3 (past the warning) in
 /// the third task of the block makes it false, and so does a plan
 /// without condition bounds (no program); on the calling thread and on
-/// the pool alike.
+/// the pool alike, and in every [`Layout`] (the same verdict and bits).
 #[test]
 fn a_block_is_bounded_only_when_the_program_solved_every_row() {
     use crate::numerics::linalg::COND_WARN;
@@ -171,6 +171,31 @@ fn a_block_is_bounded_only_when_the_program_solved_every_row() {
             }
             if locked {
                 assert!(worst(550) > COND_WARN, "{}", worst(550));
+            }
+            // The same rows written out, column- and row-major: the same
+            // verdict and the same bits.
+            let np = p.parameters().len();
+            let matrix: Vec<f64> = (columns.iter())
+                .flat_map(|c| match *c {
+                    Column::Rows(v) => v.to_vec(),
+                    Column::Every(v) => vec![v; rows],
+                })
+                .collect();
+            let by_rows: Vec<f64> = (0..rows * np)
+                .map(|i| matrix[(i % np) * rows + i / np])
+                .collect();
+            let mut c_out = vec![0.0; out.len()];
+            let c = p.run(Layout::Columns(&matrix), &mut c_out, threads);
+            let mut r_out = vec![0.0; out.len()];
+            let r = p.run(Layout::Rows(&by_rows), &mut r_out, threads);
+            assert!(c.errors.is_empty() && r.errors.is_empty());
+            assert_eq!((c.bounded, r.bounded), (vouched, vouched), "{threads:?}");
+            let q = p.outputs().len();
+            for (k, (a, b)) in out.iter().zip(&c_out).enumerate() {
+                assert_eq!(a.to_bits(), b.to_bits(), "column-major value {k}");
+                let (o, row) = (k / rows, k % rows);
+                let rv = r_out[row * q + o];
+                assert_eq!(a.to_bits(), rv.to_bits(), "row-major row {row} output {o}");
             }
         }
     }
