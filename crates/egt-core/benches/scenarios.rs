@@ -273,23 +273,29 @@ phases!(chain, CHAIN_LINKS, chain);
 phases!(nest, NEST_LINKS, families::nest);
 
 /// Large trains (zigzag chains, speeds of order one): one kinematic solve
-/// with the dense and with the sparse LU, and reading plus checking the
-/// spec. `SPARSE_FROM` in `solve/kinematics.rs` sits where they cross.
+/// (new ratios each time, so a factorisation) with the dense and with the
+/// sparse LU, and reading plus checking the spec.
 mod large {
     use super::*;
-    use egt_core::KinematicsPlan;
+    use egt_core::solve::prepared::{PreparedTrain, Scenario};
 
     const SIZES: &[usize] = &[6, 10, 16, 22, 34, 66, 130, 258, 514, 1026];
 
     fn solve(b: Bencher, links: usize, sparse: bool) {
         let t = build(&families::zigzag_chain((links - 2) / 2));
         let input = t.link_id("m0").unwrap_or_else(|| panic!("no m0"));
-        let mut plan =
-            KinematicsPlan::with_sparse(&t, &[input], sparse).unwrap_or_else(|e| panic!("{e}"));
+        let plan = PreparedTrain::for_analysis(&t, &[input], &[input], &[input], &[])
+            .and_then(|p| p.with_sparse(sparse))
+            .unwrap_or_else(|e| panic!("{e}"));
+        let mut ws = plan.workspace();
         let ratios = t.ratios().unwrap_or_else(|e| panic!("{e}"));
-        let mut speeds = vec![0.0; t.links().len()];
+        let nudged: Vec<f64> = ratios.iter().map(|r| r * (1.0 + 1e-12)).collect();
+        let mut flip = false;
         b.bench_local(|| {
-            plan.solve(black_box(&ratios), &[157.0], &mut speeds)
+            flip = !flip;
+            let r = if flip { &ratios } else { &nudged };
+            let s = Scenario::kinematic(black_box(r), &[157.0]);
+            plan.solve(&mut ws, &s, Compute::Kinematics)
                 .unwrap_or_else(|e| panic!("{e}"))
         });
     }

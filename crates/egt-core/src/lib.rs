@@ -132,7 +132,7 @@ pub use motion::simulate::{
     LinearCurves, Method, ReducedDynamics, Sample, Simulation, SimulationOptions,
     SimulationOverrides, SimulationRequest, TorqueFn, TorqueModel,
 };
-pub use solve::kinematics::{KinematicsPlan, RelativeSpeed, SpeedInput, Speeds};
+pub use solve::kinematics::{RelativeSpeed, SpeedInput, Speeds};
 pub use solve::rows::Extra;
 pub use spec::Spec;
 pub use spec::parse::{Format, parse_spec, spec_schema};

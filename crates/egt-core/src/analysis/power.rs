@@ -131,10 +131,28 @@ impl Train {
     /// As kinematics and inverse dynamics; \[`AnalysisError::SelfLocking`\] when no
     /// consistent direction of power flow exists.
     pub fn power_flow(&self, req: &PowerRequest, mass: Option<&MassMatrix>) -> Result<PowerFlow> {
-        let speeds = if req.dynamics.extras.is_empty() {
-            self.kinematics(&req.speeds)?
+        // One prepared train and workspace: the speeds (eq. 2) first, then
+        // from the same factorisation the accelerations (eq. 8), the forces
+        // (eq. 10) and, with losses, the direction search.
+        let dyn_req = &req.dynamics;
+        let inputs: Vec<LinkId> = req.speeds.iter().map(|i| i.link).collect();
+        if dyn_req.extras.is_empty() {
+            self.ratios()?;
+            self.check_speed_inputs(&inputs)?;
+        }
+        let accelerated = Self::accelerated_links(dyn_req);
+        let plan = PreparedTrain::for_analysis(
+            self,
+            &inputs,
+            &accelerated,
+            &dyn_req.driving,
+            &dyn_req.extras,
+        )?;
+        let mut ws = plan.workspace();
+        let speeds = if dyn_req.extras.is_empty() {
+            self.kinematics_on(&plan, &mut ws, &req.speeds)?
         } else {
-            self.constrained_speeds(&req.speeds, &req.dynamics.extras)?
+            self.constrained_speeds(&req.speeds, &dyn_req.extras)?
         };
         let w = &speeds.speed;
         let taus = self.ratios()?;
@@ -148,18 +166,6 @@ impl Train {
             .iter()
             .map(|c| w[c.gear_j.index()] - w[c.carrier.index()])
             .collect();
-        // One prepared solve: speeds (eq. 2), accelerations (eq. 8), forces
-        // (eq. 10) and, with losses, the direction search.
-        let dyn_req = &req.dynamics;
-        let inputs: Vec<LinkId> = req.speeds.iter().map(|i| i.link).collect();
-        let accelerated = Self::accelerated_links(dyn_req);
-        let plan = PreparedTrain::for_analysis(
-            self,
-            &inputs,
-            &accelerated,
-            &dyn_req.driving,
-            &dyn_req.extras,
-        )?;
         let alpha = Self::prescribed_accelerations(dyn_req)?;
         let (q, velocity) = self.generalized_forces(dyn_req, mass, Some(w))?;
         let input_speeds: Vec<f64> = req.speeds.iter().map(|i| i.speed).collect();
@@ -173,7 +179,6 @@ impl Train {
             efficiency: &etas,
             mass_matrix: mass,
         };
-        let mut ws = plan.workspace();
         plan.solve(&mut ws, &scenario, Compute::Power)?;
         let dynamics = self.dynamics_result(dyn_req, mass, &plan, &ws, &velocity);
         let dirs = ws.directions().to_vec();

@@ -1,11 +1,12 @@
 //! Kinematics by the Willis equations (paper section 3, eq. 2):
 //! psi_m = w_i - tau_m w_j + (tau_m - 1) w_k = 0 for every fundamental circuit m.
 //!
-//! [`KinematicsPlan`] is prepared once per choice of input links (index maps
-//! and buffers sized then) and solves any number of ratio/speed sets without
-//! allocating. [`Train::kinematics`] wraps it for one scenario, adds the exact
-//! rational solution when every ratio is exact, and diagnoses singular inputs
-//! exactly (which links are free, which equations conflict).
+//! [`Train::kinematics`] solves one scenario in floating point through the
+//! one float solver, [`PreparedTrain`] (the Willis rows completed by the
+//! input rows, dense or sparse by size); adds the exact rational solution
+//! when every ratio is exact; and diagnoses singular inputs exactly (which
+//! links are free, which equations conflict). Many scenarios: prepare a
+//! [`PreparedTrain`] once and solve [`Compute::Kinematics`] per scenario.
 
 use nalgebra::DMatrix;
 use num_traits::Zero;
@@ -15,8 +16,8 @@ use crate::error::{AnalysisError, Error, Result};
 use crate::model::equations::{self, willis_row};
 use crate::model::train::{LinkId, Train};
 use crate::numerics::exact::{self, Q, QMatrix};
-use crate::numerics::linalg::{COND_WARN, Lu};
-use crate::numerics::sparse::SparseLu;
+use crate::numerics::linalg::COND_WARN;
+use crate::solve::prepared::{Compute, PreparedTrain, Scenario, Workspace};
 
 /// One prescribed input speed.
 #[derive(Debug, Clone, PartialEq)]
@@ -73,212 +74,6 @@ pub struct Speeds {
     pub warnings: Vec<String>,
 }
 
-/// Which column a link occupies in a prepared system.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Slot {
-    Frame,
-    Input(usize),
-    Unknown(usize),
-}
-
-/// Unknowns from which the Willis system is factored sparsely (faer's
-/// sparse LU, fill-reducing order): below, the dense LU (unrolled for small
-/// orders) is faster; from about 20 unknowns the sparse one is, and its time
-/// and memory grow about linearly where the dense LU's grow as n^2 to n^3
-/// (`cargo bench -p egt-core --bench scenarios -- large::kinematics`,
-/// figures in `docs/performance.md (history: git log -p -- docs/benchmarks.md)`, "Large trains").
-pub const SPARSE_FROM: usize = 20;
-
-/// The factorisation of a Willis system.
-#[derive(Debug, Clone)]
-enum Factor {
-    Dense(Lu),
-    /// With the slot of each circuit's three entries (`usize::MAX`: a known speed).
-    Sparse(Box<SparseLu>, Vec<[usize; 3]>),
-}
-
-/// A kinematic solve prepared for one choice of input links.
-#[derive(Debug, Clone)]
-pub struct KinematicsPlan {
-    inputs: Vec<LinkId>,
-    slots: Vec<Slot>,
-    unknowns: Vec<LinkId>,
-    circuits: Vec<[LinkId; 3]>,
-    factor: Factor,
-    rhs: Vec<f64>,
-}
-
-impl KinematicsPlan {
-    /// Prepare for `inputs` (as many distinct non-frame links as the train has DOF).
-    ///
-    /// # Errors
-    /// Wrong input count, the frame or a repeated link as input.
-    pub fn new(train: &Train, inputs: &[LinkId]) -> Result<Self> {
-        Self::with_sparse(train, inputs, train.coordinates().len() >= SPARSE_FROM)
-    }
-
-    /// As [`KinematicsPlan::new`], with the sparse or the dense LU as asked.
-    ///
-    /// # Errors
-    /// As [`KinematicsPlan::new`].
-    pub fn with_sparse(train: &Train, inputs: &[LinkId], sparse: bool) -> Result<Self> {
-        if inputs.len() != train.dof() {
-            return Err(AnalysisError::WrongInputCount {
-                dof: train.dof(),
-                given: inputs.len(),
-                what: "input speeds".into(),
-            }
-            .into());
-        }
-        let mut slots: Vec<Slot> = train.links().iter().map(|_| Slot::Frame).collect();
-        for (k, &l) in inputs.iter().enumerate() {
-            if l == train.frame() {
-                return Err(AnalysisError::FrameInput {
-                    link: train.link_name(l).to_string(),
-                }
-                .into());
-            }
-            if slots[l.index()] != Slot::Frame {
-                return Err(AnalysisError::RepeatedLink {
-                    link: train.link_name(l).to_string(),
-                    role: "input links".into(),
-                }
-                .into());
-            }
-            if !train.link(l).sized {
-                return Err(unsized_error(train, l));
-            }
-            slots[l.index()] = Slot::Input(k);
-        }
-        let mut unknowns = Vec::new();
-        for &l in train.coordinates() {
-            if slots[l.index()] == Slot::Frame {
-                slots[l.index()] = Slot::Unknown(unknowns.len());
-                unknowns.push(l);
-            }
-        }
-        let n = unknowns.len();
-        debug_assert_eq!(n, train.circuits().len());
-        let circuits: Vec<[LinkId; 3]> = train
-            .circuits()
-            .iter()
-            .map(|c| [c.gear_i, c.gear_j, c.carrier])
-            .collect();
-        let factor = if sparse {
-            let mut entries = Vec::with_capacity(3 * n);
-            for (m, ids) in circuits.iter().enumerate() {
-                for l in ids {
-                    if let Slot::Unknown(u) = slots[l.index()] {
-                        entries.push((m, u));
-                    }
-                }
-            }
-            let (lu, at) = SparseLu::new(n, &entries).map_err(|e| AnalysisError::OutOfMemory {
-                what: "the Willis system".into(),
-                detail: e.to_string(),
-            })?;
-            let mut next = at.into_iter();
-            let places = circuits
-                .iter()
-                .map(|ids| {
-                    ids.map(|l| match slots[l.index()] {
-                        Slot::Unknown(_) => next.next().unwrap_or(usize::MAX),
-                        _ => usize::MAX,
-                    })
-                })
-                .collect();
-            Factor::Sparse(Box::new(lu), places)
-        } else {
-            Factor::Dense(Lu::new(n))
-        };
-        Ok(KinematicsPlan {
-            inputs: inputs.to_vec(),
-            slots,
-            unknowns,
-            circuits,
-            factor,
-            rhs: vec![0.0; n],
-        })
-    }
-
-    /// The input links, in order.
-    pub fn inputs(&self) -> &[LinkId] {
-        &self.inputs
-    }
-
-    /// Solve for every link's speed: `ratios` in gear-pair order, `input_speeds`
-    /// in input order; `speeds` (one per link) receives the result. Returns the
-    /// condition estimate. Allocates nothing.
-    ///
-    /// # Errors
-    /// [`AnalysisError::Singular`] on a zero pivot, [`AnalysisError::IllConditioned`]
-    /// past [`COND_REFUSE`](crate::numerics::linalg::COND_REFUSE). (Use [`Train::kinematics`] for an exact diagnosis.)
-    pub fn solve(
-        &mut self,
-        ratios: &[f64],
-        input_speeds: &[f64],
-        speeds: &mut [f64],
-    ) -> Result<f64> {
-        let n = self.unknowns.len();
-        self.rhs.iter_mut().for_each(|v| *v = 0.0);
-        let (what, detail) = ("the Willis system", "a pivot column is zero");
-        match &mut self.factor {
-            Factor::Dense(lu) => {
-                let a = lu.matrix_mut();
-                a.iter_mut().for_each(|v| *v = 0.0);
-                for (m, (ids, &tau)) in self.circuits.iter().zip(ratios).enumerate() {
-                    for (l, coef) in ids.iter().zip(willis_row(tau)) {
-                        match self.slots[l.index()] {
-                            Slot::Frame => {}
-                            Slot::Input(k) => self.rhs[m] -= coef * input_speeds[k],
-                            Slot::Unknown(u) => a[m * n + u] += coef,
-                        }
-                    }
-                }
-            }
-            Factor::Sparse(lu, places) => {
-                let a = lu.values_mut();
-                a.iter_mut().for_each(|v| *v = 0.0);
-                for (m, ((ids, &tau), at)) in self
-                    .circuits
-                    .iter()
-                    .zip(ratios)
-                    .zip(places.iter())
-                    .enumerate()
-                {
-                    for ((l, coef), &k) in ids.iter().zip(willis_row(tau)).zip(at) {
-                        match self.slots[l.index()] {
-                            Slot::Frame => {}
-                            Slot::Input(i) => self.rhs[m] -= coef * input_speeds[i],
-                            Slot::Unknown(_) => a[k] += coef,
-                        }
-                    }
-                }
-            }
-        }
-        let cond = match &mut self.factor {
-            Factor::Dense(lu) => {
-                let cond = lu.factor_checked(what, detail)?;
-                lu.solve(&mut self.rhs);
-                cond
-            }
-            Factor::Sparse(lu, _) => {
-                let cond = lu.factor_checked(what, detail)?;
-                lu.solve(&mut self.rhs);
-                cond
-            }
-        };
-        speeds.iter_mut().for_each(|v| *v = 0.0);
-        for (k, &l) in self.inputs.iter().enumerate() {
-            speeds[l.index()] = input_speeds[k];
-        }
-        for (u, &l) in self.unknowns.iter().enumerate() {
-            speeds[l.index()] = self.rhs[u];
-        }
-        Ok(cond)
-    }
-}
-
 fn unsized_error(train: &Train, l: LinkId) -> Error {
     AnalysisError::MissingData {
         what: format!("the tooth count of planet `{}`", train.link_name(l)),
@@ -286,6 +81,27 @@ fn unsized_error(train: &Train, l: LinkId) -> Error {
         hint: "give `teeth.planet` in its planetary set".into(),
     }
     .into()
+}
+
+/// The prepared solver's refusal of the speed system, named as the
+/// single-scenario kinematics has always named it.
+fn willis_named(e: Error) -> Error {
+    match e {
+        Error::Analysis(AnalysisError::Singular { detail, .. }) => AnalysisError::Singular {
+            what: "the Willis system".into(),
+            detail,
+        }
+        .into(),
+        Error::Analysis(AnalysisError::IllConditioned {
+            condition, threshold, ..
+        }) => AnalysisError::IllConditioned {
+            what: "the Willis system".into(),
+            condition,
+            threshold,
+        }
+        .into(),
+        e => e,
+    }
 }
 
 /// Largest |psi_m| over the circuits, relative to the largest |w| (eq. 2 residual).
@@ -358,8 +174,62 @@ impl Train {
     /// circuits when the inputs do not determine the train;
     /// [`AnalysisError::IllConditioned`] when nearly singular.
     pub fn kinematics(&self, inputs: &[SpeedInput]) -> Result<Speeds> {
+        let links: Vec<LinkId> = inputs.iter().map(|i| i.link).collect();
+        self.ratios()?;
+        self.check_speed_inputs(&links)?;
+        let plan = PreparedTrain::for_analysis(self, &links, &links, &links, &[])?;
+        let mut ws = plan.workspace();
+        self.kinematics_on(&plan, &mut ws, inputs)
+    }
+
+    /// Input links for a speed solve: one per DOF, distinct, not the frame,
+    /// each of known speed (a planet needs its tooth count).
+    pub(crate) fn check_speed_inputs(&self, links: &[LinkId]) -> Result<()> {
+        if links.len() != self.dof() {
+            return Err(AnalysisError::WrongInputCount {
+                dof: self.dof(),
+                given: links.len(),
+                what: "input speeds".into(),
+            }
+            .into());
+        }
+        for (k, &l) in links.iter().enumerate() {
+            if l == self.frame() {
+                return Err(AnalysisError::FrameInput {
+                    link: self.link_name(l).to_string(),
+                }
+                .into());
+            }
+            if links[..k].contains(&l) {
+                return Err(AnalysisError::RepeatedLink {
+                    link: self.link_name(l).to_string(),
+                    role: "input links".into(),
+                }
+                .into());
+            }
+            if !self.link(l).sized {
+                return Err(unsized_error(self, l));
+            }
+        }
+        Ok(())
+    }
+
+    /// [`Train::kinematics`] with a prepared train whose input links are
+    /// those of `inputs`, in order, and a workspace of it: power flow solves
+    /// its speeds here and its forces in the same workspace, so the speed
+    /// system is factored once.
+    ///
+    /// # Errors
+    /// As [`Train::kinematics`].
+    pub(crate) fn kinematics_on(
+        &self,
+        plan: &PreparedTrain,
+        ws: &mut Workspace,
+        inputs: &[SpeedInput],
+    ) -> Result<Speeds> {
         let ratios = self.ratios()?;
         let links: Vec<LinkId> = inputs.iter().map(|i| i.link).collect();
+        self.check_speed_inputs(&links)?;
         let values: Vec<f64> = inputs.iter().map(|i| i.speed).collect();
         for (k, v) in values.iter().enumerate() {
             if !v.is_finite() {
@@ -369,9 +239,13 @@ impl Train {
                 ));
             }
         }
-        let mut plan = KinematicsPlan::new(self, &links)?;
+        let solved = plan
+            .solve(ws, &Scenario::kinematic(&ratios, &values), Compute::Kinematics)
+            .map_err(willis_named);
         let mut speed = vec![0.0; self.links().len()];
-        let solved = plan.solve(&ratios, &values, &mut speed);
+        for (&l, &w) in self.coordinates().iter().zip(ws.speeds()) {
+            speed[l.index()] = w;
+        }
         let exact_inputs: Option<Vec<Q>> = inputs.iter().map(|i| i.exact.clone()).collect();
         let exact_taus: Option<Vec<Q>> = self
             .gears()
@@ -382,7 +256,7 @@ impl Train {
         // rationals: only for trains within the dense limit.
         let exact_fits = self.require_dense("the exact kinematics");
         let condition = match solved {
-            Ok(c) => c,
+            Ok(()) => ws.conditions()[0],
             Err(e) if exact_fits.is_err() => return Err(e),
             Err(e) => {
                 // Diagnose exactly, on the exact ratios or on the exact values of the floats.
@@ -397,7 +271,7 @@ impl Train {
                     .iter()
                     .map(|&v| exact::from_f64(v).unwrap_or_else(Q::zero))
                     .collect();
-                self.solve_exact(&plan, &taus, &ins)?;
+                self.solve_exact(&links, &taus, &ins)?;
                 // Exactly regular but singular in floating point: name what is
                 // nearly dependent by diagnosing the simplest fractions within
                 // 1e-12 of the ratios (0.3333333333333333 is 1/3 meant).
@@ -406,7 +280,7 @@ impl Train {
                     .map(|&r| exact::simplest_near(r, 1e-12))
                     .collect();
                 let zero_pivot = matches!(e, Error::Analysis(AnalysisError::Singular { .. }));
-                if zero_pivot && let Err(near) = self.solve_exact(&plan, &simple, &ins) {
+                if zero_pivot && let Err(near) = self.solve_exact(&links, &simple, &ins) {
                     return Err(AnalysisError::Singular {
                         what: "the Willis system".into(),
                         detail: format!("it is singular to round-off (with the ratios as the simplest fractions within 1e-12: {near})"),
@@ -421,7 +295,7 @@ impl Train {
             warnings.push(format!("the Willis system is ill-conditioned (condition {condition:.2e}); expect about {:.0} correct digits", (16.0 - condition.log10()).max(0.0)));
         }
         let exact = match (exact_taus, exact_inputs, exact_fits) {
-            (Some(t), Some(i), Ok(())) => Some(self.solve_exact(&plan, &t, &i)?),
+            (Some(t), Some(i), Ok(())) => Some(self.solve_exact(&links, &t, &i)?),
             (Some(_), Some(_), Err(_)) => {
                 warnings.push(format!(
                     "no exact speeds: exact rationals are solved for trains of at most {} links, this one has {} (the float speeds stand, checked by their Willis residual)",
@@ -476,28 +350,46 @@ impl Train {
         })
     }
 
-    /// The exact solution for a prepared plan.
-    fn solve_exact(&self, plan: &KinematicsPlan, taus: &[Q], inputs: &[Q]) -> Result<Vec<Q>> {
-        let n = plan.unknowns.len();
-        let mut a: QMatrix = vec![vec![Q::zero(); n]; n];
-        let mut b: Vec<Q> = vec![Q::zero(); n];
-        for (m, (ids, tau)) in plan.circuits.iter().zip(taus).enumerate() {
+    /// The exact speeds of every link: the Willis equations over the
+    /// rationals with the speeds of `links` given as `inputs` (their
+    /// elimination names the free links or the conflicting circuits).
+    fn solve_exact(&self, links: &[LinkId], taus: &[Q], inputs: &[Q]) -> Result<Vec<Q>> {
+        // Each link's place: a given speed (its input index), an unknown
+        // (its column), or the frame (None in both).
+        let mut given: Vec<Option<usize>> = vec![None; self.links().len()];
+        for (k, &l) in links.iter().enumerate() {
+            given[l.index()] = Some(k);
+        }
+        let unknowns: Vec<LinkId> = self
+            .coordinates()
+            .iter()
+            .copied()
+            .filter(|l| given[l.index()].is_none())
+            .collect();
+        let mut column: Vec<Option<usize>> = vec![None; self.links().len()];
+        for (u, &l) in unknowns.iter().enumerate() {
+            column[l.index()] = Some(u);
+        }
+        let n = unknowns.len();
+        let mut a: QMatrix = vec![vec![Q::zero(); n]; self.circuits().len()];
+        let mut b: Vec<Q> = vec![Q::zero(); self.circuits().len()];
+        for (m, (c, tau)) in self.circuits().iter().zip(taus).enumerate() {
             let coefs = [exact::q(1), -tau.clone(), tau - exact::q(1)];
-            for (l, coef) in ids.iter().zip(coefs) {
-                match plan.slots[l.index()] {
-                    Slot::Frame => {}
-                    Slot::Input(k) => b[m] -= coef * &inputs[k],
-                    Slot::Unknown(u) => a[m][u] += coef,
+            for (l, coef) in [c.gear_i, c.gear_j, c.carrier].into_iter().zip(coefs) {
+                if let Some(k) = given[l.index()] {
+                    b[m] -= coef * &inputs[k];
+                } else if let Some(u) = column[l.index()] {
+                    a[m][u] += coef;
                 }
             }
         }
         match exact::solve(&a, &b) {
             Ok(x) => {
                 let mut out = vec![Q::zero(); self.links().len()];
-                for (k, &l) in plan.inputs.iter().enumerate() {
+                for (k, &l) in links.iter().enumerate() {
                     out[l.index()] = inputs[k].clone();
                 }
-                for (u, &l) in plan.unknowns.iter().enumerate() {
+                for (u, &l) in unknowns.iter().enumerate() {
                     out[l.index()] = x[u].clone();
                 }
                 Ok(out)
@@ -514,7 +406,7 @@ impl Train {
                 free: f
                     .free_columns
                     .iter()
-                    .map(|&u| self.link_name(plan.unknowns[u]).to_string())
+                    .map(|&u| self.link_name(unknowns[u]).to_string())
                     .collect(),
             }
             .into()),

@@ -86,6 +86,23 @@ pub struct Scenario<'a> {
     pub mass_matrix: Option<&'a MassMatrix>,
 }
 
+impl<'a> Scenario<'a> {
+    /// A scenario of what [`Compute::Kinematics`] reads: the ratios and the
+    /// input speeds (no loads, no masses).
+    pub fn kinematic(ratios: &'a [f64], speeds: &'a [f64]) -> Self {
+        Scenario {
+            ratios,
+            speeds,
+            accelerations: &[],
+            torques: &[],
+            inertia: &[],
+            mass: &[],
+            efficiency: &[],
+            mass_matrix: None,
+        }
+    }
+}
+
 /// A power balance (for [`Compute::Power`]).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct PowerSummary {

@@ -94,10 +94,11 @@ fn the_straight_line_program_is_within_1e_13_of_exact() {
     }
 }
 
-/// The kinematics of `Train::kinematics` (and the CLI) factors the Willis
-/// system by the dense LU below `SPARSE_FROM` unknowns and by the sparse LU
-/// above: both, forced on every well-conditioned train, are within 1e-13 of
-/// the exact speeds.
+/// The float speed solver (`PreparedTrain`, which `Train::kinematics` and
+/// the CLI use) factors the speed system by the dense LU below
+/// `PREPARED_SPARSE_FROM` coordinates and by the sparse LU above: both,
+/// forced on every well-conditioned train, are within 1e-13 of the exact
+/// speeds.
 #[test]
 fn both_willis_factorisations_are_within_1e_13_of_exact_speeds() {
     let mut trains = well_conditioned();
@@ -119,12 +120,8 @@ fn both_willis_factorisations_are_within_1e_13_of_exact_speeds() {
             .iter()
             .map(egt_core::numerics::exact::to_f64)
             .collect();
-        let ratios = t.ratios().unwrap_or_else(|e| panic!("{name}: {e}"));
         for sparse in [false, true] {
-            let mut plan = egt_core::KinematicsPlan::with_sparse(&t, &links, sparse)
-                .unwrap_or_else(|e| panic!("{name}: {e}"));
-            let mut w = vec![0.0; t.links().len()];
-            plan.solve(&ratios, &speeds, &mut w)
+            let (w, _) = crate::util::prepared_speeds(&t, &links, &speeds, sparse)
                 .unwrap_or_else(|e| panic!("{name}: {e}"));
             let e = relative_error(&w, &exact);
             assert!(e <= 1e-13, "{name} (sparse {sparse}): {e:e}");

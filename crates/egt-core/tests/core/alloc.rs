@@ -2,7 +2,7 @@
 //! allocate nothing: `Worker::eval` for kinematics, dynamics and lossy power
 //! flow on every test train, `PreparedTrain::solve` (also with a whole mass
 //! matrix and in the forces-only mode of the single analyses),
-//! `MassModel::fill` and `KinematicsPlan::solve` (dense and sparse).
+//! `MassModel::fill`, and the kinematics alone (dense and sparse).
 //!
 //! The count is per thread (the test harness runs tests on several threads),
 //! kept in a `const`-initialised thread-local `Cell`, which itself never allocates.
@@ -14,7 +14,6 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
-use egt_core::KinematicsPlan;
 use egt_core::solve::prepared::{Compute, MassModel, PreparedTrain, Scenario};
 
 use crate::util::{self, one_dof_trains, plan};
@@ -140,7 +139,7 @@ fn batch_rows_allocate_nothing() {
 /// only its task lists (one vector row-major; the columns and one task's
 /// column list column-major), and gives the first call's numbers bit for
 /// bit, after a call with a bad row too. Every path: the program (bounds),
-/// the lanes, and the linear path (a load sweep); kinematics and dynamics.
+/// row by row, and the linear path (a load sweep); kinematics and dynamics.
 #[test]
 fn small_batch_calls_reuse_the_plans_buffers() {
     use egt_core::batch::{Layout, Threads};
@@ -215,22 +214,23 @@ fn prepared_solves_and_mass_fill_allocate_nothing() {
         let ratios = t.ratios().unwrap_or_else(|e| panic!("{e}"));
         let inputs: Vec<_> = t.analysis().speeds.iter().map(|s| s.0).collect();
         let speeds: Vec<f64> = t.analysis().speeds.iter().map(|s| s.1).collect();
-        let mut kin = KinematicsPlan::new(&t, &inputs).unwrap_or_else(|e| panic!("{e}"));
-        let mut w = vec![0.0; t.links().len()];
-        kin.solve(&ratios, &speeds, &mut w)
-            .unwrap_or_else(|e| panic!("{e}"));
-        let (n, r) = allocations(|| kin.solve(&ratios, &speeds, &mut w));
-        assert!(r.is_ok());
-        assert_eq!(n, 0, "{name}: KinematicsPlan::solve");
-        // The sparse LU of large trains: factor, condition and solve reuse
-        // the plan's numeric storage and scratch.
-        let mut kin =
-            KinematicsPlan::with_sparse(&t, &inputs, true).unwrap_or_else(|e| panic!("{e}"));
-        kin.solve(&ratios, &speeds, &mut w)
-            .unwrap_or_else(|e| panic!("{e}"));
-        let (n, r) = allocations(|| kin.solve(&ratios, &speeds, &mut w));
-        assert!(r.is_ok());
-        assert_eq!(n, 0, "{name}: KinematicsPlan::solve, sparse");
+        // The speeds alone (the single-scenario kinematics' solver), dense
+        // and sparse: factor, condition and solve reuse the workspace.
+        for sparse in [false, true] {
+            let pt = PreparedTrain::for_analysis(&t, &inputs, &inputs, &inputs, &[])
+                .and_then(|p| p.with_sparse(sparse))
+                .unwrap_or_else(|e| panic!("{e}"));
+            let mut ws = pt.workspace();
+            let s = Scenario::kinematic(&ratios, &speeds);
+            pt.solve(&mut ws, &s, Compute::Kinematics)
+                .unwrap_or_else(|e| panic!("{e}"));
+            // New ratios (bitwise), so the factorisation is redone.
+            let other: Vec<f64> = ratios.iter().map(|r| r * (1.0 + 1e-9)).collect();
+            let s2 = Scenario::kinematic(&other, &speeds);
+            let (n, r) = allocations(|| pt.solve(&mut ws, &s2, Compute::Kinematics));
+            assert!(r.is_ok());
+            assert_eq!(n, 0, "{name}: PreparedTrain::solve (kinematics, sparse {sparse})");
+        }
 
         // The single analyses' mode: a whole [M], forces only (eq. 8, 10),
         // dense and sparse (the sparse LUs and [M] as terms of large trains).

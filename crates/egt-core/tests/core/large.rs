@@ -6,7 +6,7 @@
 
 use egt_core::numerics::exact;
 use egt_core::solve::kinematics::willis_residual;
-use egt_core::{KinematicsPlan, LinkId, SpeedInput, Train};
+use egt_core::{LinkId, SpeedInput, Train};
 
 use crate::lab::families;
 use crate::util::{self, one_dof_trains};
@@ -29,11 +29,7 @@ fn speed_inputs(t: &Train) -> Vec<SpeedInput> {
 
 fn solve(t: &Train, sparse: bool) -> egt_core::error::Result<(Vec<f64>, f64)> {
     let (links, speeds) = input_of(t);
-    let mut plan = KinematicsPlan::with_sparse(t, &links, sparse)?;
-    let ratios = t.ratios()?;
-    let mut w = vec![0.0; t.links().len()];
-    let cond = plan.solve(&ratios, &speeds, &mut w)?;
-    Ok((w, cond))
+    util::prepared_speeds(t, &links, &speeds, sparse)
 }
 
 #[test]
@@ -65,7 +61,7 @@ fn sparse_and_dense_willis_solves_agree_on_every_test_train() {
 #[test]
 fn sparse_solve_of_a_500_link_chain_is_within_1e_13_of_exact() {
     let t = util::train(&families::zigzag_chain(249));
-    assert!(t.coordinates().len() >= egt_core::solve::kinematics::SPARSE_FROM);
+    assert!(t.coordinates().len() >= egt_core::solve::prepared::PREPARED_SPARSE_FROM);
     let (w, cond) = solve(&t, true).unwrap_or_else(|e| panic!("{e}"));
     // A disturbance of one stage reaches every later one: the condition
     // grows like the number of links, not faster.

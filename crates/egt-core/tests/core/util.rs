@@ -71,3 +71,24 @@ pub fn plan(t: &Train, compute: Compute) -> BatchPlan {
 pub fn close(a: f64, b: f64, rel: f64, floor: f64) -> bool {
     (a - b).abs() <= rel * a.abs().max(b.abs()).max(floor)
 }
+
+/// Every link's speed (the frame's 0) and the condition estimate from the
+/// float speed solver, [`PreparedTrain`] with [`Compute::Kinematics`],
+/// factored sparsely or densely as asked.
+pub fn prepared_speeds(
+    t: &Train,
+    links: &[egt_core::LinkId],
+    speeds: &[f64],
+    sparse: bool,
+) -> egt_core::error::Result<(Vec<f64>, f64)> {
+    use egt_core::solve::prepared::{PreparedTrain, Scenario};
+    let plan = PreparedTrain::for_analysis(t, links, links, links, &[])?.with_sparse(sparse)?;
+    let ratios = t.ratios()?;
+    let mut ws = plan.workspace();
+    plan.solve(&mut ws, &Scenario::kinematic(&ratios, speeds), Compute::Kinematics)?;
+    let mut w = vec![0.0; t.links().len()];
+    for (&l, &v) in t.coordinates().iter().zip(ws.speeds()) {
+        w[l.index()] = v;
+    }
+    Ok((w, ws.conditions()[0]))
+}
