@@ -29,7 +29,7 @@ test-rust: ## Rust unit, integration, CLI and doc tests (a default build), and t
 # Not in CI (it compiles the core's dependency tree once more, optimised:
 # about 15 minutes on 2 cores): the core's tests optimised, with the opt-in
 # jit feature. Run it after touching the batch executors.
-test-release: ## The core's tests optimised (SIMD lanes, compiled programs) with the opt-in jit feature
+test-release: ## The core's tests optimised (straight-line and compiled programs) with the opt-in jit feature
 	cargo test --release -p egt-core --features jit --lib --test core
 
 $(VENV)/.ready: crates/egt-py/requirements-dev.txt

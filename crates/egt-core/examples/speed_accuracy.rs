@@ -178,8 +178,8 @@ fn main() {
             }));
         }
         // egt's batch path: 10 000 rows through `BatchPlan::run` on one
-        // thread, the same two rows alternating (every row factors; groups
-        // of eight go through the SIMD lanes). Its rows are the worker's
+        // thread, the same two rows alternating (every row factors, row by
+        // row). Its rows are the worker's
         // numbers bit for bit (checked here), so its error is egt LU's.
         {
             let plan = p.plan();

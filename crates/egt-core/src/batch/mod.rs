@@ -39,31 +39,21 @@
 //! multiply-add over the outputs that the compiler vectorises. A load,
 //! speed or acceleration sweep costs a few nanoseconds per row instead of a
 //! solve; other blocks (ratio, inertia or efficiency sweeps, power flow with
-//! its direction-dependent losses) are solved by the lanes or row by row.
-//! Both give the same numbers to round-off (tested).
-//!
-//! **Lanes.** Other blocks of kinematics or ideal dynamics (ratio, inertia or
-//! mass sweeps, every row its own train) are solved eight rows at a time,
-//! the rows in the lanes of every matrix entry (structure of arrays), with
-//! the vector instructions the machine has (AVX2 through `pulp` when
-//! present). The eight share one pivot order; a row whose partial pivoting
-//! would choose another, whose system is singular or past the refusal
-//! threshold, or that holds a bad value, leaves its group and is solved on
-//! its own, which gives its error. A row solved in the lanes gets the numbers
-//! a fresh [`Worker`] gives it, condition estimates included (tested bit for
-//! bit); power flow is always row by row.
+//! its direction-dependent losses) are solved by the straight-line program
+//! or row by row. Both give the same numbers to round-off (tested).
 //!
 //! **Condition bounds.** The dlacn2 estimate costs four to ten substitutions
-//! per factorisation, a fifth to a quarter of a small train's row in the
-//! lanes. When the `cond.*` columns are not wanted for themselves
-//! ([`BatchPlan::with_condition_bounds`]; `egt batch --columns` without a
-//! `cond.*` column), a group first bounds every row's 1-norm condition
-//! number from above, `||A|| ||U^-1|| ||L^-1||` through the comparison
-//! matrices of the factors (one substitution, no iteration), and is
-//! estimated only when the bound cannot show every row below `COND_WARN` / 2.
-//! The estimate is a lower bound of the condition number, so the rows warned
-//! about or refused are exactly those without bounds (tested on trains swept
-//! through their lock).
+//! per factorisation. When the `cond.*` columns are not wanted for
+//! themselves ([`BatchPlan::with_condition_bounds`]; `egt batch --columns`
+//! without a `cond.*` column), the straight-line program below bounds
+//! every row's 1-norm condition number from above, `||A|| ||U^-1||
+//! ||L^-1||` through the comparison matrices of the factors (one
+//! substitution, no iteration), and leaves a row whose bound cannot show it
+//! below `COND_WARN` / 2 to the row-by-row solve, which estimates it. The
+//! estimate is a lower bound of the condition number, so the rows warned
+//! about or refused are exactly those without bounds (tested on trains
+//! swept through their lock). Without bounds, every row not on the linear
+//! path is solved on its own, its condition estimated.
 //!
 //! **Straight-line program.** With condition bounds, a dense train's
 //! kinematics and ideal dynamics are eliminated once, symbolically, in the
@@ -73,8 +63,8 @@
 //! rows at once. Each row checks that the fixed order is still a safe pivot
 //! order (no multiplier past 2 in magnitude), bounds each system's condition
 //! number as above, and that every result is finite; a row that fails any
-//! check, or holds a bad value, goes to the lanes, which give its estimate,
-//! warning or error. The program's numbers differ from the row-by-row
+//! check, or holds a bad value, is solved on its own, which gives its
+//! estimate, warning or error. The program's numbers differ from the row-by-row
 //! solve's by rounding only (another order of the same operations; tested
 //! within 1e-12 of the row's largest output); the rows warned about or
 //! refused are the same (tested). With the `jit` feature, the program runs
@@ -146,7 +136,7 @@ mod worker;
 
 pub use plan::{BatchPlan, Executor};
 pub use run::{Column, Layout, RowError, Solved, Threads, worker_threads};
-pub use worker::{LANES_MIN_ROWS, PROGRAM_MAX_COORDINATES, Worker};
+pub use worker::{PROGRAM_MAX_COORDINATES, PROGRAM_MIN_ROWS, Worker};
 
 use crate::error::{AnalysisError, Error, Result};
 use crate::model::train::{LinkId, Train};

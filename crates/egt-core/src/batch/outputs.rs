@@ -3,7 +3,7 @@
 
 use crate::error::{Error, Result};
 use crate::solve::prepared::{Compute, Workspace};
-use crate::solve::prepared::{LaneWorkspace, efficiency_ok, non_negative, ratio_ok};
+use crate::solve::prepared::{efficiency_ok, non_negative, ratio_ok};
 
 use super::plan::BatchPlan;
 
@@ -37,25 +37,6 @@ impl Solution for (&Workspace, &BatchPlan) {
     }
     fn power(&self) -> Option<crate::solve::prepared::PowerSummary> {
         (self.1.compute == Compute::Power).then(|| self.0.power())
-    }
-}
-
-/// Lane `.1` of a group.
-impl Solution for (&LaneWorkspace, usize) {
-    fn speed(&self, k: usize) -> f64 {
-        self.0.speed[k][self.1]
-    }
-    fn accel(&self, k: usize) -> f64 {
-        self.0.accel[k][self.1]
-    }
-    fn x(&self, k: usize) -> f64 {
-        self.0.x[k][self.1]
-    }
-    fn cond(&self) -> [f64; 3] {
-        self.0.cond.map(|c| c[self.1])
-    }
-    fn power(&self) -> Option<crate::solve::prepared::PowerSummary> {
-        None
     }
 }
 

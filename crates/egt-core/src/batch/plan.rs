@@ -11,7 +11,7 @@ use crate::solve::rows::Extra;
 use super::BatchSpec;
 use super::linear::LINEAR_MIN_ROWS;
 use super::run::Spares;
-use super::worker::{LANES_MIN_ROWS, Lanes, PROGRAM_MAX_COORDINATES, Worker};
+use super::worker::{Blocks, PROGRAM_MAX_COORDINATES, PROGRAM_MIN_ROWS, Worker};
 
 /// Where each parameter group starts in a row.
 #[derive(Debug, Clone, Copy, Default)]
@@ -232,8 +232,8 @@ impl BatchPlan {
     /// choice; the numbers of a chosen column are those of the plan with
     /// every output, bit for bit (tested), but for one case: only chosen
     /// results are checked finite in the program, so a row whose unchosen
-    /// output overflows stays in the program instead of going to the
-    /// lanes, and its chosen numbers may then differ by rounding.
+    /// output overflows stays in the program instead of being solved on its
+    /// own, and its chosen numbers may then differ by rounding.
     ///
     /// # Errors
     /// An empty list, an output the plan does not have, or one named twice.
@@ -477,19 +477,19 @@ impl BatchPlan {
     }
 
     /// Whether [`BatchPlan::run`] solves a block of rows (row-major) by the
-    /// lanes: kinematics or ideal dynamics of a dense train (below
-    /// [`PREPARED_SPARSE_FROM`](crate::solve::prepared::PREPARED_SPARSE_FROM)
-    /// coordinates) and at least [`LANES_MIN_ROWS`] rows.
-    pub fn lanes_apply(&self, rows: &[f64]) -> bool {
+    /// straight-line program: a plan with a program (condition bounds, a
+    /// dense train's kinematics or ideal dynamics) and at least
+    /// [`PROGRAM_MIN_ROWS`] rows.
+    pub fn program_applies(&self, rows: &[f64]) -> bool {
         let n = rows.len().checked_div(self.parameters.len()).unwrap_or(0);
-        matches!(self.compute, Compute::Kinematics | Compute::Dynamics)
-            && n >= LANES_MIN_ROWS
+        self.program.is_some()
+            && matches!(self.compute, Compute::Kinematics | Compute::Dynamics)
+            && n >= PROGRAM_MIN_ROWS
             && !self.prepared.is_sparse()
     }
 
-    pub(super) fn lanes(&self) -> Lanes {
-        Lanes {
-            w: self.prepared.lane_workspace(),
+    pub(super) fn blocks(&self) -> Blocks {
+        Blocks {
             program: self.program.as_ref().map(Program::workspace),
             left: Vec::new(),
             left_rows: Vec::new(),

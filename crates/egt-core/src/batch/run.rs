@@ -13,7 +13,7 @@ use crate::solve::prepared::Workspace;
 use super::linear::Linear;
 use super::outputs::{all_finite, overflowed, refuse};
 use super::plan::BatchPlan;
-use super::worker::{LANES_MIN_ROWS, Lanes, Worker};
+use super::worker::{Blocks, PROGRAM_MIN_ROWS, Worker};
 
 /// The worker threads for a batch: the request, capped at the machine's
 /// parallelism (more threads than cores only add switching, and a huge
@@ -133,7 +133,7 @@ impl BatchPlan {
             let first = task * ROWS_PER_TASK;
             let n = pin.len() / p.max(1);
             let solved =
-                t.w.eval_task(&mut t.lin, &mut t.lanes, pin, pout, first, &mut errors);
+                t.w.eval_task(&mut t.lin, &mut t.blocks, pin, pout, first, &mut errors);
             unbounded.fetch_add(n - solved, Ordering::Relaxed);
             if !all_finite(pout) {
                 let n = pout.len() / q;
@@ -314,7 +314,7 @@ impl BatchPlan {
             let TaskState {
                 w,
                 lin,
-                lanes,
+                blocks,
                 pin,
                 pout,
             } = t;
@@ -327,9 +327,9 @@ impl BatchPlan {
                     (c, true) => &c[..n],
                 };
                 let linear = self.linear_may(column, n);
-                if !linear && self.program.is_some() && n >= LANES_MIN_ROWS {
+                if !linear && self.program.is_some() && n >= PROGRAM_MIN_ROWS {
                     let solved =
-                        w.eval_program_columns(lanes, column, &mut cols, first, &mut errors);
+                        w.eval_program_columns(blocks, column, &mut cols, first, &mut errors);
                     unbounded.fetch_add(n - solved, Ordering::Relaxed);
                     break 'solve;
                 }
@@ -361,7 +361,7 @@ impl BatchPlan {
                 }
                 pout.clear();
                 pout.resize(n * q, 0.0);
-                w.eval_task(lin, lanes, pin, pout, first, &mut errors);
+                w.eval_task(lin, blocks, pin, pout, first, &mut errors);
                 for (t, tile) in pout.chunks(TILE * q).enumerate() {
                     let at = t * TILE;
                     for (o, c) in cols.iter_mut().enumerate() {
@@ -385,12 +385,12 @@ impl BatchPlan {
     }
 }
 
-/// What a batch task works with: a worker, the linear path's and the lanes'
-/// buffers, and the transposition's (column-major calls).
+/// What a batch task works with: a worker, the linear path's and the
+/// program's buffers, and the transposition's (column-major calls).
 pub(super) struct TaskState<'a> {
     pub(super) w: Worker<'a>,
     pub(super) lin: Linear,
-    pub(super) lanes: Lanes,
+    pub(super) blocks: Blocks,
     pub(super) pin: Vec<f64>,
     pub(super) pout: Vec<f64>,
 }
@@ -400,7 +400,7 @@ impl<'a> TaskState<'a> {
         TaskState {
             w: plan.worker(),
             lin: Linear::default(),
-            lanes: plan.lanes(),
+            blocks: plan.blocks(),
             pin: Vec::new(),
             pout: Vec::new(),
         }
@@ -412,7 +412,7 @@ pub(super) struct Spare {
     pub(super) ws: Workspace,
     pub(super) all: Vec<f64>,
     pub(super) lin: Linear,
-    pub(super) lanes: Lanes,
+    pub(super) blocks: Blocks,
     pub(super) pin: Vec<f64>,
     pub(super) pout: Vec<f64>,
 }
@@ -453,7 +453,7 @@ impl Spares {
                     all: s.all,
                 },
                 lin: s.lin,
-                lanes: s.lanes,
+                blocks: s.blocks,
                 pin: s.pin,
                 pout: s.pout,
             },
@@ -471,7 +471,7 @@ impl Spares {
                 ws: t.w.ws,
                 all: t.w.all,
                 lin: t.lin,
-                lanes: t.lanes,
+                blocks: t.blocks,
                 pin: t.pin,
                 pout: t.pout,
             });

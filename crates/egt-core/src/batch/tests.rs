@@ -12,47 +12,10 @@ use super::*;
 use crate::solve::prepared::{Isa, PROGRAM_BLOCK, Program};
 use crate::{Format, Train};
 
-/// A ratio sweep goes through the lanes: every good row of a smooth
-/// sweep, none of the rows the lanes must leave (a bad value, a pivot
-/// order of its own). The results themselves are compared with solving
-/// each row alone in `tests/core/batch.rs`.
-#[test]
-fn lanes_solve_the_rows_of_a_ratio_sweep() {
-    let text = include_str!("../../../../examples/fig3_example61.toml");
-    let t = Train::from_str(text, Format::Toml, "fig3").unwrap_or_else(|e| panic!("{e}"));
-    let p = BatchPlan::new(
-        &t,
-        &BatchSpec::from_analysis(&t, Compute::Dynamics).unwrap_or_else(|e| panic!("{e}")),
-    )
-    .unwrap_or_else(|e| panic!("{e}"));
-    let np = p.parameters().len();
-    let rows = 256;
-    let mut params = Vec::new();
-    for r in 0..rows {
-        let mut row = p.base().to_vec();
-        row[0] *= 1.0 + 0.001 * r as f64;
-        params.extend(row);
-    }
-    let mut out = vec![0.0; rows * p.outputs().len()];
-    let (mut w, mut lanes) = (p.worker(), p.lanes());
-    let mut errors = Vec::new();
-    assert_eq!(
-        w.eval_lanes(&mut lanes, &params, &mut out, 0, &mut errors),
-        rows
-    );
-    assert!(errors.is_empty());
-    params[3 * np + 1] = f64::NAN;
-    // Far from the others' ratio: it leaves the lanes (another pivot order).
-    params[9 * np] *= -40.0;
-    let solved = w.eval_lanes(&mut lanes, &params, &mut out, 0, &mut errors);
-    assert_eq!(solved, rows - 2);
-    assert_eq!(errors.len(), 1);
-    assert_eq!(errors[0].row, 3);
-}
-
 /// The straight-line program solves a sweep's rows and leaves the bad,
-/// the far-off and the ill-conditioned ones to the lanes, which give
-/// their error or estimate; its numbers are the lanes' within rounding.
+/// the far-off and the ill-conditioned ones to the row-by-row solve, which
+/// gives their error or estimate; its numbers are the row-by-row solve's
+/// within rounding.
 #[test]
 fn the_program_solves_the_rows_it_can_vouch_for() {
     let text = include_str!("../../../../examples/fig3_example61.toml");
@@ -82,9 +45,9 @@ fn the_program_solves_the_rows_it_can_vouch_for() {
     params[70 * np + g1] = t1;
     params[70 * np + g2] = (1.0 + 1e-10) / t1;
     let mut out = vec![0.0; rows * nq];
-    let (mut w, mut lanes) = (p.worker(), p.lanes());
+    let (mut w, mut blocks) = (p.worker(), p.blocks());
     let mut errors = Vec::new();
-    let solved = w.eval_program(&mut lanes, &params, &mut out, 0, &mut errors);
+    let solved = w.eval_program(&mut blocks, &params, &mut out, 0, &mut errors);
     assert_eq!(solved, rows - 3);
     assert_eq!(errors.len(), 1);
     assert_eq!(errors[0].row, 3);
@@ -94,9 +57,9 @@ fn the_program_solves_the_rows_it_can_vouch_for() {
         .fold(0.0, f64::max);
     assert!(cond > crate::numerics::linalg::COND_WARN, "{cond}");
     let mut reference = vec![0.0; rows * nq];
-    let mut errors = Vec::new();
-    let lanes_solved = w.eval_lanes(&mut lanes, &params, &mut reference, 0, &mut errors);
-    assert!(lanes_solved >= rows - 3);
+    for (r, (row, o)) in params.chunks(np).zip(reference.chunks_mut(nq)).enumerate() {
+        assert_eq!(w.eval(row, o).is_err(), r == 3, "row {r}");
+    }
     for r in (0..rows).filter(|&r| r != 3) {
         let (a, b) = (&out[r * nq..][..nq], &reference[r * nq..][..nq]);
         let scale = a.iter().map(|v| v.abs()).fold(0.0, f64::max);
@@ -432,7 +395,7 @@ fn compare(name: &str, p: &BatchPlan, interpreted: &BatchPlan) {
 
 /// Column-major runs give `run`'s numbers and errors bit for bit, on
 /// every path: the program (with its left rows), the linear path (a
-/// load sweep), the lanes (no bounds) and row by row (power flow).
+/// load sweep) and row by row (no bounds, and power flow).
 #[test]
 fn column_major_runs_give_the_row_major_numbers_bit_for_bit() {
     let text = include_str!("../../../../examples/fig3_example61.toml");

@@ -1,9 +1,8 @@
-//! The worker: one thread's evaluator of rows, one by one, by the lanes
-//! (eight at a time) or by the straight-line program, with its buffers.
+//! The worker: one thread's evaluator of rows, one by one or by the
+//! straight-line program, with its buffers.
 
 use crate::error::Result;
-use crate::numerics::lanes::{LANES, Lane};
-use crate::solve::prepared::{LaneWorkspace, PROGRAM_BLOCK, Program, ProgramWorkspace};
+use crate::solve::prepared::{PROGRAM_BLOCK, Program, ProgramWorkspace};
 use crate::solve::prepared::{Scenario, Workspace};
 
 use super::linear::Linear;
@@ -11,20 +10,17 @@ use super::outputs::{check, write_outputs};
 use super::plan::BatchPlan;
 use super::run::RowError;
 
-/// Fewest rows in a block for the lanes.
-pub const LANES_MIN_ROWS: usize = 4;
+/// Fewest rows in a block for the straight-line program.
+pub const PROGRAM_MIN_ROWS: usize = 4;
 
 /// Coordinates up to which a batch with condition bounds runs the
-/// straight-line program rather than the lanes: every dense train (the
-/// program was 1.8 to 5 times faster than the lanes from 4 to 30 links, its
-/// lead growing with the size; docs/performance.md (history: git log -p -- docs/benchmarks.md)).
+/// straight-line program: every dense train.
 pub const PROGRAM_MAX_COORDINATES: usize = crate::solve::prepared::PREPARED_SPARSE_FROM;
 
-/// Buffers of the lanes path: the group's structure of arrays; the
-/// program's block, and the rows it leaves to the lanes.
+/// Buffers of the blocks a worker solves together: the program's block,
+/// and the rows it leaves to be solved one by one.
 #[derive(Debug)]
-pub(super) struct Lanes {
-    pub(super) w: LaneWorkspace,
+pub(super) struct Blocks {
     pub(super) program: Option<ProgramWorkspace>,
     /// Rows of the task the program left (their index, their parameters,
     /// their outputs): kept between tasks, so they allocate once.
@@ -35,7 +31,7 @@ pub(super) struct Lanes {
     pub(super) all: Vec<f64>,
 }
 
-/// The plan's program and a thread's workspace for it (`Lanes::program`).
+/// The plan's program and a thread's workspace for it (`Blocks::program`).
 pub(super) fn program_of<'p, 'w>(
     plan: &'p BatchPlan,
     pw: &'w mut Option<ProgramWorkspace>,
@@ -133,75 +129,13 @@ impl Worker<'_> {
         &self.ws
     }
 
-    /// A block of rows by the lanes ([`LANES`] rows solved at once, see the
-    /// module docs); rows the lanes leave (a bad parameter, another pivot
-    /// order, a singular or ill-conditioned system) are solved one at a time.
-    /// Returns how many rows the lanes solved.
-    pub(super) fn eval_lanes(
-        &mut self,
-        lanes: &mut Lanes,
-        rows: &[f64],
-        out: &mut [f64],
-        first: usize,
-        errors: &mut Vec<RowError>,
-    ) -> usize {
-        let plan = self.plan;
-        let g = plan.groups;
-        let pt = &plan.prepared;
-        let (p, q) = (plan.parameters.len(), plan.all.len());
-        let lw = &mut lanes.w;
-        let mut solved = 0;
-        for (k, (group, gout)) in rows
-            .chunks(p * LANES)
-            .zip(out.chunks_mut(q * LANES))
-            .enumerate()
-        {
-            let count = group.len() / p;
-            let mut live = [false; LANES];
-            for (l, row) in group.chunks(p).enumerate() {
-                live[l] = check(plan, row).is_ok();
-            }
-            if let Some(f) = live.iter().position(|&x| x) {
-                // Padding and bad rows take the first good row's values.
-                for l in 0..LANES {
-                    let row = &group[if live[l] { l } else { f } * p..][..p];
-                    let put = |dst: &mut [Lane], from: usize| {
-                        for (d, &v) in dst.iter_mut().zip(&row[from..]) {
-                            d[l] = v;
-                        }
-                    };
-                    put(&mut lw.ratios, g.ratio);
-                    put(&mut lw.speeds, g.speed);
-                    put(&mut lw.accelerations, g.accel);
-                    put(&mut lw.torques, g.torque);
-                    put(&mut lw.inertia, g.inertia);
-                    put(&mut lw.mass, g.mass);
-                }
-                pt.solve_lanes(lw, &mut live, plan.compute, plan.bounds);
-            }
-            for (l, (row, o)) in group.chunks(p).zip(gout.chunks_mut(q)).enumerate() {
-                if live[l] {
-                    solved += 1;
-                    write_outputs(plan, &(&*lw, l), o);
-                } else if let Err(error) = self.eval_all(row, o) {
-                    errors.push(RowError {
-                        row: first + k * LANES + l,
-                        error,
-                    });
-                }
-            }
-            debug_assert!(count <= LANES);
-        }
-        solved
-    }
-
     /// One task's rows (row-major) by the quickest path that applies: the
-    /// linear path, the program, the lanes, or row by row; how many rows
-    /// the program solved.
+    /// linear path, the program, or row by row; how many rows the program
+    /// solved.
     pub(super) fn eval_task(
         &mut self,
         lin: &mut Linear,
-        lanes: &mut Lanes,
+        blocks: &mut Blocks,
         rows: &[f64],
         out: &mut [f64],
         first: usize,
@@ -209,45 +143,40 @@ impl Worker<'_> {
     ) -> usize {
         let plan = self.plan;
         // The paths other than the program write every output: into `out`
-        // when all are chosen, else into `lanes.all` and then the chosen.
-        let mut all = std::mem::take(&mut lanes.all);
+        // when all are chosen, else into `blocks.all` and then the chosen.
+        let mut all = std::mem::take(&mut blocks.all);
         let whole = plan.writes_all();
         if !whole {
             all.clear();
             all.resize(rows.len() / plan.parameters.len() * plan.all.len(), 0.0);
         }
         let target = if whole { &mut *out } else { &mut all[..] };
-        let program = plan.program.is_some();
         let mut solved = 0;
         let wrote = if self.eval_linear(lin, rows, target, first, errors) {
             // Solved as y0 + sum p_j R_j.
             true
-        } else if plan.lanes_apply(rows) && program {
-            solved = self.eval_program(lanes, rows, out, first, errors);
+        } else if plan.program_applies(rows) {
+            solved = self.eval_program(blocks, rows, out, first, errors);
             false
         } else {
             let target = if whole { &mut *out } else { &mut all[..] };
-            if plan.lanes_apply(rows) {
-                self.eval_lanes(lanes, rows, target, first, errors);
-            } else {
-                self.eval_rows(rows, target, first, errors);
-            }
+            self.eval_rows(rows, target, first, errors);
             true
         };
         if wrote && !whole {
             plan.gather_rows(&all, out);
         }
-        lanes.all = all;
+        blocks.all = all;
         solved
     }
 
     /// A block of rows by the straight-line program ([`PROGRAM_BLOCK`] rows at
     /// once); the rows it leaves (a bad parameter, other pivots, a bound past
-    /// `COND_WARN` / 2, a result not finite) go to the lanes together.
+    /// `COND_WARN` / 2, a result not finite) are then solved one by one.
     /// Returns how many rows the program solved.
     pub(super) fn eval_program(
         &mut self,
-        lanes: &mut Lanes,
+        blocks: &mut Blocks,
         rows: &[f64],
         out: &mut [f64],
         first: usize,
@@ -255,9 +184,9 @@ impl Worker<'_> {
     ) -> usize {
         let plan = self.plan;
         let (p, q) = (plan.parameters.len(), plan.names.len());
-        let (program, pw) = program_of(plan, &mut lanes.program);
-        lanes.left.clear();
-        lanes.left_rows.clear();
+        let (program, pw) = program_of(plan, &mut blocks.program);
+        blocks.left.clear();
+        blocks.left_rows.clear();
         for (k, (block, bout)) in rows
             .chunks(p * PROGRAM_BLOCK)
             .zip(out.chunks_mut(q * PROGRAM_BLOCK))
@@ -270,14 +199,14 @@ impl Worker<'_> {
             }
             for (r, row) in block.chunks(p).enumerate() {
                 if !pw.valid[r] {
-                    lanes.left.push(k * PROGRAM_BLOCK + r);
-                    lanes.left_rows.extend_from_slice(row);
+                    blocks.left.push(k * PROGRAM_BLOCK + r);
+                    blocks.left_rows.extend_from_slice(row);
                 }
             }
         }
-        let solved = rows.len() / p - lanes.left.len();
-        self.eval_left(lanes, first, errors);
-        for (&i, o) in lanes.left.iter().zip(lanes.left_out.chunks(plan.all.len())) {
+        let solved = rows.len() / p - blocks.left.len();
+        self.eval_left(blocks, first, errors);
+        for (&i, o) in blocks.left.iter().zip(blocks.left_out.chunks(plan.all.len())) {
             plan.gather(o, &mut out[i * q..(i + 1) * q]);
         }
         solved
@@ -287,7 +216,7 @@ impl Worker<'_> {
     /// is the block's part of parameter column `k`, `out[o]` of output column `o`.
     pub(super) fn eval_program_columns<'c>(
         &mut self,
-        lanes: &mut Lanes,
+        blocks: &mut Blocks,
         column: impl Fn(usize) -> &'c [f64],
         out: &mut [&mut [f64]],
         first: usize,
@@ -296,9 +225,9 @@ impl Worker<'_> {
         let plan = self.plan;
         let p = plan.parameters.len();
         let n = out.first().map_or(0, |c| c.len());
-        let (program, pw) = program_of(plan, &mut lanes.program);
-        lanes.left.clear();
-        lanes.left_rows.clear();
+        let (program, pw) = program_of(plan, &mut blocks.program);
+        blocks.left.clear();
+        blocks.left_rows.clear();
         // Outputs written in place, unless their columns crowd the cache's
         // sets (a matrix of 512 x 2^k rows): then through the block's slots.
         let crowded = crate::solve::prepared::crowded(out.iter().map(|c| c.as_ptr() as usize));
@@ -310,15 +239,15 @@ impl Worker<'_> {
             }
             for r in at..to {
                 if !pw.valid[r - at] {
-                    lanes.left.push(r);
-                    lanes.left_rows.extend((0..p).map(|k| column(k)[r]));
+                    blocks.left.push(r);
+                    blocks.left_rows.extend((0..p).map(|k| column(k)[r]));
                 }
             }
         }
-        let solved = n - lanes.left.len();
-        self.eval_left(lanes, first, errors);
+        let solved = n - blocks.left.len();
+        self.eval_left(blocks, first, errors);
         let q = plan.all.len();
-        for (&i, o) in lanes.left.iter().zip(lanes.left_out.chunks(q)) {
+        for (&i, o) in blocks.left.iter().zip(blocks.left_out.chunks(q)) {
             for (c, &k) in out.iter_mut().zip(&plan.chosen) {
                 c[i] = o[k];
             }
@@ -326,32 +255,28 @@ impl Worker<'_> {
         solved
     }
 
-    /// The rows the program left (`lanes.left_rows`, row-major) by the lanes
-    /// or row by row into `lanes.left_out`; their errors numbered from `first`.
-    fn eval_left(&mut self, lanes: &mut Lanes, first: usize, errors: &mut Vec<RowError>) {
+    /// The rows the program left (`blocks.left_rows`, row-major) one by one
+    /// into `blocks.left_out`; their errors numbered from `first`.
+    fn eval_left(&mut self, blocks: &mut Blocks, first: usize, errors: &mut Vec<RowError>) {
         let plan = self.plan;
         let q = plan.all.len();
-        if lanes.left.is_empty() {
-            lanes.left_out.clear();
+        if blocks.left.is_empty() {
+            blocks.left_out.clear();
             return;
         }
         let (left, left_rows, mut left_out) = (
-            std::mem::take(&mut lanes.left),
-            std::mem::take(&mut lanes.left_rows),
-            std::mem::take(&mut lanes.left_out),
+            std::mem::take(&mut blocks.left),
+            std::mem::take(&mut blocks.left_rows),
+            std::mem::take(&mut blocks.left_out),
         );
         left_out.clear();
         left_out.resize(left.len() * q, 0.0);
         let mut failed = Vec::new();
-        if plan.lanes_apply(&left_rows) {
-            self.eval_lanes(lanes, &left_rows, &mut left_out, 0, &mut failed);
-        } else {
-            self.eval_rows(&left_rows, &mut left_out, 0, &mut failed);
-        }
+        self.eval_rows(&left_rows, &mut left_out, 0, &mut failed);
         errors.extend(failed.into_iter().map(|e| RowError {
             row: first + left[e.row],
             error: e.error,
         }));
-        (lanes.left, lanes.left_rows, lanes.left_out) = (left, left_rows, left_out);
+        (blocks.left, blocks.left_rows, blocks.left_out) = (left, left_rows, left_out);
     }
 }

@@ -3,7 +3,6 @@
 
 pub mod exact;
 mod field;
-pub(crate) mod lanes;
 pub mod linalg;
 pub mod modp;
 pub mod sparse;

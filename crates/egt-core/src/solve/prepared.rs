@@ -24,11 +24,9 @@ mod jit;
 pub(crate) use jit::Isa;
 mod build;
 mod fill;
-mod lanes;
 mod mass_model;
 mod solve;
 mod tape;
-pub(crate) use lanes::LaneWorkspace;
 pub use mass_model::MassModel;
 pub(crate) use mass_model::exact_of;
 pub(crate) use tape::{
@@ -166,9 +164,9 @@ pub struct PreparedTrain {
 /// linearly in the links. One scenario alone is faster sparse from about 20
 /// coordinates (`cargo bench -p egt-core --bench scenarios --
 /// large::dynamics`: 2.8 against 2.3 µs at 22 links, 19.9 against 8.3 µs at
-/// 66), but a batch solves dense trains eight rows at a time in the lanes
-/// (1.8 µs a row at 30 links), so the switch sits higher; every production
-/// train is far below it.
+/// 66), but a batch solves dense trains by the straight-line program, which
+/// holds dense factors, so the switch sits higher; every production train
+/// is far below it.
 pub const PREPARED_SPARSE_FROM: usize = 64;
 
 /// A factorisation of one of the three systems.

@@ -423,8 +423,8 @@ fn linear_blocks_equal_row_by_row_solves() {
     }
 }
 
-/// The lanes' test trains (see `lanes_equal_fresh_row_by_row_solves_bit_for_bit`).
-fn lane_plans() -> Vec<(String, BatchPlan)> {
+/// The batch's test trains (see `runs_equal_fresh_row_by_row_solves_bit_for_bit`).
+fn test_plans() -> Vec<(String, BatchPlan)> {
     use egt_core::batch::BatchSpec;
     let fig5 = crate::util::example("fig5_example62.toml");
     let id = |t: &Train, n: &str| t.link_id(n).unwrap_or_else(|| panic!("no link {n}"));
@@ -466,7 +466,7 @@ fn lane_plans() -> Vec<(String, BatchPlan)> {
     plans
 }
 
-/// Rows of `lane_rows` with a bad value in the last column of a group.
+/// Rows of `sweep_rows` with a bad value in the last column of a group.
 const BAD_ROWS: [(usize, &str); 6] = [
     (17, "ratio."),
     (23, "speed."),
@@ -476,10 +476,10 @@ const BAD_ROWS: [(usize, &str); 6] = [
     (41, "mass."),
 ];
 
-/// 613 rows for the lanes: every row its own ratios, every 50th far off
+/// 613 rows, none linear: every row its own ratios, every 50th far off
 /// (another pivot order), row 5 with a NaN, row 11 singular in most trains,
 /// the rows of `BAD_ROWS` with a bad value.
-fn lane_rows(p: &BatchPlan) -> Vec<f64> {
+fn sweep_rows(p: &BatchPlan) -> Vec<f64> {
     let (np, rows) = (p.parameters().len(), 613);
     let mut params = Vec::with_capacity(rows * np);
     for r in 0..rows {
@@ -653,8 +653,9 @@ fn chosen_outputs_of_power_flow_and_bad_choices() {
     assert!(e.contains("no output column"), "{e}");
 }
 
-/// The lanes of `BatchPlan::run` (rows whose ratios differ, solved eight at
-/// a time) give what a fresh worker gives for each row alone, bit for bit:
+/// `BatchPlan::run` without condition bounds (rows whose ratios differ, so
+/// no linear block and no program) gives what a fresh worker gives for each
+/// row alone, bit for bit:
 /// every output column, the conditions included, with rows that pivot
 /// differently from their group, singular rows (a ratio of 1 locks a
 /// planetary set's sun to its carrier) and rows with a bad value in among
@@ -663,13 +664,13 @@ fn chosen_outputs_of_power_flow_and_bad_choices() {
 /// apart) and torques solved on a third pair (eq. 10 apart), and every gear
 /// state of the 8HP70 (engaged elements as extra rows, output torque solved).
 #[test]
-fn lanes_equal_fresh_row_by_row_solves_bit_for_bit() {
-    for (name, p) in &lane_plans() {
+fn runs_equal_fresh_row_by_row_solves_bit_for_bit() {
+    for (name, p) in &test_plans() {
         let (np, nq) = (p.parameters().len(), p.outputs().len());
         let rows = 613;
-        let params = lane_rows(p);
+        let params = sweep_rows(p);
         for block in params.chunks(256 * np) {
-            assert!(!p.is_linear_block(block) && p.lanes_apply(block), "{name}");
+            assert!(!p.is_linear_block(block) && !p.program_applies(block), "{name}");
         }
         let mut out = vec![0.0; rows * nq];
         let errors = p.run(Layout::Rows(&params), &mut out, Threads::Pool).errors;
@@ -685,7 +686,7 @@ fn lanes_equal_fresh_row_by_row_solves_bit_for_bit() {
             for (c, (a, b)) in one.iter().zip(&out[r * nq..(r + 1) * nq]).enumerate() {
                 assert!(
                     a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
-                    "{name} row {r} {}: {a} alone vs {b} in lanes",
+                    "{name} row {r} {}: {a} alone vs {b} in the batch",
                     p.outputs()[c]
                 );
             }
@@ -768,10 +769,10 @@ fn the_sparse_engine_gives_the_dense_numbers() {
     }
 }
 
-/// With condition bounds (`with_condition_bounds`) the lanes refuse the same
+/// With condition bounds (`with_condition_bounds`) the batch refuses the same
 /// rows, with the same messages, and give every other output bit for bit as
 /// without; a `cond.*` value differs only where it is an upper bound of the
-/// estimate at most COND_WARN / 2, so every warning is kept. On the lanes'
+/// estimate at most COND_WARN / 2, so every warning is kept. On the batch's
 /// test trains and Fig. 3 near its lock, where every fifth row takes
 /// tau_2 = (1 + eps) / tau_1 with eps from 10^-1 to 10^-16 (conditions from
 /// 10 to past the refusal): the bounds, the estimates past COND_WARN and
@@ -781,7 +782,7 @@ fn condition_bounds_change_only_small_conditions() {
     use egt_core::numerics::linalg::COND_WARN;
     let near = train(&crate::lab::families::near_locked(0.1));
     let plans = || {
-        let mut v = lane_plans();
+        let mut v = test_plans();
         for compute in [Compute::Kinematics, Compute::Dynamics] {
             v.push((format!("near-locked {compute:?}"), plan(&near, compute)));
         }
@@ -792,7 +793,7 @@ fn condition_bounds_change_only_small_conditions() {
         let b = b.with_condition_bounds(true);
         assert!(b.has_program(), "{name}: no straight-line program");
         let (np, nq) = (p.parameters().len(), p.outputs().len());
-        let mut params = lane_rows(p);
+        let mut params = sweep_rows(p);
         let rows = params.len() / np;
         if let (Some(g1), Some(g2)) = (p.parameter("ratio.G1"), p.parameter("ratio.G2")) {
             let t1 = p.base()[g1];
@@ -860,8 +861,8 @@ fn condition_bounds_change_only_small_conditions() {
             rounded += usize::from(differs);
         }
     }
-    // Rows that differ by rounding were solved by the program (the lanes
-    // give the row-by-row solve's numbers bit for bit).
+    // Rows that differ by rounding were solved by the program (the others
+    // are the row-by-row solve's numbers bit for bit).
     assert!(rounded > 500, "{rounded} rows solved by the program");
     assert!(
         bounded > 1000 && warned > 10 && refused > 10,
@@ -942,18 +943,18 @@ fn the_program_runs_compiled_or_interpreted_with_the_same_bits() {
 
 /// `Layout::ColumnSet` with some columns given as one value for
 /// every row gives `Layout::Columns` on the same columns written out, bit for
-/// bit, with the same errors: on the program (condition bounds), the lanes,
-/// the linear path (only loads vary) and the transposed row-by-row path;
+/// bit, with the same errors: on the program (condition bounds), row by
+/// row (no bounds), the linear path (only loads vary) and the transposed row-by-row path;
 /// with nothing varied; with a bad value in a fixed column (every row
 /// refused) and in varied ones; on the pool and the calling thread.
 #[test]
 fn fixed_columns_give_the_numbers_of_the_columns_written_out() {
     use egt_core::batch::Column;
-    for (name, p) in &lane_plans() {
+    for (name, p) in &test_plans() {
         for p in [p.clone(), p.clone().with_condition_bounds(true)] {
             let (np, nq) = (p.parameters().len(), p.outputs().len());
             let rows = 613;
-            let full = lane_rows(&p);
+            let full = sweep_rows(&p);
             let group = |prefix: &str| -> Vec<usize> {
                 (0..np)
                     .filter(|&c| p.parameters()[c].starts_with(prefix))
@@ -972,7 +973,7 @@ fn fixed_columns_give_the_numbers_of_the_columns_written_out() {
                 ("a NaN fixed", group("ratio."), bad_fixed),
             ] {
                 let label = format!("{name} {what} (program {})", p.has_program());
-                // The full matrix: varied columns from `lane_rows`, the others `base`.
+                // The full matrix: varied columns from `sweep_rows`, the others `base`.
                 let columns: Vec<f64> = (0..np)
                     .flat_map(|k| {
                         let from_rows = varied.contains(&k);

@@ -85,7 +85,7 @@ fn bad_rows_are_reported_in_place_and_the_rest_go_on() {
     assert!(e.to_string().starts_with("4 of 6 scenarios failed"), "{e}");
 }
 
-/// Asking for no `cond.*` column (condition bounds in the lanes) keeps
+/// Asking for no `cond.*` column (condition bounds in the program) keeps
 /// every number, warning and error: Fig. 3 swept through its lock
 /// (tau_2 = 1 / tau_1 = -1.5), where the rows next to it are warned
 /// about and the lock itself refused.

@@ -15,11 +15,12 @@
 //! The fixed order is the base row's partial-pivoting order. The program
 //! checks, in every row, that this order is still a partial-pivoting order
 //! (every pivot at least as large as the candidates below it), and bounds
-//! each system's condition number from above as
-//! [`LaneLu::condition_bound`](crate::numerics::lanes::LaneLu::condition_bound)
-//! does. A row whose pivots would differ, whose bound is past
-//! [`COND_WARN`] / 2, or any of whose results is not finite is left to the
-//! lanes and the row-by-row solve, which give its estimate, warning or error:
+//! each system's condition number from above, `||A||_1 ||U^-1||_1 ||L^-1||_1`
+//! with the inverse norms bounded through the comparison matrices of the
+//! factors (one non-negative substitution each). A row whose pivots would
+//! differ, whose bound is past [`COND_WARN`] / 2, or any of whose results
+//! is not finite is left to the row-by-row solve, which gives its
+//! estimate, warning or error:
 //! so a row evaluated here is one where the condition columns hold bounds
 //! (the batch's `with_condition_bounds`), and every warning and refusal is
 //! what the row-by-row solve gives. The program's numbers differ from the
@@ -33,7 +34,7 @@
 //! kept in registers, giving the same numbers and the same checks bit for
 //! bit. The finiteness checks are sums (one for
 //! the parameters, one for the results): a sum is finite when every term is,
-//! unless it overflows, and such a row is left to the lanes.
+//! unless it overflows, and such a row is left to the row-by-row solve.
 
 #[cfg(feature = "jit")]
 use super::jit::{GOOD, MASK_BYTES, MASKS, MOVING};

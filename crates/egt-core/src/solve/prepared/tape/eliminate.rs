@@ -84,7 +84,7 @@ impl Builder {
                 }
             }
         }
-        // As `LaneLu::condition_bound`: ||U^-1||_1 <= max(M(U)^-T e) and
+        // ||U^-1||_1 <= max(M(U)^-T e) and
         // ||L^-1||_1 <= max(M(L)^-T e), non-negative substitutions.
         let mut y = vec![S::C(1.0); n];
         let mut umax = S::C(0.0);
@@ -225,7 +225,7 @@ impl PreparedTrain {
     /// only what they need is computed (the checks of pivots and condition
     /// bounds always are; only the chosen results are checked finite).
     /// None when the base row is singular or ill-conditioned in a system
-    /// the program needs (the lanes then solve every row).
+    /// the program needs (every row is then solved on its own).
     pub(crate) fn program(
         &self,
         compute: Compute,
@@ -350,8 +350,8 @@ impl PreparedTrain {
             .collect::<Option<_>>()?;
         // The results are finite when their sum is: one check for all. A
         // sum with an infinite or NaN term is not finite; one of finite
-        // terms is, unless it overflows, and that row is left to the lanes,
-        // which solve it.
+        // terms is, unless it overflows, and that row is left to the
+        // row-by-row solve.
         let mut terms: Vec<S> = (chosen.iter().zip(&outputs))
             .filter(|(o, v)| **o < results && matches!(v.0, S::V(_)))
             .map(|(_, v)| v.0)

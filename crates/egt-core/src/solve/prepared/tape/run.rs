@@ -181,7 +181,7 @@ impl Program {
         let c = self.cols;
         w.moving = [false; BLOCK];
         // Finite when their sum is (in column order, as the compiled code
-        // adds them): a row whose sum overflows is left to the lanes.
+        // adds them): a row whose sum overflows is left to the row-by-row solve.
         let mut sum = [0.0; BLOCK];
         for (k, v) in w.vals[..self.cols.end].iter().enumerate() {
             if k == 0 {
@@ -401,7 +401,7 @@ pub(crate) fn crowded(starts: impl IntoIterator<Item = usize>) -> bool {
 }
 
 /// One block's run as a [`pulp::WithSimd`], compiled for the detected
-/// instruction set (as the lanes' `Group`): the parameter rules, the
+/// instruction set: the parameter rules, the
 /// operations, and each row's validity.
 struct Run<'a> {
     program: &'a Program,
