@@ -223,11 +223,17 @@ def test_a_bad_output_choice_is_refused_by_name(fig3: egt.Train) -> None:
 
 def test_condition_bounds_keep_every_refusal_and_number_to_rounding(fig3: egt.Train) -> None:
     # Fig. 3 swept through its lock (tau_2 = 1 / tau_1 = -1.5): the rows next
-    # to it are ill-conditioned, the lock itself is refused.
-    g2 = np.repeat(np.linspace(-1.5000001, -1.4999999, 21), 8)
-    load = np.tile(np.linspace(-10.0, -50.0, 8), 21)
+    # to it are ill-conditioned, the lock itself is refused (those rows pivot
+    # unlike the base row, so the program leaves them to the row-by-row
+    # solve); and near the spec's own tau_2, where the program solves and
+    # bounds the conditions.
+    plain = fig3.batch("dynamics")
+    t2 = plain.base[plain.parameters.index("ratio.G2")]
+    lock = np.repeat(np.linspace(-1.5000001, -1.4999999, 21), 8)
+    g2 = np.concatenate([lock, np.repeat(t2 * np.linspace(0.999, 1.001, 21), 8)])
+    load = np.tile(np.linspace(-10.0, -50.0, 8), 42)
     values = {"ratio.G2": g2, "torque.4": load}
-    full = fig3.batch("dynamics").evaluate(values)
+    full = plain.evaluate(values)
     fast = fig3.batch("dynamics", condition_bounds=True).evaluate(values)
     assert full.outputs == fast.outputs
     np.testing.assert_array_equal(full.ok, fast.ok)
