@@ -5,7 +5,8 @@ commands, and the bindings.
 1. No module of egt-core imports a layer above its own.
 2. No command of egt-cli (`commands/X.rs`, `commands/X/...`) imports another
    command or `cli.rs`: `cli.rs` owns the grammar and the dispatch, the
-   commands share only `args`, `input`, `report` and `svg`.
+   commands share only `args`, `input`, `report`, `svg`, `interrupt` and
+   `progress`.
 3. The Python bindings (egt-py) use the CLI only through `egt_cli::run` (the
    wheel's `egt` command); the documents they return come from egt-views.
 4. egt-views (the JSON documents) depends on egt-core only.

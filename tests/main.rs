@@ -35,3 +35,7 @@ mod shift_sim;
 
 // Issue 42: every flag of every subcommand run with a valid value.
 mod flags;
+
+// Issue 42: Ctrl-C stops synth, enumerate and batch with exit 130 and whole output so far; --progress on stderr only.
+#[cfg(unix)]
+mod interrupt;

@@ -69,6 +69,15 @@ pub fn preflight(command: &Command, stdout_is_terminal: bool) -> anyhow::Result<
     }
 }
 
+/// The commands whose loops stop on Ctrl-C and write what they finished
+/// (the binary catches SIGINT for them only; the others end at once).
+pub fn stops_on_ctrl_c(command: &Command) -> bool {
+    matches!(
+        command,
+        Command::Synth(_) | Command::Enumerate(_) | Command::Batch(_)
+    )
+}
+
 /// Run one subcommand, writing its report to `out`.
 ///
 /// # Errors

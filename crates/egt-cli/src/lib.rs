@@ -5,12 +5,15 @@
 //!
 //! Exit codes: 0 on success (and when stdout is a closed pipe); 2 for usage,
 //! syntax, spec, topology and gear-state errors; 1 for analysis and I/O
-//! errors. Errors print to stderr as `error: ...`.
+//! errors; 130 when Ctrl-C stopped a long command (only in the binary, see
+//! [`run_handling_ctrl_c`]). Errors print to stderr as `error: ...`.
 
 mod args;
 pub mod cli;
 pub mod commands;
 mod input;
+mod interrupt;
+mod progress;
 mod report;
 mod svg;
 
@@ -20,13 +23,29 @@ use std::io::{self, Write};
 use clap::Parser;
 
 /// Run the command line `args` (the first is the program name) and return
-/// the exit code. Output goes to the process's stdout and stderr.
+/// the exit code. Output goes to the process's stdout and stderr. No signal
+/// handler is set: Ctrl-C does what the hosting program makes of it.
 pub fn run<I, T>(args: I) -> u8
 where
     I: IntoIterator<Item = T>,
     T: Into<OsString> + Clone,
 {
-    let args: Vec<OsString> = args.into_iter().map(Into::into).collect();
+    run_with(args.into_iter().map(Into::into).collect(), false)
+}
+
+/// [`run`] for the `egt` binary: a long command (`synth`, `enumerate`,
+/// `batch`) catches Ctrl-C, stops at its next block, writes what it
+/// finished, prints `interrupted: ...` on stderr and returns 130. Other
+/// commands keep the default (Ctrl-C ends the process at once).
+pub fn run_handling_ctrl_c<I, T>(args: I) -> u8
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    run_with(args.into_iter().map(Into::into).collect(), true)
+}
+
+fn run_with(args: Vec<OsString>, ctrl_c: bool) -> u8 {
     let json = wants_json(&args);
     let cli = match cli::Cli::try_parse_from(&args) {
         Ok(cli) => cli,
@@ -36,6 +55,9 @@ where
             return u8::try_from(e.exit_code()).unwrap_or(2);
         }
     };
+    if ctrl_c && cli::stops_on_ctrl_c(&cli.command) {
+        interrupt::install();
+    }
     let terminal = io::IsTerminal::is_terminal(&io::stdout());
     let mut out = io::BufWriter::new(io::stdout().lock());
     let result = cli::preflight(&cli.command, terminal)
@@ -44,6 +66,13 @@ where
     match result {
         Ok(()) => 0,
         Err(e) if is_broken_pipe(&e) => 0,
+        Err(e) if interrupted(&e).is_some() => {
+            // What the command finished is on stdout; no error document
+            // after it (it would spoil a valid partial output).
+            let _ = out.flush();
+            eprintln!("interrupted: {}", interrupted(&e).unwrap_or_default());
+            interrupt::EXIT
+        }
         Err(e) => {
             let code = exit_code(&e);
             eprintln!("error: {e:#}");
@@ -97,6 +126,13 @@ fn exit_code(e: &anyhow::Error) -> u8 {
         }
     }
     1
+}
+
+/// What a run stopped by Ctrl-C left, if that is what `e` is.
+fn interrupted(e: &anyhow::Error) -> Option<&str> {
+    e.chain()
+        .find_map(|c| c.downcast_ref::<interrupt::Interrupted>())
+        .map(|i| i.0.as_str())
 }
 
 fn is_broken_pipe(e: &anyhow::Error) -> bool {

@@ -1,5 +1,5 @@
-//! The `egt` binary: the command line of `egt_cli::run`, its exit code the
-//! process's.
+//! The `egt` binary: the command line of `egt_cli::run` (with Ctrl-C
+//! handled by the long commands), its exit code the process's.
 
 use std::process::ExitCode;
 
@@ -12,5 +12,5 @@ use std::process::ExitCode;
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn main() -> ExitCode {
-    ExitCode::from(egt_cli::run(std::env::args_os()))
+    ExitCode::from(egt_cli::run_handling_ctrl_c(std::env::args_os()))
 }

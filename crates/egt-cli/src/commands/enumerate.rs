@@ -3,18 +3,23 @@
 //! adjacency form (readable back by every egt command as `adjacency = "..."`
 //! with any frame), or JSON Lines with the classification. Streamed unit by
 //! unit; `--part I/K` runs one of K disjoint partitions of the search.
-//! `--identify SPEC` prints the member a given train is instead.
+//! `--identify SPEC` prints the member a given train is instead. Ctrl-C
+//! stops it after the last whole tree: the lines written are every member of
+//! the trees done (`--count` then prints nothing), and it exits with 130.
 
 use std::io::Write;
 
 use std::path::PathBuf;
 
-use egt_core::synthesis::{AtlasRequest, Fractionation, GraphLevel, enumerate_with, member, units};
-use indicatif::{ProgressBar, ProgressStyle};
+use egt_core::synthesis::{
+    AtlasRequest, Fractionation, GraphLevel, enumerate_until, member, units,
+};
 
 use crate::args::parse_part;
 use crate::args::{OutputFormat, SpecArgs};
 use crate::input;
+use crate::interrupt::{self, Interrupted};
+use crate::progress::Progress;
 
 /// Arguments of `egt enumerate`.
 #[derive(Debug, Clone, clap::Args)]
@@ -43,7 +48,8 @@ pub struct Args {
     /// Tsai & Lin's non-fractionated trains; stricter for two or more DOF).
     #[arg(long, value_enum, default_value_t = FractionationArg::Layout)]
     pub fractionation: FractionationArg,
-    /// Print only the number of members.
+    /// Print only the number of members (nothing when Ctrl-C stops the
+    /// run: a count of part of the atlas is not its size).
     #[arg(long)]
     pub count: bool,
     /// The most links asked for without a refusal: 9 links take about 10 s
@@ -51,6 +57,11 @@ pub struct Args {
     /// to go further on purpose.
     #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_LINKS)]
     pub max_links: usize,
+    /// Show a progress line on stderr (trees done / all, rate, members found)
+    /// even when stderr is not a terminal (on a terminal it shows anyway).
+    /// Ctrl-C stops the run after the last whole tree and exits with 130.
+    #[arg(long)]
+    pub progress: bool,
 }
 
 /// The default of `--max-links`: the largest atlas measured to finish.
@@ -123,17 +134,20 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
             FractionationArg::Kinematic => Fractionation::Kinematic,
         },
     };
-    // Drawn on stderr only when it is a terminal (indicatif hides it otherwise).
-    let bar = ProgressBar::new(units(links.clamp(1, 12)) as u64);
-    if let Ok(style) = ProgressStyle::with_template("{bar:30} {pos}/{len} trees, {msg} members") {
-        bar.set_style(style);
-    }
-    let mut total = 0usize;
+    // The trees this run covers (a partition's share of them).
+    let trees = units(links.clamp(3, 12));
+    let trees = match req.part {
+        Some((i, k)) if k > 0 => (i..trees).step_by(k).len(),
+        _ => trees,
+    };
+    let bar = Progress::new(args.progress, "trees", Some(trees as u64));
+    let (mut total, mut done) = (0usize, 0u64);
     let mut failed: Option<std::io::Error> = None;
-    enumerate_with(&req, |_, members| {
+    let whole = enumerate_until(&req, &interrupt::flag(), |_, members| {
         total += members.len();
-        bar.inc(1);
-        bar.set_message(total.to_string());
+        done += 1;
+        bar.note(format!("{total} members"));
+        bar.set(done);
         if args.count || failed.is_some() {
             return;
         }
@@ -149,9 +163,17 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
             }
         }
     })?;
-    bar.finish_and_clear();
+    drop(bar);
     if let Some(e) = failed {
         return Err(e.into());
+    }
+    if !whole {
+        let written = if args.count {
+            format!("{total} members counted, no count printed (it would be part of the atlas's)")
+        } else {
+            format!("{total} members written, every member of those trees")
+        };
+        return Err(Interrupted(format!("{done} of {trees} trees enumerated; {written}")).into());
     }
     if args.count {
         writeln!(out, "{total}")?;

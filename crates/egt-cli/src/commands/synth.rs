@@ -4,7 +4,9 @@
 //! all cores, and prints the best candidates with their exact ratios.
 //! `--part I/K` runs one of K disjoint partitions (for several machines);
 //! `--write-specs DIR` writes each candidate as a train spec that every egt
-//! command reads (e.g. `egt shift DIR/candidate-1.json`).
+//! command reads (e.g. `egt shift DIR/candidate-1.json`). Ctrl-C stops the
+//! search: the candidates confirmed so far are printed as the report (marked
+//! interrupted), and it exits with 130.
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -15,7 +17,6 @@ use std::io::IsTerminal;
 use anyhow::Context;
 use egt_core::design::{Candidate, Search, Stats, SynthSpec};
 use egt_core::{Format, parse_spec};
-use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
 /// Parts of a search run one after another to show progress on a terminal.
@@ -24,6 +25,8 @@ const PROGRESS_PARTS: usize = 32;
 use crate::args::parse_part;
 use crate::args::{OutputFormat, SpecFormat};
 use crate::input::{is_stdin, read_spec};
+use crate::interrupt::{self, Interrupted};
+use crate::progress::Progress;
 use crate::report::{self, Table};
 
 /// Arguments of `egt synth`.
@@ -62,6 +65,13 @@ pub struct Args {
     /// report (`{"event": "done", ...}`).
     #[arg(long, conflicts_with = "part")]
     pub stream: bool,
+    /// Show a progress line on stderr (parts searched / all, rate) even when
+    /// stderr is not a terminal (on a terminal it shows anyway). The space is
+    /// then searched in 32 parts one after another, each with its own
+    /// `--max-leaves`. Ctrl-C stops the search: the candidates confirmed so
+    /// far are printed (marked interrupted) and it exits with 130.
+    #[arg(long, conflicts_with = "part")]
+    pub progress: bool,
 }
 
 #[derive(Debug, Serialize)]
@@ -144,13 +154,24 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
     let base = parse_spec(&base_text, Format::from_path(&base_name), &base_name)?;
     let search = Search::new(spec, base)
         .map_err(egt_core::Error::from)
-        .with_context(|| source.clone())?;
+        .with_context(|| source.clone())?
+        .with_cancel(interrupt::flag());
     let part = args.part.as_deref().map(parse_part).transpose()?;
     let start = Instant::now();
+    // Parts one after another, for a progress line (on a terminal or with
+    // `--progress`) and for `--stream`; the result is the same as one run.
+    // (`--part` is one run: no line.)
+    let bar = if part.is_none() {
+        Progress::new(args.progress, "parts", None)
+    } else {
+        Progress::hidden()
+    };
     let (found, stats) = match part {
         Some((i, k)) => search.run_partition(i, k),
         // JSON Lines: the best so far after each part, as it is found.
         None if args.stream => search.run_in_parts(PROGRESS_PARTS, |done, of, best| {
+            bar.total(of as u64);
+            bar.set(done as u64);
             let best: Vec<Row> = best
                 .iter()
                 .enumerate()
@@ -161,25 +182,18 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
             // A closed pipe ends the stream at the final write.
             let _ = writeln!(out, "{line}").and_then(|()| out.flush());
         }),
-        // On a terminal: the space in parts one after another, with a bar and
-        // an ETA on stderr (the result is the same; elsewhere one run).
-        None if std::io::stderr().is_terminal() => {
-            let bar = ProgressBar::new(0);
-            if let Ok(style) = ProgressStyle::with_template("{bar:30} {pos}/{len} parts, ETA {eta}")
-            {
-                bar.set_style(style);
-            }
-            let r = search.run_in_parts(PROGRESS_PARTS, |done, of, _| {
-                bar.set_length(of as u64);
-                bar.set_position(done as u64);
-            });
-            bar.finish_and_clear();
-            r
+        None if args.progress || std::io::stderr().is_terminal() => {
+            search.run_in_parts(PROGRESS_PARTS, |done, of, _| {
+                bar.total(of as u64);
+                bar.set(done as u64);
+            })
         }
         None => search.run(),
     }
     .map_err(egt_core::Error::from)?;
+    drop(bar);
     let seconds = start.elapsed().as_secs_f64();
+    let interrupted = stats.interrupted;
     let mut rows = Vec::with_capacity(found.len());
     for (k, c) in found.iter().enumerate() {
         let written = match &args.write_specs {
@@ -208,18 +222,29 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         stats,
         seconds,
     };
+    let count = report.candidates.len();
     if args.stream {
         let mut done = report::value_of(&report)?;
         if let serde_json::Value::Object(map) = &mut done {
-            map.insert("event".into(), "done".into());
+            let event = if interrupted { "interrupted" } else { "done" };
+            map.insert("event".into(), event.into());
         }
         writeln!(out, "{done}")?;
-        return Ok(());
+    } else {
+        match args.format {
+            OutputFormat::Json => report::json(out, &report)?,
+            OutputFormat::Table => write_table(out, &report)?,
+        }
     }
-    match args.format {
-        OutputFormat::Json => report::json(out, &report),
-        OutputFormat::Table => write_table(out, &report),
+    if interrupted {
+        return Err(Interrupted(format!(
+            "the search stopped before it covered the space ({} nodes, {} leaves); \
+             the {count} candidates written are exact but the best of the part searched only",
+            report.stats.nodes, report.stats.leaves
+        ))
+        .into());
     }
+    Ok(())
 }
 
 fn row(search: &Search, c: &Candidate, rank: usize, spec: Option<String>) -> Row {
@@ -279,9 +304,11 @@ fn write_table(out: &mut dyn Write, r: &Report) -> anyhow::Result<()> {
         out,
         "{}: design search over {} (base {})",
         r.source,
-        match r.part {
-            Some([i, k]) => format!("partition {i} of {k}"),
-            None => "the whole space".into(),
+        match (r.part, r.stats.interrupted) {
+            (Some([i, k]), false) => format!("partition {i} of {k}"),
+            (Some([i, k]), true) => format!("part of partition {i} of {k} (interrupted)"),
+            (None, false) => "the whole space".into(),
+            (None, true) => "part of the space (interrupted)".into(),
         },
         r.base
     )?;

@@ -19,6 +19,7 @@ pub mod levels;
 pub mod trees;
 
 use std::collections::{BTreeMap, HashMap, HashSet};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -187,7 +188,7 @@ pub fn member(train: &Train, level: GraphLevel) -> Result<AtlasMember> {
         fractionation: Fractionation::Layout,
     };
     let (_, p) = canonical(&owner, Extra::None);
-    let members = members_of_tree(&owner.permuted(&p), &req);
+    let members = members_of_tree(&owner.permuted(&p), &req, &NEVER).unwrap_or_default();
     let code: String = match level {
         GraphLevel::Rotation => &rcode,
         GraphLevel::Displacement => &dcode,
@@ -225,10 +226,29 @@ pub fn enumerate(req: &AtlasRequest) -> Result<Vec<AtlasMember>> {
 ///
 /// # Errors
 /// As [`enumerate`].
-pub fn enumerate_with(
+pub fn enumerate_with(req: &AtlasRequest, sink: impl FnMut(usize, Vec<AtlasMember>)) -> Result<()> {
+    enumerate_until(req, &NEVER, sink).map(|_| ())
+}
+
+/// A flag nothing sets: the search of a caller that does not cancel.
+static NEVER: AtomicBool = AtomicBool::new(false);
+
+/// Like [`enumerate_with`], but stops soon after `cancel` is set (by another
+/// thread: a Ctrl-C handler, a time limit): it is read between units and,
+/// within a unit, once per level partition and per candidate graph, never in
+/// the canonical labelling itself. The units handed to `sink` before the stop
+/// are whole and in order; the unit in progress is dropped, never handed on
+/// in part. Returns `Ok(true)` when every unit was handed on, `Ok(false)`
+/// when `cancel` stopped the enumeration first. The library sets no signal
+/// handler: the flag is the caller's.
+///
+/// # Errors
+/// As [`enumerate`].
+pub fn enumerate_until(
     req: &AtlasRequest,
+    cancel: &AtomicBool,
     mut sink: impl FnMut(usize, Vec<AtlasMember>),
-) -> Result<()> {
+) -> Result<bool> {
     if req.links < 3 || req.links > MAX_LINKS {
         return Err(Error::invalid(
             "links",
@@ -262,15 +282,20 @@ pub fn enumerate_with(
     // Parallel over trees in chunks, handing results on in order.
     let chunk = rayon::current_num_threads().max(1) * 2;
     for group in chosen.chunks(chunk) {
-        let results: Vec<(usize, Vec<AtlasMember>)> = group
+        if cancel.load(Ordering::Relaxed) {
+            return Ok(false);
+        }
+        let results: Vec<(usize, Option<Vec<AtlasMember>>)> = group
             .par_iter()
-            .map(|&(i, t)| (i, members_of_tree(t, req)))
+            .map(|&(i, t)| (i, members_of_tree(t, req, cancel)))
             .collect();
         for (i, m) in results {
+            // The trees before a cancelled one are whole: hand them on.
+            let Some(m) = m else { return Ok(false) };
             sink(i, m);
         }
     }
-    Ok(())
+    Ok(true)
 }
 
 /// Calls `f` with every choice of `k` candidates whose legs cover all the
@@ -320,16 +345,23 @@ struct Found {
 /// graph's breadth-first spanning tree has the shape of `tree`. Every
 /// displacement graph is owned by exactly one tree, so trees partition the
 /// search with no de-duplication across them.
-fn found_in_tree(tree_graph: &ChainGraph, req: &AtlasRequest) -> BTreeMap<Code, Found> {
-    found_from_tree(tree_graph, req, true)
+fn found_in_tree(
+    tree_graph: &ChainGraph,
+    req: &AtlasRequest,
+    cancel: &AtomicBool,
+) -> BTreeMap<Code, Found> {
+    found_from_tree(tree_graph, req, true, cancel)
 }
 
 /// As [`found_in_tree`]; with `owned_only` false, every displacement graph
-/// reachable from `tree` (for testing that ownership loses nothing).
+/// reachable from `tree` (for testing that ownership loses nothing). Once
+/// `cancel` is set, the rest is skipped: the map is then partial, and the
+/// caller drops it.
 fn found_from_tree(
     tree_graph: &ChainGraph,
     req: &AtlasRequest,
     owned_only: bool,
+    cancel: &AtomicBool,
 ) -> BTreeMap<Code, Found> {
     let n = req.links;
     let gears = n - 1 - req.dof;
@@ -343,11 +375,16 @@ fn found_from_tree(
     // the same displacement graphs: one per orbit is enough.
     let mut orbits: HashSet<Code> = HashSet::new();
     tree.for_each_level_partition(|levels| {
-        if !orbits.insert(canonical(tree_graph, Extra::Levels(levels)).0) {
+        if cancel.load(Ordering::Relaxed)
+            || !orbits.insert(canonical(tree_graph, Extra::Levels(levels)).0)
+        {
             return;
         }
         let cands = tree.candidates(levels);
         for_each_cover(&cands, gears, full, &mut |picked| {
+            if cancel.load(Ordering::Relaxed) {
+                return;
+            }
             let (g, lv) = rotation_graph(n, picked);
             let (rcode, perm) = canonical(&g, Extra::None);
             let owned = !owned_only
@@ -420,13 +457,23 @@ fn renamed(levels: &[usize]) -> Vec<usize> {
         .collect()
 }
 
-/// All atlas members this tree owns.
-fn members_of_tree(tree: &ChainGraph, req: &AtlasRequest) -> Vec<AtlasMember> {
+/// All atlas members this tree owns; None when `cancel` was set before
+/// they were all found.
+fn members_of_tree(
+    tree: &ChainGraph,
+    req: &AtlasRequest,
+    cancel: &AtomicBool,
+) -> Option<Vec<AtlasMember>> {
     let n = req.links;
     let gears = n - 1 - req.dof;
     // r-code -> its valid displacement graphs (d-code, emitted form)
     let mut by_rotation: BTreeMap<Code, Vec<(Code, Emitted)>> = BTreeMap::new();
-    for (dcode, f) in found_in_tree(tree, req) {
+    let found = found_in_tree(tree, req, cancel);
+    for (dcode, f) in found {
+        // Also right after the search: a cancelled search's map is partial.
+        if cancel.load(Ordering::Relaxed) {
+            return None;
+        }
         if req.fractionation == Fractionation::Kinematic && has_cut_link(&f.graph) {
             continue;
         }
@@ -465,7 +512,8 @@ fn members_of_tree(tree: &ChainGraph, req: &AtlasRequest) -> Vec<AtlasMember> {
             }
         }
     }
-    out
+    // Set at any point, the flag drops the tree (even one just finished).
+    (!cancel.load(Ordering::Relaxed)).then_some(out)
 }
 
 /// A displacement graph as egt prints it.

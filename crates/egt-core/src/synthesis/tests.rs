@@ -136,7 +136,8 @@ fn differently_seeded_generation_orders_give_the_same_set() {
         };
         for t in trees::trees(6) {
             let codes = |g: &ChainGraph| {
-                let mut c: Vec<String> = members_of_tree(g, &req)
+                let mut c: Vec<String> = members_of_tree(g, &req, &NEVER)
+                    .unwrap_or_default()
                     .into_iter()
                     .map(|m| m.code)
                     .collect();
@@ -413,8 +414,10 @@ fn ownership_loses_nothing() {
     let all: Vec<_> = trees::trees(n)
         .par_iter()
         .map(|t| {
-            let owned: BTreeSet<Code> = found_in_tree(t, &req).into_keys().collect();
-            let every: BTreeSet<Code> = found_from_tree(t, &req, false).into_keys().collect();
+            let owned: BTreeSet<Code> = found_in_tree(t, &req, &NEVER).into_keys().collect();
+            let every: BTreeSet<Code> = found_from_tree(t, &req, false, &NEVER)
+                .into_keys()
+                .collect();
             (owned, every)
         })
         .collect();
@@ -485,4 +488,36 @@ fn the_kinematic_sense_of_fractionation_drops_series_trains_like_fig_5() {
     let fig5 = member(&example("fig5_example62.toml"), GraphLevel::Displacement).unwrap();
     assert!(codes(6, 2, GraphLevel::Displacement).contains(&fig5.code));
     assert!(!strict(6, 2, GraphLevel::Displacement).contains(&fig5.code));
+}
+
+#[test]
+fn a_cancelled_enumeration_hands_on_whole_trees_only_a_prefix_of_the_atlas() {
+    let req = AtlasRequest {
+        links: 7,
+        dof: 1,
+        level: GraphLevel::Displacement,
+        part: None,
+        fractionation: Fractionation::Layout,
+    };
+    let mut whole: Vec<(usize, Vec<AtlasMember>)> = Vec::new();
+    let cancel = AtomicBool::new(false);
+    assert!(enumerate_until(&req, &cancel, |i, m| whole.push((i, m))).unwrap());
+    assert_eq!(whole.len(), units(7));
+    // Set before the start: nothing is handed on.
+    cancel.store(true, Ordering::Relaxed);
+    let mut none = 0;
+    assert!(!enumerate_until(&req, &cancel, |_, _| none += 1).unwrap());
+    assert_eq!(none, 0);
+    // Set by the sink after the first tree: the trees handed on are whole
+    // and the first of the atlas, in order.
+    let cancel = AtomicBool::new(false);
+    let mut part: Vec<(usize, Vec<AtlasMember>)> = Vec::new();
+    let done = enumerate_until(&req, &cancel, |i, m| {
+        part.push((i, m));
+        cancel.store(true, Ordering::Relaxed);
+    })
+    .unwrap();
+    assert!(!done);
+    assert!(!part.is_empty() && part.len() < whole.len());
+    assert_eq!(part[..], whole[..part.len()]);
 }

@@ -7,7 +7,11 @@
 //! with its `[analysis]`). A bad row (a parameter out of range, a singular or
 //! ill-conditioned system, an unreadable line) is reported in its own output
 //! row and on stderr; the rest go on, and the exit code is 1 when any failed.
-//! A progress bar shows on stderr when it is a terminal.
+//! A progress line shows on stderr when it is a terminal (or with
+//! `--progress`). Ctrl-C stops the batch after the last block written: the
+//! output then holds the first rows, whole (CSV and JSON Lines lines, a
+//! Parquet or Arrow file closed with its footer, readable), stderr says how
+//! many, and the exit code is 130.
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -16,7 +20,6 @@ use egt_core::batch::BatchPlan;
 use egt_core::numerics::linalg::COND_WARN;
 use egt_core::solve::prepared::Compute;
 use egt_core::{Error, SpecErrorKind};
-use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::args::SpecFormat;
 use design::{parse_set, parse_values};
@@ -139,6 +142,13 @@ pub struct Args {
     /// Print the parameters (with the spec's values) and the output columns, then exit.
     #[arg(long)]
     pub list: bool,
+    /// Show a progress line on stderr (scenarios written / all, rate) even
+    /// when stderr is not a terminal (on a terminal it shows anyway). Ctrl-C
+    /// stops the batch after the last whole block: the output holds the
+    /// first rows (a Parquet or Arrow file is closed, readable) and the exit
+    /// code is 130.
+    #[arg(long)]
+    pub progress: bool,
 }
 
 /// Run `egt batch`.
@@ -198,18 +208,23 @@ pub fn refuse_binary_to_terminal(args: &Args) -> anyhow::Result<()> {
     .into())
 }
 
-fn progress(total: usize) -> ProgressBar {
-    // Drawn on stderr only when it is a terminal (indicatif hides it otherwise).
-    let bar = ProgressBar::new(total as u64);
-    if let Ok(style) =
-        ProgressStyle::with_template("{bar:30} {human_pos}/{human_len} scenarios, eta {eta}")
-    {
-        bar.set_style(style);
-    }
-    bar
-}
-
+/// Scenarios (or `--specs` lines) written, of them failed, the first failure.
 type Outcome = (usize, usize, Option<String>);
+
+/// What a batch that Ctrl-C stopped wrote: `written` of `total` rows
+/// (None: not known, `--specs`), `failed` of them failed.
+fn interrupted(written: usize, total: Option<usize>, failed: usize, what: &str) -> anyhow::Error {
+    let of = total.map_or(String::new(), |t| format!(" of {t}"));
+    let failed = if failed > 0 {
+        format!(" ({failed} of them failed, each in its row)")
+    } else {
+        String::new()
+    };
+    crate::interrupt::Interrupted(format!(
+        "{written}{of} {what} written{failed}: the output holds them whole, in order; the rest were not run"
+    ))
+    .into()
+}
 
 /// A block's output, ready to be written.
 enum Encoded {

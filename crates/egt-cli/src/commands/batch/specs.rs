@@ -9,13 +9,14 @@ use anyhow::Context;
 use egt_core::batch::{BatchPlan, BatchSpec};
 use egt_core::solve::prepared::Compute;
 use egt_core::{Format, Train};
-use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
 use super::columnar::{Encoder, long_columnar};
 use super::order::size_global_pool;
 use super::text::{csv_field, number, quoted};
-use super::{Args, BLOCK, BatchOutput, Encoded, Outcome, select, warning};
+use super::{Args, BLOCK, BatchOutput, Encoded, Outcome, interrupted, select, warning};
+use crate::interrupt;
+use crate::progress::Progress;
 
 /// Text of `--specs` lines per block: a block holds at most this much, and
 /// at most [`BLOCK`] lines (parsing takes about 30 times the text, so a file
@@ -120,13 +121,18 @@ pub(super) fn run_specs(
         out.write_all(b"row,name,quantity,value\n")?;
     }
     // The number of lines is not known before the end.
-    let bar = ProgressBar::no_length();
-    if let Ok(style) = ProgressStyle::with_template("{human_pos} specs") {
-        bar.set_style(style);
-    }
+    let bar = Progress::new(args.progress, "specs", None);
     let (mut failed, mut first_error) = (0, None);
     let mut first = 0;
     for b in 0.. {
+        // Ctrl-C: stop before the next block; the output ends after a whole one.
+        if interrupt::requested() {
+            drop(bar);
+            if let Some((_, sink)) = columnar {
+                sink.finish(out)?;
+            }
+            return Err(interrupted(first, None, failed, "specs lines"));
+        }
         let block = lines.next_block()?;
         if block.is_empty() {
             break;
@@ -171,9 +177,9 @@ pub(super) fn run_specs(
             }
         }
         first += block.len();
-        bar.inc(block.len() as u64);
+        bar.add(block.len() as u64);
     }
-    bar.finish_and_clear();
+    drop(bar);
     if let Some((_, sink)) = columnar {
         sink.finish(out)?;
     }

@@ -17,10 +17,12 @@ use super::design::{Design, design, unknown};
 use super::order::{AHEAD, batch_threads, in_order, size_global_pool};
 use super::text::{csv_field, quoted};
 use super::{
-    Args, BLOCK, BatchOutput, COLUMNAR_BLOCK, Encoded, Outcome, block_rows, progress, select,
+    Args, BLOCK, BatchOutput, COLUMNAR_BLOCK, Encoded, Outcome, block_rows, interrupted, select,
 };
 use crate::args::{OutputFormat, SpecArgs};
 use crate::input;
+use crate::interrupt;
+use crate::progress::Progress;
 
 /// One plan's share of the output: which of the CSV columns it fills.
 pub(super) struct Columns {
@@ -75,7 +77,7 @@ pub(super) fn run_one_spec(
     }
     let per_plan = design.rows.count();
     let total = per_plan * plans.len();
-    let bar = progress(total);
+    let bar = Progress::new(args.progress, "scenarios", Some(total as u64));
     let (mut failed, mut first_error) = (0, None);
     let keys: Vec<String> = design.varied.iter().map(|v| quoted(&v.0)).collect();
     let okeys: Vec<Vec<String>> = plans
@@ -137,7 +139,14 @@ pub(super) fn run_one_spec(
     // history: waves of blocks left a thread idle while the other finished
     // its block and while this one wrote).
     let ahead = if block < most { 1 } else { AHEAD };
-    in_order(all, ahead, threads, &|(b, i)| sweep.solve(b, i), |d| {
+    // Ctrl-C: the writer stops before the next block, so that the output
+    // ends after a whole block (a Parquet or Arrow file is then closed).
+    let (mut written, mut stopped) = (0, false);
+    let run = in_order(all, ahead, threads, &|(b, i)| sweep.solve(b, i), |d| {
+        if interrupt::requested() {
+            stopped = true;
+            anyhow::bail!("interrupted");
+        }
         let d = d?;
         match d.encoded {
             Encoded::Text(text) => {
@@ -154,12 +163,19 @@ pub(super) fn run_one_spec(
         if first_error.is_none() {
             first_error = d.first_error;
         }
-        bar.inc(d.len as u64);
+        written += d.len;
+        bar.add(d.len as u64);
         Ok(())
-    })?;
-    bar.finish_and_clear();
+    });
+    drop(bar);
+    if !stopped {
+        run?;
+    }
     if let Some(sink) = sink {
         sink.finish(out)?;
+    }
+    if stopped {
+        return Err(interrupted(written, Some(total), failed, "scenarios"));
     }
     Ok((total, failed, first_error))
 }

@@ -72,7 +72,11 @@ impl Search {
         use std::sync::atomic::Ordering::Relaxed;
         nodes.fetch_add(1, Relaxed);
         // Past the leaf budget the run is refused (`run_partition`): stop.
-        if leaves.load(Relaxed) > self.spec.max_leaves || !self.feasible(states, bounds) {
+        // Stopped by the caller (`with_cancel`): stop too.
+        if leaves.load(Relaxed) > self.spec.max_leaves
+            || self.cancelled()
+            || !self.feasible(states, bounds)
+        {
             return Vec::new();
         }
         let widest = (0..bounds.len())

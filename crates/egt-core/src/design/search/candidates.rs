@@ -52,6 +52,12 @@ pub struct Stats {
     /// elements, states that are not one DOF, singular states).
     #[serde(default)]
     pub skipped_layouts: u64,
+    /// The run was stopped before it searched the whole space
+    /// ([`Search::with_cancel`](super::Search::with_cancel)): the candidates
+    /// are exact but the best of the part searched only. Absent from the
+    /// serde form when false.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub interrupted: bool,
 }
 
 /// Partitions' results as one search's: the candidates ranked together
@@ -69,6 +75,7 @@ pub fn merge(parts: Vec<(Vec<Candidate>, Stats)>, top: usize) -> (Vec<Candidate>
         total.nodes += s.nodes;
         total.leaves += s.leaves;
         total.rejected += s.rejected;
+        total.interrupted |= s.interrupted;
     }
     rank(&mut found, top);
     (found, total)

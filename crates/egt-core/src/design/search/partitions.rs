@@ -1,5 +1,9 @@
 //! Running a search whole or in partitions (for Dask): the partition
-//! count, one partition, all of them with progress.
+//! count, one partition, all of them with progress, and stopping a run
+//! early.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::error::DesignError;
 
@@ -15,6 +19,26 @@ impl Search {
     /// The unknown sets, in the order of each candidate's lists.
     pub fn set_names(&self) -> &[String] {
         &self.set_names
+    }
+
+    /// Stop runs of this search soon after `flag` is set (by another thread:
+    /// a Ctrl-C handler, a time limit). The flag is read at each node of the
+    /// bound and before each exact confirmation, never inside one. A run
+    /// stopped so returns `Ok` with [`Stats::interrupted`] set and the
+    /// candidates confirmed before the stop: each is exact and meets the
+    /// targets, but the space was not all searched, so better ones may
+    /// exist. The library sets no signal handler: the flag is the caller's.
+    #[must_use]
+    pub fn with_cancel(mut self, flag: Arc<AtomicBool>) -> Self {
+        self.cancel = Some(flag);
+        self
+    }
+
+    /// Whether the caller asked the run to stop ([`Search::with_cancel`]).
+    pub(super) fn cancelled(&self) -> bool {
+        self.cancel
+            .as_ref()
+            .is_some_and(|f| f.load(Ordering::Relaxed))
     }
 
     /// Number of partitions the first unknown set's ratios can be split into.
@@ -69,12 +93,18 @@ impl Search {
             .variants
             .par_iter()
             .map(|pick| {
-                let states = self.states(pick)?;
                 let mut out = Vec::new();
                 let mut rejected = 0;
+                if self.cancelled() {
+                    return Ok((out, rejected));
+                }
+                let states = self.states(pick)?;
                 let survivors = self.branch(&states, &bounds, &nodes, &leaves);
-                self.within_leaf_budget(leaves.load(std::sync::atomic::Ordering::Relaxed))?;
+                self.within_leaf_budget(leaves.load(Ordering::Relaxed))?;
                 for ks in survivors {
+                    if self.cancelled() {
+                        break;
+                    }
                     match self.confirm(pick, &ks)? {
                         Some(c) => out.push(c),
                         None => rejected += 1,
@@ -86,6 +116,8 @@ impl Search {
             .collect();
         stats.nodes = nodes.into_inner();
         stats.leaves = leaves.into_inner();
+        // Read once all is done: set at any point, the run was cut short.
+        stats.interrupted = self.cancelled();
         let mut out = Vec::new();
         for r in per_layout {
             let (c, rejected) = r?;
@@ -121,7 +153,9 @@ impl Search {
     /// all cores), calling `progress(done, parts, best)` after each with the
     /// best candidates so far (ranked, at most `top`): what a progress bar, an
     /// ETA and a stream of results need. Merged and ranked, the result is
-    /// [`Search::run`]'s.
+    /// [`Search::run`]'s. Stopped ([`Search::with_cancel`]), it runs no
+    /// further part and does not report the one cut short; the result is
+    /// then the parts run, with [`Stats::interrupted`] set.
     ///
     /// # Errors
     /// As [`Search::run_partition`].
@@ -135,6 +169,10 @@ impl Search {
         let mut done = Vec::with_capacity(parts);
         for part in 0..parts {
             let (found, stats) = self.run_partition(part, parts)?;
+            if stats.interrupted {
+                done.push((found, stats));
+                break;
+            }
             best.extend(found.iter().cloned());
             rank(&mut best, self.spec.top);
             progress(part + 1, parts, &best);

@@ -1,6 +1,9 @@
 //! Preparing a search: the [`Search`] and its construction from the spec
 //! and the base train.
 
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
 use crate::design::spec::SynthSpec;
 use crate::error::DesignError;
 use crate::spec::{PlanetaryKind, Spec};
@@ -26,6 +29,8 @@ pub struct Search {
     /// Layouts skipped before the search: an element doubled, a gear state
     /// that is not one DOF, or one whose system is singular for any teeth.
     pub(super) skipped_layouts: u64,
+    /// Set by the caller to stop a run early ([`Search::with_cancel`]).
+    pub(super) cancel: Option<Arc<AtomicBool>>,
 }
 
 impl Search {
@@ -189,6 +194,7 @@ impl Search {
             layouts,
             variants: Vec::new(),
             skipped_layouts: 0,
+            cancel: None,
         };
         search.check_base()?;
         if search.layouts.names.is_empty() {

@@ -289,3 +289,38 @@ fn rediscovers_8hp_full_ranges() {
     assert!(stats.tooth_space > 1e10);
     assert_eq!(found[0].basic, ["2", "2", "37/23", "85/23"]);
 }
+
+/// A run stopped by its caller's flag says so, and what it returns is
+/// what it finished: nothing when stopped before the start, the first
+/// part's candidates when stopped after the first part.
+#[test]
+fn a_cancelled_run_stops_and_says_so() {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
+    let sets = "[sets]\nP3 = { sun = [60, 76], ring = [100, 120] }\nP4 = { sun = [20, 28], ring = [76, 92] }";
+    let flag = Arc::new(AtomicBool::new(false));
+    let s = zf_search(sets).with_cancel(flag.clone());
+    let (whole, ws) = s.run().expect("test input");
+    assert!(!ws.interrupted && !whole.is_empty());
+    flag.store(true, Relaxed);
+    let (none, ns) = s.run().expect("test input");
+    assert!(ns.interrupted);
+    assert!(none.is_empty());
+    assert_eq!(ns.nodes, 0);
+    flag.store(false, Relaxed);
+    let mut seen = Vec::new();
+    let (first, fs) = s
+        .run_in_parts(4, |done, of, _| {
+            seen.push((done, of));
+            flag.store(true, Relaxed);
+        })
+        .expect("test input");
+    assert_eq!(seen, [(1, 4)]);
+    assert!(fs.interrupted);
+    let (part0, _) = zf_search(sets).run_partition(0, 4).expect("test input");
+    let key = |c: &Vec<Candidate>| c.iter().map(|x| x.teeth.clone()).collect::<Vec<_>>();
+    assert_eq!(key(&first), key(&part0));
+    // Not in the serde form unless set: reports of whole runs are unchanged.
+    let text = serde_json::to_string(&ws).expect("stats");
+    assert!(!text.contains("interrupted"), "{text}");
+}
