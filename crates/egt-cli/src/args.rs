@@ -30,9 +30,16 @@ pub enum SpecFormat {
     Json,
 }
 
-/// Arguments shared by every command that reads a spec.
+/// An output format flag: [`OutputFormat`], or a command's own choices.
+pub trait FormatArg: ValueEnum + Default + Clone + Send + Sync + 'static {}
+impl<F: ValueEnum + Default + Clone + Send + Sync + 'static> FormatArg for F {}
+
+/// Arguments shared by every command that reads a spec: the spec, its
+/// format, and the output format `F` (a table or JSON, or a command's own
+/// choices, such as the CSV of `egt simulate` and `egt shift-sim`), whose
+/// default is the table.
 #[derive(Debug, Clone, clap::Args)]
-pub struct SpecArgs {
+pub struct SpecArgs<F: FormatArg = OutputFormat> {
     /// The spec file (TOML or JSON), or `-` for standard input.
     #[arg(value_name = "SPEC")]
     pub spec: PathBuf,
@@ -40,8 +47,8 @@ pub struct SpecArgs {
     #[arg(long, value_enum, value_name = "FORMAT")]
     pub spec_format: Option<SpecFormat>,
     /// Output format.
-    #[arg(long, value_enum, default_value_t = OutputFormat::Table)]
-    pub format: OutputFormat,
+    #[arg(long, value_enum, default_value_t)]
+    pub format: F,
 }
 
 /// Loads, accelerations and driving links, from flags or the spec's `[analysis]`.
@@ -146,10 +153,21 @@ pub fn parse_input(s: &str) -> Result<InputArg, String> {
     })
 }
 
+/// The input speeds of `egt kinematics` and `egt power`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct InputArgs {
+    /// An input speed, `LINK=SPEED` (rad/s or any unit; SPEED may be a fraction
+    /// `p/q` or a decimal, read exactly). Repeat once per DOF. Default: the
+    /// spec's `[analysis] speeds`.
+    #[arg(short, long = "input", value_name = "LINK=SPEED", value_parser = parse_input)]
+    pub inputs: Vec<InputArg>,
+}
+
 /// Inputs from `--input`, else from the spec's `[analysis] speeds`.
-pub fn speed_inputs(train: &Train, args: &[InputArg]) -> anyhow::Result<Vec<SpeedInput>> {
-    if !args.is_empty() {
+pub fn speed_inputs(train: &Train, args: &InputArgs) -> anyhow::Result<Vec<SpeedInput>> {
+    if !args.inputs.is_empty() {
         return args
+            .inputs
             .iter()
             .map(|a| {
                 let link = train.resolve(&a.link, &format!("--input {}", a.link))?;

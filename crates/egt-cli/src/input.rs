@@ -8,7 +8,7 @@ use std::path::Path;
 use anyhow::Context;
 use egt_core::{Format, Train};
 
-use crate::args::{SpecArgs, SpecFormat};
+use crate::args::{FormatArg, SpecArgs, SpecFormat};
 
 /// A validated train and the name its spec was read under.
 #[derive(Debug)]
@@ -25,7 +25,7 @@ pub struct Loaded {
 /// I/O errors (with the path), and the core's syntax, spec and topology errors.
 /// Semantic errors carry the source name as context; syntax errors already
 /// say `file:line:col`.
-pub fn load(args: &SpecArgs) -> anyhow::Result<Loaded> {
+pub fn load<F: FormatArg>(args: &SpecArgs<F>) -> anyhow::Result<Loaded> {
     let (text, source, format) = read_spec(&args.spec, args.spec_format)?;
     match Train::from_str(&text, format, &source) {
         Ok(train) => Ok(Loaded { train, source }),

@@ -11,7 +11,7 @@ use egt_core::Train;
 use egt_core::numerics::exact;
 use egt_views::kinematics::{Report, build};
 
-use crate::args::{InputArg, parse_input, speed_inputs};
+use crate::args::{InputArgs, speed_inputs};
 use crate::args::{OutputFormat, SpecArgs};
 use crate::input;
 use crate::report::{self, Table};
@@ -21,11 +21,8 @@ use crate::report::{self, Table};
 pub struct Args {
     #[command(flatten)]
     pub spec: SpecArgs,
-    /// An input speed, `LINK=SPEED` (rad/s or any unit; SPEED may be a fraction
-    /// `p/q` or a decimal, read exactly). Repeat once per DOF. Default: the
-    /// spec's `[analysis] speeds`.
-    #[arg(short, long = "input", value_name = "LINK=SPEED", value_parser = parse_input)]
-    pub inputs: Vec<InputArg>,
+    #[command(flatten)]
+    pub inputs: InputArgs,
 }
 /// Run `egt kinematics`.
 ///

@@ -10,7 +10,7 @@ use egt_core::Train;
 use egt_core::analysis::power::PowerRequest;
 use egt_views::power::{Report, build};
 
-use crate::args::{InputArg, LoadArgs, load_request, mass_if_needed, parse_input, speed_inputs};
+use crate::args::{InputArgs, LoadArgs, load_request, mass_if_needed, speed_inputs};
 use crate::args::{OutputFormat, SpecArgs};
 use crate::input;
 use crate::report::{self, Table};
@@ -20,9 +20,8 @@ use crate::report::{self, Table};
 pub struct Args {
     #[command(flatten)]
     pub spec: SpecArgs,
-    /// An input speed, `LINK=SPEED`, one per DOF. Default: `[analysis] speeds`.
-    #[arg(short, long = "input", value_name = "LINK=SPEED", value_parser = parse_input)]
-    pub inputs: Vec<InputArg>,
+    #[command(flatten)]
+    pub inputs: InputArgs,
     #[command(flatten)]
     pub loads: LoadArgs,
     /// Ignore the gear pairs' efficiencies (ideal meshes).

@@ -15,8 +15,8 @@ use egt_core::{
 };
 use egt_views::simulation::{MeshOut, Report, build, equilibrium};
 
+use crate::args::SpecArgs;
 use crate::args::{ModelArgs, curves, parse_pair, resolve_pairs};
-use crate::args::{OutputFormat, SpecArgs, SpecFormat};
 use crate::input;
 use crate::report::{self, Table};
 
@@ -44,15 +44,8 @@ pub enum MethodArg {
 /// Arguments of `egt simulate`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
-    /// The spec file (TOML or JSON), or `-` for standard input.
-    #[arg(value_name = "SPEC")]
-    pub spec: PathBuf,
-    /// Spec format; by default from the extension (`.json` is JSON), or sniffed on stdin.
-    #[arg(long, value_enum, value_name = "FORMAT")]
-    pub spec_format: Option<SpecFormat>,
-    /// Output format.
-    #[arg(long, value_enum, default_value_t = SimFormat::Table)]
-    pub format: SimFormat,
+    #[command(flatten)]
+    pub spec: SpecArgs<SimFormat>,
     #[command(flatten)]
     pub model: ModelArgs,
     /// End time [s]. Default: `[analysis.simulate] t_end`.
@@ -86,12 +79,7 @@ pub struct Args {
 /// (exit 2); missing data, singular systems, a blown-up solution (exit 1,
 /// after the series up to the blow-up has been written); I/O.
 pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
-    let spec_args = SpecArgs {
-        spec: args.spec.clone(),
-        spec_format: args.spec_format,
-        format: OutputFormat::Table,
-    };
-    let loaded = input::load(&spec_args)?;
+    let loaded = input::load(&args.spec)?;
     let train = &loaded.train;
     let ctx = || format!("{}: simulate", loaded.source);
     let req = request(train, args)?;
@@ -143,7 +131,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         );
         std::fs::write(path, svg).with_context(|| format!("writing {}", path.display()))?;
     }
-    match args.format {
+    match args.spec.format {
         SimFormat::Json => report::json(out, &report)?,
         SimFormat::Csv => write_csv(out, train, &report)?,
         SimFormat::Table => write_table(out, train, &loaded.source, &report)?,
