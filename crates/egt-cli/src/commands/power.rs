@@ -106,12 +106,12 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
     writeln!(
         out,
         "input power {}, output power {}, mesh losses {}, dK/dt {}",
-        f(r.input_power),
-        f(r.output_power),
-        f(r.loss),
-        f(r.kinetic_rate)
+        f(r.totals.input_power),
+        f(r.totals.output_power),
+        f(r.totals.loss),
+        f(r.totals.kinetic_rate)
     )?;
-    match r.efficiency {
+    match r.totals.efficiency {
         Some(e) => writeln!(out, "efficiency: {}", f(e))?,
         None => writeln!(out, "efficiency: - (no input power)")?,
     }
@@ -119,13 +119,13 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
         writeln!(
             out,
             "circulating power: none (largest branch / input = {})",
-            f(r.circulation_ratio)
+            f(r.totals.circulation_ratio)
         )?;
     } else {
         writeln!(
             out,
             "circulating power: largest branch / input = {} through shafts [{}] and meshes [{}]",
-            f(r.circulation_ratio),
+            f(r.totals.circulation_ratio),
             r.circulating_shafts.join(", "),
             r.circulating_meshes.join(", ")
         )?;
