@@ -153,9 +153,11 @@ pub fn parse_input(s: &str) -> Result<InputArg, String> {
     })
 }
 
-/// The input speeds of `egt kinematics` and `egt power`.
+/// A spec and its input speeds: `egt kinematics` and `egt power`.
 #[derive(Debug, Clone, clap::Args)]
-pub struct InputArgs {
+pub struct SpeedArgs {
+    #[command(flatten)]
+    pub spec: SpecArgs,
     /// An input speed, `LINK=SPEED` (rad/s or any unit; SPEED may be a fraction
     /// `p/q` or a decimal, read exactly). Repeat once per DOF. Default: the
     /// spec's `[analysis] speeds`.
@@ -164,7 +166,7 @@ pub struct InputArgs {
 }
 
 /// Inputs from `--input`, else from the spec's `[analysis] speeds`.
-pub fn speed_inputs(train: &Train, args: &InputArgs) -> anyhow::Result<Vec<SpeedInput>> {
+pub fn speed_inputs(train: &Train, args: &SpeedArgs) -> anyhow::Result<Vec<SpeedInput>> {
     if !args.inputs.is_empty() {
         return args
             .inputs

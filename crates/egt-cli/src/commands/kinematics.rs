@@ -11,8 +11,7 @@ use egt_core::Train;
 use egt_core::numerics::exact;
 use egt_views::kinematics::{Report, build};
 
-use crate::args::{InputArgs, speed_inputs};
-use crate::args::{OutputFormat, SpecArgs};
+use crate::args::{OutputFormat, SpeedArgs};
 use crate::input;
 use crate::report::{self, Table};
 
@@ -20,9 +19,7 @@ use crate::report::{self, Table};
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
     #[command(flatten)]
-    pub spec: SpecArgs,
-    #[command(flatten)]
-    pub inputs: InputArgs,
+    pub point: SpeedArgs,
 }
 /// Run `egt kinematics`.
 ///
@@ -31,9 +28,8 @@ pub struct Args {
 /// inputs that do not determine the train, singular or ill-conditioned
 /// systems (analysis errors, exit 1); I/O.
 pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
-    let loaded = input::load(&args.spec)?;
+    let (loaded, inputs) = input::load_speeds(&args.point)?;
     let train = &loaded.train;
-    let inputs = speed_inputs(train, &args.inputs)?;
     let speeds = train.kinematics(&inputs).with_context(|| {
         let given: Vec<String> = inputs
             .iter()
@@ -46,7 +42,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         )
     })?;
     let report = build(train, &loaded.source, &inputs, &speeds);
-    match args.spec.format {
+    match args.point.spec.format {
         OutputFormat::Json => report::json(out, &report),
         OutputFormat::Table => write_table(out, train, &loaded.source, &report),
     }

@@ -10,8 +10,7 @@ use egt_core::Train;
 use egt_core::analysis::power::PowerRequest;
 use egt_views::power::{Report, build};
 
-use crate::args::{InputArgs, LoadArgs, load_request, mass_if_needed, speed_inputs};
-use crate::args::{OutputFormat, SpecArgs};
+use crate::args::{LoadArgs, OutputFormat, SpeedArgs, load_request, mass_if_needed};
 use crate::input;
 use crate::report::{self, Table};
 
@@ -19,9 +18,7 @@ use crate::report::{self, Table};
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
     #[command(flatten)]
-    pub spec: SpecArgs,
-    #[command(flatten)]
-    pub inputs: InputArgs,
+    pub point: SpeedArgs,
     #[command(flatten)]
     pub loads: LoadArgs,
     /// Ignore the gear pairs' efficiencies (ideal meshes).
@@ -33,9 +30,8 @@ pub struct Args {
 /// # Errors
 /// Spec errors (exit 2); missing data, singular systems, self-locking (exit 1).
 pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
-    let loaded = input::load(&args.spec)?;
+    let (loaded, speeds) = input::load_speeds(&args.point)?;
     let train = &loaded.train;
-    let speeds = speed_inputs(train, &args.inputs)?;
     let dynamics = load_request(train, &args.loads)?;
     let mass = mass_if_needed(train, &dynamics)?;
     let req = PowerRequest {
@@ -47,7 +43,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         .power_flow(&req, mass.as_ref())
         .with_context(|| format!("{}: power flow", loaded.source))?;
     let report = build(train, &loaded.source, &pf, req.losses);
-    match args.spec.format {
+    match args.point.spec.format {
         OutputFormat::Json => report::json(out, &report),
         OutputFormat::Table => write_table(out, train, &loaded.source, &report),
     }
