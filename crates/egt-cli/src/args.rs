@@ -21,6 +21,22 @@ pub enum OutputFormat {
     Json,
 }
 
+/// How the commands that integrate in time (`egt simulate`, `egt shift-sim`)
+/// print their result.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
+pub enum SeriesFormat {
+    /// A summary as a table (`egt simulate` adds a table of sampled steps).
+    #[default]
+    Table,
+    /// The whole result as JSON, every stored sample included.
+    Json,
+    /// The time series as CSV, a row per stored sample: t, each moving link's
+    /// speed, then `egt simulate`'s drift, energy, work and power, or `egt
+    /// shift-sim`'s slip, torque and dissipated energy of each element, output
+    /// torque, energy residual and DOF.
+    Csv,
+}
+
 /// The text format of a spec.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum SpecFormat {

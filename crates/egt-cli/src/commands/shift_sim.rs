@@ -16,22 +16,10 @@ use egt_core::shift_dynamics::{
     Capacity, FrictionLaw, InputTorque, ShiftMethod, ShiftResult, ShiftSim,
 };
 
-use crate::args::SpecArgs;
+use crate::args::{SeriesFormat, SpecArgs};
 use crate::input;
 use crate::report::{self, Table};
 use crate::svg::{GAP, Line, PLOT_H, Panel, TOP, legend, panel, plain_lines};
-
-/// How `egt shift-sim` prints its result.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
-pub enum ShiftFormat {
-    /// The summary as a table.
-    #[default]
-    Table,
-    /// The whole result, samples included.
-    Json,
-    /// The time series.
-    Csv,
-}
 
 /// The integrator, as on the command line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -48,7 +36,7 @@ pub enum MethodArg {
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
     #[command(flatten)]
-    pub spec: SpecArgs<ShiftFormat>,
+    pub spec: SpecArgs<SeriesFormat>,
     /// The gear before the shift (a state of `[transmission.states]`).
     #[arg(long)]
     pub from: String,
@@ -241,9 +229,9 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
             .with_context(|| format!("writing {}", path.display()))?;
     }
     match args.spec.format {
-        ShiftFormat::Json => report::json(out, &r),
-        ShiftFormat::Csv => csv(out, train, &r),
-        ShiftFormat::Table => table(out, train, &loaded.source, &args.from, &args.to, &r),
+        SeriesFormat::Json => report::json(out, &r),
+        SeriesFormat::Csv => csv(out, train, &r),
+        SeriesFormat::Table => table(out, train, &loaded.source, &args.from, &args.to, &r),
     }
 }
 

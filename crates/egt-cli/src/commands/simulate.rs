@@ -15,22 +15,10 @@ use egt_core::{
 };
 use egt_views::simulation::{MeshOut, Report, build, equilibrium};
 
-use crate::args::SpecArgs;
 use crate::args::{ModelArgs, curves, parse_pair, resolve_pairs};
+use crate::args::{SeriesFormat, SpecArgs};
 use crate::input;
 use crate::report::{self, Table};
-
-/// Output formats of `egt simulate`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
-pub enum SimFormat {
-    /// A summary and a sampled table.
-    #[default]
-    Table,
-    /// The summary and every stored sample as JSON.
-    Json,
-    /// Every stored sample as CSV: t, each link's speed, drift, energy, work, power.
-    Csv,
-}
 
 /// Integrators, as flags.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -45,7 +33,7 @@ pub enum MethodArg {
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
     #[command(flatten)]
-    pub spec: SpecArgs<SimFormat>,
+    pub spec: SpecArgs<SeriesFormat>,
     #[command(flatten)]
     pub model: ModelArgs,
     /// End time [s]. Default: `[analysis.simulate] t_end`.
@@ -132,9 +120,9 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         std::fs::write(path, svg).with_context(|| format!("writing {}", path.display()))?;
     }
     match args.spec.format {
-        SimFormat::Json => report::json(out, &report)?,
-        SimFormat::Csv => write_csv(out, train, &report)?,
-        SimFormat::Table => write_table(out, train, &loaded.source, &report)?,
+        SeriesFormat::Json => report::json(out, &report)?,
+        SeriesFormat::Csv => write_csv(out, train, &report)?,
+        SeriesFormat::Table => write_table(out, train, &loaded.source, &report)?,
     }
     if let Some(d) = &sim.diverged {
         let hint = match (sim.method, sim.rk4_step_limit) {
