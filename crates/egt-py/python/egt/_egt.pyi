@@ -98,11 +98,7 @@ class TrainCore:
 
 def structure(core: TrainCore) -> Dict[str, Any]: ...
 def atlas(
-    links: int,
-    dof: int = 1,
-    level: str = "rotation",
-    part: Optional[Tuple[int, int]] = None,
-    fractionation: str = "layout",
+    links: int, dof: int, level: str, part: Optional[Tuple[int, int]], fractionation: str
 ) -> List[Dict[str, Any]]: ...
 def atlas_member(core: TrainCore, level: str = "rotation") -> Dict[str, Any]: ...
 @final
