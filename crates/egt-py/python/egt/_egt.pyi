@@ -6,40 +6,6 @@ from typing import Any, Callable, Dict, List, Optional, Tuple, final
 import numpy as np
 import numpy.typing as npt
 
-__all__ = [
-    "__version__",
-    "TrainCore",
-    "structure",
-    "BatchPlanCore",
-    "SearchCore",
-    "search_inputs",
-    "batch_plan",
-    "ratios_from_teeth",
-    "stability",
-    "simulate",
-    "gear",
-    "shift_table",
-    "cli",
-    "atlas",
-    "atlas_member",
-    "shift_sim",
-    "EgtError",
-    "SpecError",
-    "SpecSyntaxError",
-    "TopologyError",
-    "TransmissionError",
-    "AnalysisError",
-    "InputError",
-    "UnderdeterminedError",
-    "InconsistentError",
-    "SingularError",
-    "IllConditionedError",
-    "MissingDataError",
-    "SelfLockingError",
-    "NonFiniteError",
-    "InternalError",
-]
-
 __version__: str
 
 _Input = Tuple[str, float, Optional[str]]
