@@ -21,6 +21,22 @@ pub enum OutputFormat {
     Json,
 }
 
+/// How the commands that integrate in time (`egt simulate`, `egt shift-sim`)
+/// print their result.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
+pub enum SeriesFormat {
+    /// A summary as a table (`egt simulate` adds a table of sampled steps).
+    #[default]
+    Table,
+    /// The whole result as JSON, every stored sample included.
+    Json,
+    /// The time series as CSV, a row per stored sample: t, each moving link's
+    /// speed, then `egt simulate`'s drift, energy, work and power, or `egt
+    /// shift-sim`'s slip, torque and dissipated energy of each element, output
+    /// torque, energy residual and DOF.
+    Csv,
+}
+
 /// The text format of a spec.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum SpecFormat {
@@ -30,9 +46,16 @@ pub enum SpecFormat {
     Json,
 }
 
-/// Arguments shared by every command that reads a spec.
+/// An output format flag: [`OutputFormat`], or a command's own choices.
+pub trait FormatArg: ValueEnum + Default + Clone + Send + Sync + 'static {}
+impl<F: ValueEnum + Default + Clone + Send + Sync + 'static> FormatArg for F {}
+
+/// Arguments shared by every command that reads a spec: the spec, its
+/// format, and the output format `F` (a table or JSON, or a command's own
+/// choices, such as the CSV of `egt simulate` and `egt shift-sim`), whose
+/// default is the table.
 #[derive(Debug, Clone, clap::Args)]
-pub struct SpecArgs {
+pub struct SpecArgs<F: FormatArg = OutputFormat> {
     /// The spec file (TOML or JSON), or `-` for standard input.
     #[arg(value_name = "SPEC")]
     pub spec: PathBuf,
@@ -40,8 +63,8 @@ pub struct SpecArgs {
     #[arg(long, value_enum, value_name = "FORMAT")]
     pub spec_format: Option<SpecFormat>,
     /// Output format.
-    #[arg(long, value_enum, default_value_t = OutputFormat::Table)]
-    pub format: OutputFormat,
+    #[arg(long, value_enum, default_value_t)]
+    pub format: F,
 }
 
 /// Loads, accelerations and driving links, from flags or the spec's `[analysis]`.
@@ -146,10 +169,23 @@ pub fn parse_input(s: &str) -> Result<InputArg, String> {
     })
 }
 
+/// A spec and its input speeds: `egt kinematics` and `egt power`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct SpeedArgs {
+    #[command(flatten)]
+    pub spec: SpecArgs,
+    /// An input speed, `LINK=SPEED` (rad/s or any unit; SPEED may be a fraction
+    /// `p/q` or a decimal, read exactly). Repeat once per DOF. Default: the
+    /// spec's `[analysis] speeds`.
+    #[arg(short, long = "input", value_name = "LINK=SPEED", value_parser = parse_input)]
+    pub inputs: Vec<InputArg>,
+}
+
 /// Inputs from `--input`, else from the spec's `[analysis] speeds`.
-pub fn speed_inputs(train: &Train, args: &[InputArg]) -> anyhow::Result<Vec<SpeedInput>> {
-    if !args.is_empty() {
+pub fn speed_inputs(train: &Train, args: &SpeedArgs) -> anyhow::Result<Vec<SpeedInput>> {
+    if !args.inputs.is_empty() {
         return args
+            .inputs
             .iter()
             .map(|a| {
                 let link = train.resolve(&a.link, &format!("--input {}", a.link))?;

@@ -33,7 +33,7 @@ pub enum Command {
     Power(commands::power::Args),
     /// Automatic transmission: per-gear ratios, element torques, efficiency, steps and shifts.
     Shift(commands::shift::Args),
-    /// Simulate a gear change in time: the off-going element releases, the on-coming one slips and locks.
+    /// Simulate a gear change in time (a spec with a `[transmission]`): the off-going element releases, the on-coming one slips and locks.
     ShiftSim(commands::shift_sim::Args),
     /// Write the train's graph as Graphviz DOT (links, turning and gear pairs, shift elements).
     Graph(commands::graph::Args),

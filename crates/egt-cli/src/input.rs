@@ -6,9 +6,9 @@ use std::io::Read;
 use std::path::Path;
 
 use anyhow::Context;
-use egt_core::{Format, Train};
+use egt_core::{Format, SpeedInput, Train};
 
-use crate::args::{SpecArgs, SpecFormat};
+use crate::args::{FormatArg, SpecArgs, SpecFormat, SpeedArgs, speed_inputs};
 
 /// A validated train and the name its spec was read under.
 #[derive(Debug)]
@@ -25,13 +25,23 @@ pub struct Loaded {
 /// I/O errors (with the path), and the core's syntax, spec and topology errors.
 /// Semantic errors carry the source name as context; syntax errors already
 /// say `file:line:col`.
-pub fn load(args: &SpecArgs) -> anyhow::Result<Loaded> {
+pub fn load<F: FormatArg>(args: &SpecArgs<F>) -> anyhow::Result<Loaded> {
     let (text, source, format) = read_spec(&args.spec, args.spec_format)?;
     match Train::from_str(&text, format, &source) {
         Ok(train) => Ok(Loaded { train, source }),
         Err(e @ egt_core::Error::Syntax(_)) => Err(e.into()),
         Err(e) => Err(anyhow::Error::new(e).context(source)),
     }
+}
+
+/// Read a spec ([`load`]) and its input speeds ([`speed_inputs`]).
+///
+/// # Errors
+/// Those of [`load`]; unknown input links; no input speeds at all.
+pub fn load_speeds(args: &SpeedArgs) -> anyhow::Result<(Loaded, Vec<SpeedInput>)> {
+    let loaded = load(&args.spec)?;
+    let speeds = speed_inputs(&loaded.train, args)?;
+    Ok((loaded, speeds))
 }
 
 /// The text of a spec ([`read_text`]), its name for messages and its

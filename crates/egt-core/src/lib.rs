@@ -56,8 +56,8 @@
 //!     .map(|(l, v, q)| SpeedInput { link: *l, speed: *v, exact: q.clone() })
 //!     .collect();
 //! let flow = train.power_flow(&PowerRequest { speeds, dynamics: req, losses: true }, mass.as_ref()).unwrap();
-//! let balance = flow.input_power - flow.output_power - flow.loss - flow.kinetic_rate;
-//! assert!(balance.abs() <= 1e-9 * flow.input_power.abs());
+//! let balance = flow.totals.input_power - flow.totals.output_power - flow.totals.loss - flow.totals.kinetic_rate;
+//! assert!(balance.abs() <= 1e-9 * flow.totals.input_power.abs());
 //! ```
 //!
 //! Stability about an operating point (eq. 12-27) and an automatic

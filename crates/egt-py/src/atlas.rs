@@ -38,9 +38,10 @@ fn to_dict<'py>(py: Python<'py>, m: AtlasMember) -> Result<Bound<'py, PyDict>> {
     Ok(d)
 }
 
-/// Every member with `links` links and `dof` DOF, at level `rotation` or `displacement`.
+/// Every member with `links` links and `dof` DOF, at level `rotation` or
+/// `displacement`. Its defaults are `egt.atlas`'s, which checks the numbers.
 #[pyfunction]
-#[pyo3(signature = (links, dof = 1, level = "rotation", part = None, fractionation = "layout"))]
+#[pyo3(signature = (links, dof, level, part, fractionation))]
 pub fn atlas<'py>(
     py: Python<'py>,
     links: usize,

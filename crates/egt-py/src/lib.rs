@@ -47,5 +47,8 @@ fn _egt(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<design::SearchCore>()?;
     m.add_function(wrap_pyfunction!(design::search_inputs, m)?)?;
     errors::register(m)?;
+    // The module is private: the package's `__all__` lists the public names,
+    // once. pyo3 keeps a list as it adds each name; the stub would repeat it.
+    m.delattr("__all__")?;
     Ok(())
 }

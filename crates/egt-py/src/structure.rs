@@ -25,8 +25,7 @@ pub fn structure<'py>(py: Python<'py>, core: &TrainCore) -> Result<Bound<'py, Py
             t.coordinates().iter().map(|&l| name(l)).collect::<Vec<_>>(),
         )?;
         let links = PyList::empty(py);
-        for (i, l) in t.links().iter().enumerate() {
-            let id = egt_core::LinkId::from_index(i);
+        for (id, l) in t.links_with_ids() {
             let ld = PyDict::new(py);
             ld.set_item("name", l.name.as_str())?;
             ld.set_item("coordinate", t.coordinate(id))?;

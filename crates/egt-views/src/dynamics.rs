@@ -55,11 +55,8 @@ pub fn build(
 ) -> Report {
     let name = |l: LinkId| train.link_name(l).to_string();
     let links = train
-        .links()
-        .iter()
-        .enumerate()
-        .map(|(i, l)| {
-            let id = LinkId::from_index(i);
+        .links_with_ids()
+        .map(|(id, l)| {
             let role = if id == train.frame() {
                 "frame (housing)"
             } else if req.driving.contains(&id) {
@@ -71,8 +68,8 @@ pub fn build(
             };
             LinkRow {
                 name: l.name.clone(),
-                acceleration: r.acceleration[i],
-                torque: r.torque[i],
+                acceleration: r.acceleration[id.index()],
+                torque: r.torque[id.index()],
                 role: role.into(),
             }
         })

@@ -55,11 +55,9 @@ pub fn build(train: &Train, source: &str, inputs: &[SpeedInput], s: &Speeds) -> 
     let is_input = |l: LinkId| inputs.iter().any(|i| i.link == l);
     let exact_of = |l: LinkId| s.exact.as_ref().map(|e| &e[l.index()]);
     let links = train
-        .links()
-        .iter()
-        .enumerate()
-        .map(|(i, link)| {
-            let id = LinkId::from_index(i);
+        .links_with_ids()
+        .map(|(id, link)| {
+            let i = id.index();
             let known = s.known[i];
             let speed = known.then_some(s.speed[i]);
             let ex = exact_of(id).filter(|_| known);

@@ -1,7 +1,7 @@
 //! The power-flow document (`egt power --format json`): power per link and
 //! per mesh, losses, efficiency and circulating power.
 
-use egt_core::analysis::power::{Driver, PowerFlow};
+use egt_core::analysis::power::{Driver, PowerFlow, PowerTotals};
 use egt_core::{LinkId, Train};
 use serde::Serialize;
 
@@ -34,12 +34,9 @@ pub struct Report {
     pub losses: bool,
     pub links: Vec<LinkRow>,
     pub meshes: Vec<MeshRow>,
-    pub input_power: f64,
-    pub output_power: f64,
-    pub loss: f64,
-    pub kinetic_rate: f64,
-    pub efficiency: Option<f64>,
-    pub circulation_ratio: f64,
+    /// The core's totals, field by field.
+    #[serde(flatten)]
+    pub totals: PowerTotals,
     pub circulating_meshes: Vec<String>,
     pub circulating_shafts: Vec<String>,
     pub warnings: Vec<String>,
@@ -87,12 +84,7 @@ pub fn build(train: &Train, source: &str, pf: &PowerFlow, losses: bool) -> Repor
         losses,
         links,
         meshes,
-        input_power: pf.input_power,
-        output_power: pf.output_power,
-        loss: pf.loss,
-        kinetic_rate: pf.kinetic_rate,
-        efficiency: pf.efficiency,
-        circulation_ratio: pf.circulation_ratio,
+        totals: pf.totals,
         circulating_meshes: cm
             .iter()
             .map(|g| train.gears()[g.index()].name.clone())

@@ -247,20 +247,15 @@ pub fn gear_row(train: &Train, g: &GearAnalysis, forward: bool) -> GearRow {
         ratio_exact: exact_str(g.ratio_exact.as_ref()),
         forward,
         speeds: train
-            .links()
-            .iter()
-            .enumerate()
-            .map(|(i, l)| {
-                let id = egt_core::LinkId::from_index(i);
-                SpeedRow {
-                    link: l.name.clone(),
-                    shaft: shaft(id),
-                    speed: g.speed[i],
-                    exact: g
-                        .speed_exact
-                        .as_ref()
-                        .and_then(|e| exact_str(e[i].as_ref())),
-                }
+            .links_with_ids()
+            .map(|(id, l)| SpeedRow {
+                link: l.name.clone(),
+                shaft: shaft(id),
+                speed: g.speed[id.index()],
+                exact: g
+                    .speed_exact
+                    .as_ref()
+                    .and_then(|e| exact_str(e[id.index()].as_ref())),
             })
             .collect(),
         relative: g

@@ -72,11 +72,8 @@ fn build(train: &Train) -> Graph {
         .map_or((None, None), |t| (Some(t.input), Some(t.output)));
     let name = |l: LinkId| train.link_name(l).to_string();
     let nodes = train
-        .links()
-        .iter()
-        .enumerate()
-        .map(|(i, l)| {
-            let id = LinkId::from_index(i);
+        .links_with_ids()
+        .map(|(id, l)| {
             let role = if id == train.frame() {
                 "frame"
             } else if Some(id) == input {

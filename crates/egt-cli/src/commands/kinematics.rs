@@ -11,8 +11,7 @@ use egt_core::Train;
 use egt_core::numerics::exact;
 use egt_views::kinematics::{Report, build};
 
-use crate::args::{InputArg, parse_input, speed_inputs};
-use crate::args::{OutputFormat, SpecArgs};
+use crate::args::{OutputFormat, SpeedArgs};
 use crate::input;
 use crate::report::{self, Table};
 
@@ -20,12 +19,7 @@ use crate::report::{self, Table};
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
     #[command(flatten)]
-    pub spec: SpecArgs,
-    /// An input speed, `LINK=SPEED` (rad/s or any unit; SPEED may be a fraction
-    /// `p/q` or a decimal, read exactly). Repeat once per DOF. Default: the
-    /// spec's `[analysis] speeds`.
-    #[arg(short, long = "input", value_name = "LINK=SPEED", value_parser = parse_input)]
-    pub inputs: Vec<InputArg>,
+    pub point: SpeedArgs,
 }
 /// Run `egt kinematics`.
 ///
@@ -34,9 +28,8 @@ pub struct Args {
 /// inputs that do not determine the train, singular or ill-conditioned
 /// systems (analysis errors, exit 1); I/O.
 pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
-    let loaded = input::load(&args.spec)?;
+    let (loaded, inputs) = input::load_speeds(&args.point)?;
     let train = &loaded.train;
-    let inputs = speed_inputs(train, &args.inputs)?;
     let speeds = train.kinematics(&inputs).with_context(|| {
         let given: Vec<String> = inputs
             .iter()
@@ -49,7 +42,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         )
     })?;
     let report = build(train, &loaded.source, &inputs, &speeds);
-    match args.spec.format {
+    match args.point.spec.format {
         OutputFormat::Json => report::json(out, &report),
         OutputFormat::Table => write_table(out, train, &loaded.source, &report),
     }

@@ -10,8 +10,7 @@ use egt_core::Train;
 use egt_core::analysis::power::PowerRequest;
 use egt_views::power::{Report, build};
 
-use crate::args::{InputArg, LoadArgs, load_request, mass_if_needed, parse_input, speed_inputs};
-use crate::args::{OutputFormat, SpecArgs};
+use crate::args::{LoadArgs, OutputFormat, SpeedArgs, load_request, mass_if_needed};
 use crate::input;
 use crate::report::{self, Table};
 
@@ -19,10 +18,7 @@ use crate::report::{self, Table};
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
     #[command(flatten)]
-    pub spec: SpecArgs,
-    /// An input speed, `LINK=SPEED`, one per DOF. Default: `[analysis] speeds`.
-    #[arg(short, long = "input", value_name = "LINK=SPEED", value_parser = parse_input)]
-    pub inputs: Vec<InputArg>,
+    pub point: SpeedArgs,
     #[command(flatten)]
     pub loads: LoadArgs,
     /// Ignore the gear pairs' efficiencies (ideal meshes).
@@ -34,9 +30,8 @@ pub struct Args {
 /// # Errors
 /// Spec errors (exit 2); missing data, singular systems, self-locking (exit 1).
 pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
-    let loaded = input::load(&args.spec)?;
+    let (loaded, speeds) = input::load_speeds(&args.point)?;
     let train = &loaded.train;
-    let speeds = speed_inputs(train, &args.inputs)?;
     let dynamics = load_request(train, &args.loads)?;
     let mass = mass_if_needed(train, &dynamics)?;
     let req = PowerRequest {
@@ -48,7 +43,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         .power_flow(&req, mass.as_ref())
         .with_context(|| format!("{}: power flow", loaded.source))?;
     let report = build(train, &loaded.source, &pf, req.losses);
-    match args.spec.format {
+    match args.point.spec.format {
         OutputFormat::Json => report::json(out, &report),
         OutputFormat::Table => write_table(out, train, &loaded.source, &report),
     }
@@ -107,12 +102,12 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
     writeln!(
         out,
         "input power {}, output power {}, mesh losses {}, dK/dt {}",
-        f(r.input_power),
-        f(r.output_power),
-        f(r.loss),
-        f(r.kinetic_rate)
+        f(r.totals.input_power),
+        f(r.totals.output_power),
+        f(r.totals.loss),
+        f(r.totals.kinetic_rate)
     )?;
-    match r.efficiency {
+    match r.totals.efficiency {
         Some(e) => writeln!(out, "efficiency: {}", f(e))?,
         None => writeln!(out, "efficiency: - (no input power)")?,
     }
@@ -120,13 +115,13 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
         writeln!(
             out,
             "circulating power: none (largest branch / input = {})",
-            f(r.circulation_ratio)
+            f(r.totals.circulation_ratio)
         )?;
     } else {
         writeln!(
             out,
             "circulating power: largest branch / input = {} through shafts [{}] and meshes [{}]",
-            f(r.circulation_ratio),
+            f(r.totals.circulation_ratio),
             r.circulating_shafts.join(", "),
             r.circulating_meshes.join(", ")
         )?;

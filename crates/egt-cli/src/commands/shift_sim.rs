@@ -16,21 +16,10 @@ use egt_core::shift_dynamics::{
     Capacity, FrictionLaw, InputTorque, ShiftMethod, ShiftResult, ShiftSim,
 };
 
-use crate::args::{OutputFormat, SpecArgs};
+use crate::args::{SeriesFormat, SpecArgs};
 use crate::input;
 use crate::report::{self, Table};
 use crate::svg::{GAP, Line, PLOT_H, Panel, TOP, legend, panel, plain_lines};
-
-/// How `egt shift-sim` prints its result.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum ShiftFormat {
-    /// The summary as a table.
-    Table,
-    /// The whole result, samples included.
-    Json,
-    /// The time series.
-    Csv,
-}
 
 /// The integrator, as on the command line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -46,15 +35,8 @@ pub enum MethodArg {
 /// Arguments of `egt shift-sim`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
-    /// The spec file (TOML or JSON), or `-` for standard input; it needs a `[transmission]`.
-    #[arg(value_name = "SPEC")]
-    pub spec: PathBuf,
-    /// Spec format; by default from the extension.
-    #[arg(long, value_enum, value_name = "FORMAT")]
-    pub spec_format: Option<crate::args::SpecFormat>,
-    /// Output format.
-    #[arg(long, value_enum, default_value_t = ShiftFormat::Table)]
-    pub format: ShiftFormat,
+    #[command(flatten)]
+    pub spec: SpecArgs<SeriesFormat>,
     /// The gear before the shift (a state of `[transmission.states]`).
     #[arg(long)]
     pub from: String,
@@ -198,11 +180,7 @@ fn parse_table(s: &str) -> Result<TorqueTable, String> {
 /// # Errors
 /// The spec, a bad shift (named field), a failed run, or I/O.
 pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
-    let loaded = input::load(&SpecArgs {
-        spec: args.spec.clone(),
-        spec_format: args.spec_format,
-        format: OutputFormat::Table,
-    })?;
+    let loaded = input::load(&args.spec)?;
     let train = &loaded.train;
     let sim = ShiftSim {
         from: args.from.clone(),
@@ -250,10 +228,10 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         std::fs::write(path, plot(train, &report::title(train, &loaded.source), &r))
             .with_context(|| format!("writing {}", path.display()))?;
     }
-    match args.format {
-        ShiftFormat::Json => report::json(out, &r),
-        ShiftFormat::Csv => csv(out, train, &r),
-        ShiftFormat::Table => table(out, train, &loaded.source, &args.from, &args.to, &r),
+    match args.spec.format {
+        SeriesFormat::Json => report::json(out, &r),
+        SeriesFormat::Csv => csv(out, train, &r),
+        SeriesFormat::Table => table(out, train, &loaded.source, &args.from, &args.to, &r),
     }
 }
 

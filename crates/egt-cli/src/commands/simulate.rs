@@ -16,21 +16,9 @@ use egt_core::{
 use egt_views::simulation::{MeshOut, Report, build, equilibrium};
 
 use crate::args::{ModelArgs, curves, parse_pair, resolve_pairs};
-use crate::args::{OutputFormat, SpecArgs, SpecFormat};
+use crate::args::{SeriesFormat, SpecArgs};
 use crate::input;
 use crate::report::{self, Table};
-
-/// Output formats of `egt simulate`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
-pub enum SimFormat {
-    /// A summary and a sampled table.
-    #[default]
-    Table,
-    /// The summary and every stored sample as JSON.
-    Json,
-    /// Every stored sample as CSV: t, each link's speed, drift, energy, work, power.
-    Csv,
-}
 
 /// Integrators, as flags.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -44,15 +32,8 @@ pub enum MethodArg {
 /// Arguments of `egt simulate`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
-    /// The spec file (TOML or JSON), or `-` for standard input.
-    #[arg(value_name = "SPEC")]
-    pub spec: PathBuf,
-    /// Spec format; by default from the extension (`.json` is JSON), or sniffed on stdin.
-    #[arg(long, value_enum, value_name = "FORMAT")]
-    pub spec_format: Option<SpecFormat>,
-    /// Output format.
-    #[arg(long, value_enum, default_value_t = SimFormat::Table)]
-    pub format: SimFormat,
+    #[command(flatten)]
+    pub spec: SpecArgs<SeriesFormat>,
     #[command(flatten)]
     pub model: ModelArgs,
     /// End time [s]. Default: `[analysis.simulate] t_end`.
@@ -86,12 +67,7 @@ pub struct Args {
 /// (exit 2); missing data, singular systems, a blown-up solution (exit 1,
 /// after the series up to the blow-up has been written); I/O.
 pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
-    let spec_args = SpecArgs {
-        spec: args.spec.clone(),
-        spec_format: args.spec_format,
-        format: OutputFormat::Table,
-    };
-    let loaded = input::load(&spec_args)?;
+    let loaded = input::load(&args.spec)?;
     let train = &loaded.train;
     let ctx = || format!("{}: simulate", loaded.source);
     let req = request(train, args)?;
@@ -143,10 +119,10 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         );
         std::fs::write(path, svg).with_context(|| format!("writing {}", path.display()))?;
     }
-    match args.format {
-        SimFormat::Json => report::json(out, &report)?,
-        SimFormat::Csv => write_csv(out, train, &report)?,
-        SimFormat::Table => write_table(out, train, &loaded.source, &report)?,
+    match args.spec.format {
+        SeriesFormat::Json => report::json(out, &report)?,
+        SeriesFormat::Csv => write_csv(out, train, &report)?,
+        SeriesFormat::Table => write_table(out, train, &loaded.source, &report)?,
     }
     if let Some(d) = &sim.diverged {
         let hint = match (sim.method, sim.rk4_step_limit) {

@@ -62,6 +62,21 @@ pub struct PowerFlow {
     pub meshes: Vec<MeshPower>,
     /// Per link.
     pub links: Vec<LinkPower>,
+    /// The balance, efficiency and circulation (their fields stand in this
+    /// struct's serde form, as in `egt power --format json`).
+    #[serde(flatten)]
+    pub totals: PowerTotals,
+    /// The meshes and shafts carrying more than the input power, when power circulates.
+    pub circulating: Option<(Vec<GearId>, Vec<LinkId>)>,
+    /// Direction iterations used (0 for ideal meshes).
+    pub iterations: usize,
+    /// Notes.
+    pub notes: Vec<String>,
+}
+
+/// The totals of a power flow: its balance, efficiency and circulation.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PowerTotals {
     /// Sum of positive external powers.
     pub input_power: f64,
     /// Minus the sum of negative external powers.
@@ -75,12 +90,6 @@ pub struct PowerFlow {
     /// Largest branch power (a shaft's exchange with one planetary unit or one
     /// fixed-axis mesh) over the input power.
     pub circulation_ratio: f64,
-    /// The meshes and shafts carrying more than the input power, when power circulates.
-    pub circulating: Option<(Vec<GearId>, Vec<LinkId>)>,
-    /// Direction iterations used (0 for ideal meshes).
-    pub iterations: usize,
-    /// Notes.
-    pub notes: Vec<String>,
 }
 
 /// What a power-flow analysis asks.
@@ -311,12 +320,14 @@ impl Train {
             dynamics,
             meshes,
             links,
-            input_power,
-            output_power,
-            loss,
-            kinetic_rate,
-            efficiency,
-            circulation_ratio: circ_ratio,
+            totals: PowerTotals {
+                input_power,
+                output_power,
+                loss,
+                kinetic_rate,
+                efficiency,
+                circulation_ratio: circ_ratio,
+            },
             circulating,
             iterations,
             notes,

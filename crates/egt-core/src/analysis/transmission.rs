@@ -686,11 +686,11 @@ impl<'a> GearSolver<'a> {
             Ok(p) => {
                 notes.extend(p.notes.iter().cloned());
                 Some(GearPower {
-                    efficiency: p.efficiency.unwrap_or(0.0),
+                    efficiency: p.totals.efficiency.unwrap_or(0.0),
                     output_torque: -p.dynamics.driving_torques.first().map_or(0.0, |d| d.1),
                     meshes: p.meshes,
-                    loss: p.loss,
-                    circulation_ratio: p.circulation_ratio,
+                    loss: p.totals.loss,
+                    circulation_ratio: p.totals.circulation_ratio,
                     circulating: p.circulating,
                 })
             }

@@ -262,6 +262,10 @@ impl Train {
     pub fn links(&self) -> &[Link] {
         &self.links
     }
+    /// All links with their ids, in id order.
+    pub fn links_with_ids(&self) -> impl Iterator<Item = (LinkId, &Link)> {
+        (self.links.iter().enumerate()).map(|(i, l)| (LinkId::from_index(i), l))
+    }
     /// A link by id.
     pub fn link(&self, id: LinkId) -> &Link {
         &self.links[id.index()]

@@ -321,23 +321,11 @@ fn expand_planetary(d: &mut Draft, set: &PlanetarySpec, frame: &str, path: &str)
     let sun_planet =
         |zp: Option<i64>| mesh(&set.sun, zs, &planet, zp, MeshKind::External, "sun-planet");
     match set.kind {
-        PlanetaryKind::Simple => {
-            let ring = need_link(&set.ring, "ring")?;
-            let zr = Some(need(t.ring, "ring")?);
-            add_planet(d, &planet, t.planet)?;
-            d.gears.push(sun_planet(t.planet));
-            d.gears.push(mesh(
-                &planet,
-                t.planet,
-                &ring,
-                zr,
-                MeshKind::Internal,
-                "planet-ring",
-            ));
-        }
-        // A Ravigneaux set is a double-pinion set whose long planet (planet2)
-        // also meshes with a second sun.
-        PlanetaryKind::DoublePinion | PlanetaryKind::Ravigneaux => {
+        // The sun meshes with the planet and the ring with the outer planet:
+        // the planet itself, or in a double-pinion set planet2, which meshes
+        // with the planet between them. A Ravigneaux set is a double-pinion
+        // set whose long planet (planet2) also meshes with a second sun.
+        PlanetaryKind::Simple | PlanetaryKind::DoublePinion | PlanetaryKind::Ravigneaux => {
             let ring = need_link(&set.ring, "ring")?;
             let zr = Some(need(t.ring, "ring")?);
             let sun2 = match set.kind {
@@ -347,34 +335,33 @@ fn expand_planetary(d: &mut Draft, set: &PlanetarySpec, frame: &str, path: &str)
                 _ => None,
             };
             add_planet(d, &planet, t.planet)?;
-            add_planet(d, &planet2, t.planet2)?;
             d.gears.push(sun_planet(t.planet));
-            d.gears.push(mesh(
-                &planet,
-                t.planet,
-                &planet2,
-                t.planet2,
-                MeshKind::External,
-                "planet-planet2",
-            ));
-            if let Some((sun2, z2)) = sun2 {
+            let (outer, z_outer, tag) = if set.kind == PlanetaryKind::Simple {
+                (&planet, t.planet, "planet-ring")
+            } else {
+                add_planet(d, &planet2, t.planet2)?;
                 d.gears.push(mesh(
-                    &sun2,
-                    z2,
+                    &planet,
+                    t.planet,
                     &planet2,
                     t.planet2,
                     MeshKind::External,
-                    "sun2-planet2",
+                    "planet-planet2",
                 ));
-            }
-            d.gears.push(mesh(
-                &planet2,
-                t.planet2,
-                &ring,
-                zr,
-                MeshKind::Internal,
-                "planet2-ring",
-            ));
+                if let Some((sun2, z2)) = sun2 {
+                    d.gears.push(mesh(
+                        &sun2,
+                        z2,
+                        &planet2,
+                        t.planet2,
+                        MeshKind::External,
+                        "sun2-planet2",
+                    ));
+                }
+                (&planet2, t.planet2, "planet2-ring")
+            };
+            d.gears
+                .push(mesh(outer, z_outer, &ring, zr, MeshKind::Internal, tag));
         }
         PlanetaryKind::Stepped => {
             let zp = Some(need(t.planet, "planet")?);

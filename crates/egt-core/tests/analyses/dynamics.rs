@@ -187,16 +187,16 @@ proptest! {
                 Err(e) => panic!("{e}"),
             };
             let applied: f64 = pf.links.iter().map(|l| l.external).sum();
-            let scale = pf.input_power.max(pf.kinetic_rate.abs()).max(1e-9);
-            prop_assert!((applied - pf.kinetic_rate - pf.loss).abs() <= 1e-10 * scale,
-                "losses={losses}: applied {applied} dK/dt {} loss {}", pf.kinetic_rate, pf.loss);
+            let scale = pf.totals.input_power.max(pf.totals.kinetic_rate.abs()).max(1e-9);
+            prop_assert!((applied - pf.totals.kinetic_rate - pf.totals.loss).abs() <= 1e-10 * scale,
+                "losses={losses}: applied {applied} dK/dt {} loss {}", pf.totals.kinetic_rate, pf.totals.loss);
             // dK/dt computed independently as w^T M w'.
             let w: Vec<f64> = t.coordinates().iter().map(|l| pf.speeds.speed[l.index()]).collect();
             let wd: Vec<f64> = t.coordinates().iter().map(|l| pf.dynamics.acceleration[l.index()]).collect();
             let mut kdot = 0.0;
             for (i, wi) in w.iter().enumerate() { for (j, wdj) in wd.iter().enumerate() { kdot += wi * mass.get(i, j) * wdj; } }
-            prop_assert!((kdot - pf.kinetic_rate).abs() <= 1e-10 * kdot.abs().max(1e-9));
-            if !losses { prop_assert_eq!(pf.loss, 0.0); }
+            prop_assert!((kdot - pf.totals.kinetic_rate).abs() <= 1e-10 * kdot.abs().max(1e-9));
+            if !losses { prop_assert_eq!(pf.totals.loss, 0.0); }
             prop_assert!(pf.meshes.iter().all(|m| m.loss >= -1e-9 * scale), "losses are dissipative");
         }
     }
@@ -374,18 +374,22 @@ fn planetary_efficiency_matches_textbook() {
         let t = Train::from_spec(&explicit).unwrap();
         let (li, lo) = (id(&t, input), id(&t, output));
         let pf = steady_power(&t, li, 150.0, li, lo, -80.0, true).unwrap();
-        let eff = pf.efficiency.unwrap();
+        let eff = pf.totals.efficiency.unwrap();
         assert!(
             close(eff, expected, 1e-12),
             "fixed {fixed}, {input} -> {output}: {eff} vs {expected}"
         );
         assert!(
-            close(pf.input_power, pf.output_power + pf.loss, 1e-12),
+            close(
+                pf.totals.input_power,
+                pf.totals.output_power + pf.totals.loss,
+                1e-12
+            ),
             "power balance"
         );
         // Ideal meshes give exactly 1.
         let ideal = steady_power(&t, li, 150.0, li, lo, -80.0, false).unwrap();
-        assert!(close(ideal.efficiency.unwrap(), 1.0, 1e-14));
+        assert!(close(ideal.totals.efficiency.unwrap(), 1.0, 1e-14));
     }
 }
 
@@ -416,11 +420,11 @@ fn circulating_power_is_detected_and_named() {
     let pf = steady_power(&t, li, 100.0, li, lo, -50.0, false).unwrap();
     assert!(close(pf.speeds.speed[lo.index()], 140.0, 1e-12));
     assert!(close(pf.dynamics.driving_torques[0].1, 70.0, 1e-12));
-    assert!(close(pf.input_power, pf.output_power, 1e-12));
+    assert!(close(pf.totals.input_power, pf.totals.output_power, 1e-12));
     assert!(
-        close(pf.circulation_ratio, 75.0 / 70.0, 1e-12),
+        close(pf.totals.circulation_ratio, 75.0 / 70.0, 1e-12),
         "{}",
-        pf.circulation_ratio
+        pf.totals.circulation_ratio
     );
     let (meshes, links) = pf.circulating.clone().expect("named loop");
     assert_eq!(links, vec![li]);
@@ -451,11 +455,11 @@ fn self_locking_is_reported() {
     let forward = run(l2, l4).unwrap();
     // Forward it runs, at the low efficiency typical of such reductions, and
     // balances power: input = output + mesh losses.
-    let eff = forward.efficiency.unwrap();
+    let eff = forward.totals.efficiency.unwrap();
     assert!(eff > 0.0 && eff < 0.5, "{eff}");
     assert!(close(
-        forward.input_power,
-        forward.output_power + forward.loss,
+        forward.totals.input_power,
+        forward.totals.output_power + forward.totals.loss,
         1e-12
     ));
     let err = run(l4, l2).unwrap_err().to_string();
@@ -772,11 +776,14 @@ fn circulation_through_shared_members_matches_hand_statics() {
         let t = train(&format!("frame = \"case\"\n{body}"));
         let (li, lo) = (id(&t, input), id(&t, output));
         let pf = steady_power(&t, li, 1.0, lo, li, 1.0, false).unwrap();
-        assert!(close(pf.input_power, pf.output_power, 1e-12), "{what}");
         assert!(
-            close(pf.circulation_ratio, expected, 1e-12),
+            close(pf.totals.input_power, pf.totals.output_power, 1e-12),
+            "{what}"
+        );
+        assert!(
+            close(pf.totals.circulation_ratio, expected, 1e-12),
             "{what}: circulation {} against {expected} by hand",
-            pf.circulation_ratio
+            pf.totals.circulation_ratio
         );
         assert!(pf.circulating.is_some(), "{what}: no loop named");
     }

@@ -94,12 +94,13 @@ fn check_against_single(name: &str, t: &Train, p: &BatchPlan, row: &[f64]) {
         );
     }
     if p.compute() == Compute::Power {
-        let scale = pf.input_power.abs().max(pf.output_power.abs()).max(1e-9);
+        let (input, output) = (pf.totals.input_power, pf.totals.output_power);
+        let scale = input.abs().max(output.abs()).max(1e-9);
         for (c, v) in [
-            ("power.input", pf.input_power),
-            ("power.output", pf.output_power),
-            ("power.loss", pf.loss),
-            ("power.kinetic_rate", pf.kinetic_rate),
+            ("power.input", input),
+            ("power.output", output),
+            ("power.loss", pf.totals.loss),
+            ("power.kinetic_rate", pf.totals.kinetic_rate),
         ] {
             assert!(
                 (out[col(c.into())] - v).abs() <= REL * scale,

@@ -292,14 +292,17 @@ fn a_10000_link_chain_balances_its_inverse_dynamics_and_power_flow() {
     let flow = t
         .power_flow(&util::power_request(&t, true), Some(&mass))
         .unwrap_or_else(|e| panic!("{e}"));
-    let balance = flow.input_power - flow.output_power - flow.loss - flow.kinetic_rate;
+    let balance = flow.totals.input_power
+        - flow.totals.output_power
+        - flow.totals.loss
+        - flow.totals.kinetic_rate;
     assert!(
-        balance.abs() <= 1e-9 * flow.input_power,
+        balance.abs() <= 1e-9 * flow.totals.input_power,
         "input {} output {} loss {} kinetic {}",
-        flow.input_power,
-        flow.output_power,
-        flow.loss,
-        flow.kinetic_rate
+        flow.totals.input_power,
+        flow.totals.output_power,
+        flow.totals.loss,
+        flow.totals.kinetic_rate
     );
     // The same driving torque through the power-flow path (ideal meshes here).
     let driving = flow.dynamics.driving_torques[0].1;

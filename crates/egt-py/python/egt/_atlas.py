@@ -9,8 +9,6 @@ from typing import Any, Dict, List, Optional, Tuple
 from ._args import count
 from ._egt import atlas as _atlas
 
-__all__ = ["atlas"]
-
 _MAX = 2**63 - 1
 
 

@@ -26,8 +26,6 @@ from ._egt import ratios_from_teeth as _ratios_from_teeth
 if TYPE_CHECKING:  # pragma: no cover
     import pandas
 
-__all__ = ["RowError", "BatchPlan", "BatchResult", "BatchKinematics", "BatchDynamics"]
-
 
 def _numeric(x: ArrayLike, what: str) -> np.ndarray:
     """``x`` as an array of real numbers (bool, complex, object, text refused)."""

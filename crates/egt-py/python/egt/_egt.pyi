@@ -6,40 +6,6 @@ from typing import Any, Callable, Dict, List, Optional, Tuple, final
 import numpy as np
 import numpy.typing as npt
 
-__all__ = [
-    "__version__",
-    "TrainCore",
-    "structure",
-    "BatchPlanCore",
-    "SearchCore",
-    "search_inputs",
-    "batch_plan",
-    "ratios_from_teeth",
-    "stability",
-    "simulate",
-    "gear",
-    "shift_table",
-    "cli",
-    "atlas",
-    "atlas_member",
-    "shift_sim",
-    "EgtError",
-    "SpecError",
-    "SpecSyntaxError",
-    "TopologyError",
-    "TransmissionError",
-    "AnalysisError",
-    "InputError",
-    "UnderdeterminedError",
-    "InconsistentError",
-    "SingularError",
-    "IllConditionedError",
-    "MissingDataError",
-    "SelfLockingError",
-    "NonFiniteError",
-    "InternalError",
-]
-
 __version__: str
 
 _Input = Tuple[str, float, Optional[str]]
@@ -98,11 +64,7 @@ class TrainCore:
 
 def structure(core: TrainCore) -> Dict[str, Any]: ...
 def atlas(
-    links: int,
-    dof: int = 1,
-    level: str = "rotation",
-    part: Optional[Tuple[int, int]] = None,
-    fractionation: str = "layout",
+    links: int, dof: int, level: str, part: Optional[Tuple[int, int]], fractionation: str
 ) -> List[Dict[str, Any]]: ...
 def atlas_member(core: TrainCore, level: str = "rotation") -> Dict[str, Any]: ...
 @final

@@ -21,8 +21,6 @@ from ._results import _Documented, _document_field, _pandas
 if TYPE_CHECKING:  # pragma: no cover
     import pandas
 
-__all__ = ["Curve", "OperatingPoint", "Mode", "MasslessDirection", "StabilityReport", "Simulation"]
-
 
 def _array(v: Any) -> np.ndarray:
     return np.asarray(v, dtype=np.float64)

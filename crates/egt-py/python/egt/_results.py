@@ -27,21 +27,6 @@ from ._args import ArgumentKeyError
 if TYPE_CHECKING:  # pragma: no cover
     import pandas
 
-__all__ = [
-    "Link",
-    "GearPair",
-    "Circuit",
-    "Offset",
-    "RelativeSpeed",
-    "Kinematics",
-    "MassMatrix",
-    "MeshLoad",
-    "Dynamics",
-    "MeshPower",
-    "LinkPower",
-    "PowerFlow",
-]
-
 
 def _pandas() -> Any:
     try:

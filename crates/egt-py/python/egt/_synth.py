@@ -23,8 +23,6 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from ._train import Train
 
-__all__ = ["SetTeeth", "Candidate", "SynthResult", "synth", "synth_distributed"]
-
 Job = Tuple[str, str, str, str, str, str, Optional[int]]
 """What a search is built from, as strings (so that it pickles to workers):
 search text, its format and name, base text, its format and name, top."""

@@ -56,8 +56,6 @@ from ._results import (
 if TYPE_CHECKING:  # pragma: no cover
     from .sympy_export import SymbolicTrain
 
-__all__ = ["Train", "load", "loads", "Speed", "CurveLike"]
-
 Speed = Union[float, int, Fraction, str]
 """An input speed: a number, a Fraction, or exact text such as ``"-162/77"``."""
 

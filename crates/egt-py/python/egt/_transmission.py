@@ -13,8 +13,6 @@ from ._results import _Documented, _document_field, _pandas
 if TYPE_CHECKING:  # pragma: no cover
     import pandas
 
-__all__ = ["ElementLoad", "Slip", "GearPowerFlow", "GearState", "Step", "Spread", "Shift", "ShiftTable"]
-
 
 Names = Tuple[Tuple[str, ...], Tuple[str, ...], Tuple[str, ...]]
 """Link, gear-pair and shift-element names, by index (the core's ids)."""

@@ -195,11 +195,7 @@ impl Sweep<'_> {
         let (base, slot, within) = (self.base, self.slot, self.within);
         let nq = plan.outputs().len();
         let Buffers {
-            params,
-            results,
-            messages,
-            failed_rows,
-            ..
+            params, results, ..
         } = buffers;
         // `run` writes every output of every row (NaN on failed rows).
         results.resize(len * nq, 0.0);
@@ -232,28 +228,8 @@ impl Sweep<'_> {
                 false,
             )
         };
-        // Most blocks have no failed row: a buffer of the same length is
-        // cleared only where the last block set it (a block's 16 384
-        // messages are 384 KiB to write).
-        if messages.len() == len {
-            for r in failed_rows.drain(..) {
-                messages[r] = None;
-            }
-        } else {
-            messages.clear();
-            messages.resize(len, None);
-            failed_rows.clear();
-        }
-        for e in errors {
-            messages[e.row] = Some(e.error.to_string());
-            failed_rows.push(e.row);
-        }
-        for (r, e) in unreadable {
-            messages[r] = Some(e);
-            failed_rows.push(r);
-        }
-        failed_rows.sort_unstable();
-        failed_rows.dedup();
+        let errors = errors.into_iter().map(|e| (e.row, e.error.to_string()));
+        buffers.set_messages(len, errors.chain(unreadable));
         bounded
     }
 

@@ -16,6 +16,40 @@ pub(super) struct Buffers {
     pub(super) failed_rows: Vec<usize>,
 }
 
+impl Buffers {
+    /// The messages of a block of `len` rows: each failed row's, in any
+    /// order (a later message for a row replaces an earlier one).
+    pub(super) fn set_messages(
+        &mut self,
+        len: usize,
+        failed: impl IntoIterator<Item = (usize, String)>,
+    ) {
+        let Buffers {
+            messages,
+            failed_rows,
+            ..
+        } = self;
+        // Most blocks have no failed row: a buffer of the same length is
+        // cleared only where the last block set it (a block's 16 384
+        // messages are 384 KiB to write).
+        if messages.len() == len {
+            for r in failed_rows.drain(..) {
+                messages[r] = None;
+            }
+        } else {
+            messages.clear();
+            messages.resize(len, None);
+            failed_rows.clear();
+        }
+        for (r, e) in failed {
+            messages[r] = Some(e);
+            failed_rows.push(r);
+        }
+        failed_rows.sort_unstable();
+        failed_rows.dedup();
+    }
+}
+
 /// Blocks `0..all`: `solve` on this thread and on `threads - 1` helper
 /// threads (each with its own buffers, taking the next block as it finishes
 /// one), and `write` on this thread, in order. A thread takes no block

@@ -23,9 +23,7 @@ use crate::error::Result;
 
 /// A consistent mode at one instant, and how it was reached.
 pub(super) struct Settled {
-    /// The changing elements' phases.
-    pub(super) phases: Vec<Phase>,
-    /// Their mode.
+    /// The mode (the changing elements' phases).
     pub(super) mode: Mode,
     /// The state in it (speeds projected onto the mode where an element locked).
     pub(super) y: Vec<f64>,
@@ -57,8 +55,8 @@ pub(super) fn settle(
     // The way each locked element's torque pushes: it slips that way if released.
     let k = phases.len();
     let now = setup.mode(phases)?;
-    let dy = setup.rhs(&now, phases, t, y);
-    let lam = setup.locked_torques(&now, phases, t, y, &dy);
+    let dy = setup.rhs(&now, t, y);
+    let lam = setup.locked_torques(&now, t, y, &dy);
     let options: Vec<Vec<Phase>> = (0..k)
         .map(|i| {
             let release = if setup.one_way[i] {
@@ -113,8 +111,8 @@ pub(super) fn settle(
             yc[..n].copy_from_slice(speed.as_slice());
             lost = l;
         }
-        let d = setup.rhs(&mode, &c, t, &yc);
-        let torque = setup.locked_torques(&mode, &c, t, &yc, &d);
+        let d = setup.rhs(&mode, t, &yc);
+        let torque = setup.locked_torques(&mode, t, &yc, &d);
         let slack = RATE_SLACK * d[..n].iter().fold(0.0f64, |m, x| m.max(x.abs()));
         let entered = |i: usize| fired == Some(i) || c[i] != phases[i];
         let holds = (0..k).all(|i| match c[i] {
@@ -129,7 +127,6 @@ pub(super) fn settle(
         if holds {
             let changed = (0..k).filter(|&i| entered(i)).collect();
             return Ok(Settled {
-                phases: c,
                 mode,
                 y: yc,
                 lost,

@@ -414,7 +414,7 @@ impl ShiftSim {
         // Takes a consistent mode: its changes, the on-coming lock, the loss.
         let take = |out: &mut ShiftResult, s: &Settled, t: f64| {
             for &i in &s.changed {
-                let now = match s.phases[i] {
+                let now = match s.mode.phases[i] {
                     Phase::Locked => "locked",
                     Phase::Slipping(_) if setup.one_way[i] => "overrunning",
                     Phase::Slipping(_) => "slipping",
@@ -422,7 +422,7 @@ impl ShiftSim {
                 if i >= n_off
                     && now == "locked"
                     && out.lock_time.is_none()
-                    && s.phases[n_off..].iter().all(|p| *p == Phase::Locked)
+                    && s.mode.phases[n_off..].iter().all(|p| *p == Phase::Locked)
                 {
                     out.lock_time = Some(t);
                 }
@@ -441,11 +441,10 @@ impl ShiftSim {
                       y: &[f64],
                       dy: &[f64],
                       mode: &Mode,
-                      phases: &[Phase],
                       loss: f64|
          -> Observed {
             let v = &y[..n];
-            let q = setup.observe(mode, phases, t, y, dy);
+            let q = setup.observe(mode, t, y, dy);
             ext.add(&q);
             // W_applied - dKE - each element's friction work - E_lock, in that order
             let residual = y[n..n + k]
@@ -474,7 +473,6 @@ impl ShiftSim {
         let settled = settle(&setup, &first, 0.0, &y, None)?;
         take(&mut out, &settled, 0.0);
         let Settled {
-            mut phases,
             mut mode,
             lost: mut lock_loss,
             ..
@@ -483,17 +481,8 @@ impl ShiftSim {
         let mut t_now = 0.0;
         let mut implicit = self.method == ShiftMethod::Implicit;
         let mut limited = 0usize;
-        let mut f0 = setup.rhs(&mode, &phases, t_now, &y);
-        let mut q0 = record(
-            &mut out,
-            &mut extremes,
-            t_now,
-            &y,
-            &f0,
-            &mode,
-            &phases,
-            lock_loss,
-        );
+        let mut f0 = setup.rhs(&mode, t_now, &y);
+        let mut q0 = record(&mut out, &mut extremes, t_now, &y, &f0, &mode, lock_loss);
         let breaks: Vec<f64> = capacity.iter().flat_map(Capacity::breakpoints).collect();
         let mut h = (self.t_end * 1e-4).min(1e-4);
         let mut attempts = 0usize;
@@ -520,7 +509,7 @@ impl ShiftSim {
                 }
             }
             h = h.min(stop - t_now).min(MAX_STEP);
-            let mut rhs = |tt: f64, yy: &[f64]| setup.rhs(&mode, &phases, tt, yy);
+            let mut rhs = |tt: f64, yy: &[f64]| setup.rhs(&mode, tt, yy);
             let step = if implicit {
                 ode::implicit_step(&mut rhs, t_now, &y, h)
             } else {
@@ -564,7 +553,7 @@ impl ShiftSim {
                 // |f(y1) - f(y_euler)| / |y1 - y_euler|, against the explicit
                 // stability boundary.
                 let euler: Vec<f64> = y.iter().zip(&f0).map(|(a, b)| a + h * b).collect();
-                let fe = setup.rhs(&mode, &phases, t_now + h, &euler);
+                let fe = setup.rhs(&mode, t_now + h, &euler);
                 let (mut num, mut den) = (0.0f64, 0.0f64);
                 for i in 0..n {
                     num += (f1[i] - fe[i]).powi(2);
@@ -593,8 +582,8 @@ impl ShiftSim {
             } else {
                 t_now + h
             };
-            let g0 = setup.events(&mode, &phases, t_now, &y, &f0);
-            let g1 = setup.events(&mode, &phases, t1, &y1, &f1);
+            let g0 = setup.events(&mode, t_now, &y, &f0);
+            let g1 = setup.events(&mode, t1, &y1, &f1);
             // The earliest crossing, located on the dense output. An element
             // that entered its phase at the crossing (g = 0) and heads the
             // wrong way fires at once.
@@ -604,8 +593,8 @@ impl ShiftSim {
                     let te = ode::locate(
                         |s| {
                             let ys = ode::hermite(t_now, &y, &f0, t1, &y1, &f1, s);
-                            let ds = setup.rhs(&mode, &phases, s, &ys);
-                            setup.events(&mode, &phases, s, &ys, &ds)[i]
+                            let ds = setup.rhs(&mode, s, &ys);
+                            setup.events(&mode, s, &ys, &ds)[i]
                         },
                         t_now,
                         t1,
@@ -620,24 +609,15 @@ impl ShiftSim {
             // The quantities on the step's dense output, for turning points.
             let dense = |s: f64| {
                 let ys = ode::hermite(t_now, &y, &f0, t1, &y1, &f1, s);
-                let ds = setup.rhs(&mode, &phases, s, &ys);
-                setup.observe(&mode, &phases, s, &ys, &ds)
+                let ds = setup.rhs(&mode, s, &ys);
+                setup.observe(&mode, s, &ys, &ds)
             };
             if let Some((te, i)) = first {
                 let ye = ode::hermite(t_now, &y, &f0, t1, &y1, &f1, te);
                 if te > t_now {
                     // The left limit: the old mode's state at the event.
-                    let fe = setup.rhs(&mode, &phases, te, &ye);
-                    let qe = record(
-                        &mut out,
-                        &mut extremes,
-                        te,
-                        &ye,
-                        &fe,
-                        &mode,
-                        &phases,
-                        lock_loss,
-                    );
+                    let fe = setup.rhs(&mode, te, &ye);
+                    let qe = record(&mut out, &mut extremes, te, &ye, &fe, &mode, lock_loss);
                     extremes.within(dense, t_now, te, &q0, &qe, &slip_rates(&setup, &f0, &fe));
                     at_once = 0;
                 } else {
@@ -650,34 +630,16 @@ impl ShiftSim {
                     }
                 }
                 // The right limit: a consistent mode after the change.
-                let s = settle(&setup, &phases, te, &ye, Some(i))?;
+                let s = settle(&setup, &mode.phases, te, &ye, Some(i))?;
                 take(&mut out, &s, te);
                 lock_loss += s.lost;
-                (phases, mode, y) = (s.phases, s.mode, s.y);
+                (mode, y) = (s.mode, s.y);
                 t_now = te;
-                f0 = setup.rhs(&mode, &phases, t_now, &y);
-                q0 = record(
-                    &mut out,
-                    &mut extremes,
-                    t_now,
-                    &y,
-                    &f0,
-                    &mode,
-                    &phases,
-                    lock_loss,
-                );
+                f0 = setup.rhs(&mode, t_now, &y);
+                q0 = record(&mut out, &mut extremes, t_now, &y, &f0, &mode, lock_loss);
                 continue;
             }
-            let q1 = record(
-                &mut out,
-                &mut extremes,
-                t1,
-                &y1,
-                &f1,
-                &mode,
-                &phases,
-                lock_loss,
-            );
+            let q1 = record(&mut out, &mut extremes, t1, &y1, &f1, &mode, lock_loss);
             extremes.within(dense, t_now, t1, &q0, &q1, &slip_rates(&setup, &f0, &f1));
             t_now = t1;
             y = y1;

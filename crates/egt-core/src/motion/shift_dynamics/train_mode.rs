@@ -1,5 +1,5 @@
-//! One mode of a whole train during a shift: which elements are locked, the
-//! mode's matrices (its null-space basis `N`, the Cholesky of `N^T M N`, the
+//! One mode of a whole train during a shift: which elements are locked (the
+//! changing elements' phases), the mode's matrices (its null-space basis `N`, the Cholesky of `N^T M N`, the
 //! rows and their Gram inverse), and what the mode gives at a state: the
 //! forces, the accelerations, the locked elements' torques (Lagrange
 //! multipliers), the event functions and the lock-up projection.
@@ -19,8 +19,10 @@ pub(super) enum Phase {
     Slipping(f64),
 }
 
-/// One mode's constant matrices.
+/// One mode: the changing elements' phases and the mode's constant matrices.
 pub(super) struct Mode {
+    /// The changing elements' phases, which make the mode.
+    pub(super) phases: Vec<Phase>,
     pub(super) basis: DMatrix<f64>,
     /// Cholesky of `N^T M N`.
     pub(super) reduced: Cholesky<f64, Dyn>,
@@ -63,14 +65,17 @@ impl Setup<'_> {
             }
         }
         let mb = mode_basis(self.train, &locked)?;
+        // The locked elements, named, for a refusal.
+        let listed = || {
+            (locked.iter())
+                .map(|&e| format!("`{}`", self.train.elements()[e.index()].name))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
         if mb.dof() == 0 {
             return Err(refuse(format!(
                 "tie-up: with {} locked the train cannot move",
-                locked
-                    .iter()
-                    .map(|&e| format!("`{}`", self.train.elements()[e.index()].name))
-                    .collect::<Vec<_>>()
-                    .join(", ")
+                listed()
             )));
         }
         let basis = mb.basis.clone();
@@ -86,14 +91,11 @@ impl Setup<'_> {
             .ok_or_else(|| {
                 refuse(format!(
                     "the rows of the mode with {} locked are dependent (an element that repeats another's constraint), so its torques are not determined",
-                    locked
-                        .iter()
-                        .map(|&e| format!("`{}`", self.train.elements()[e.index()].name))
-                        .collect::<Vec<_>>()
-                        .join(", ")
+                    listed()
                 ))
             })?;
         Ok(Mode {
+            phases: phases.to_vec(),
             basis,
             reduced,
             rows: mb.rows,
@@ -143,10 +145,10 @@ impl Setup<'_> {
     }
 
     /// The state derivative: speeds, each changing element's dissipation, applied work.
-    pub(super) fn rhs(&self, mode: &Mode, phases: &[Phase], t: f64, y: &[f64]) -> Vec<f64> {
+    pub(super) fn rhs(&self, mode: &Mode, t: f64, y: &[f64]) -> Vec<f64> {
         let n = self.n;
         let v = &y[..n];
-        let (f, tf) = self.forces(phases, t, v);
+        let (f, tf) = self.forces(&mode.phases, t, v);
         let q = mode.reduced.solve(&(mode.basis.transpose() * &f));
         let a = &mode.basis * q;
         let mut d = a.as_slice().to_vec();
@@ -158,16 +160,9 @@ impl Setup<'_> {
     }
 
     /// The locked elements' torques on their first links (`0` where slipping).
-    pub(super) fn locked_torques(
-        &self,
-        mode: &Mode,
-        phases: &[Phase],
-        t: f64,
-        y: &[f64],
-        dy: &[f64],
-    ) -> Vec<f64> {
+    pub(super) fn locked_torques(&self, mode: &Mode, t: f64, y: &[f64], dy: &[f64]) -> Vec<f64> {
         let n = self.n;
-        let (f, _) = self.forces(phases, t, &y[..n]);
+        let (f, _) = self.forces(&mode.phases, t, &y[..n]);
         let a = DVector::from_column_slice(&dy[..n]);
         let r = &self.m * a - f;
         let lambda = &mode.gram_inverse * (&mode.rows * r);
@@ -178,15 +173,9 @@ impl Setup<'_> {
     }
 
     /// Event functions of the current phases: each crosses zero at a change.
-    pub(super) fn events(
-        &self,
-        mode: &Mode,
-        phases: &[Phase],
-        t: f64,
-        y: &[f64],
-        dy: &[f64],
-    ) -> Vec<f64> {
-        let lam = self.locked_torques(mode, phases, t, y, dy);
+    pub(super) fn events(&self, mode: &Mode, t: f64, y: &[f64], dy: &[f64]) -> Vec<f64> {
+        let phases = &mode.phases;
+        let lam = self.locked_torques(mode, t, y, dy);
         let mut g = vec![f64::INFINITY; phases.len()];
         for i in 0..phases.len() {
             g[i] = match phases[i] {
@@ -222,16 +211,9 @@ impl Setup<'_> {
     /// torque (vehicle inertia times output acceleration plus the road load),
     /// each changing element's torque on its first link (the multiplier where
     /// locked, the friction torque where slipping), then each one's slip.
-    pub(super) fn observe(
-        &self,
-        mode: &Mode,
-        phases: &[Phase],
-        t: f64,
-        y: &[f64],
-        dy: &[f64],
-    ) -> Observed {
-        let v = &y[..self.n];
-        let lam = self.locked_torques(mode, phases, t, y, dy);
+    pub(super) fn observe(&self, mode: &Mode, t: f64, y: &[f64], dy: &[f64]) -> Observed {
+        let (v, phases) = (&y[..self.n], &mode.phases);
+        let lam = self.locked_torques(mode, t, y, dy);
         let k = phases.len();
         let mut q = Vec::with_capacity(1 + 2 * k);
         q.push(self.sim.vehicle_inertia * dy[self.output] + self.road(v[self.output]));
