@@ -206,7 +206,11 @@ impl Worker<'_> {
         }
         let solved = rows.len() / p - blocks.left.len();
         self.eval_left(blocks, first, errors);
-        for (&i, o) in blocks.left.iter().zip(blocks.left_out.chunks(plan.all.len())) {
+        for (&i, o) in blocks
+            .left
+            .iter()
+            .zip(blocks.left_out.chunks(plan.all.len()))
+        {
             plan.gather(o, &mut out[i * q..(i + 1) * q]);
         }
         solved

@@ -93,7 +93,9 @@ fn willis_named(e: Error) -> Error {
         }
         .into(),
         Error::Analysis(AnalysisError::IllConditioned {
-            condition, threshold, ..
+            condition,
+            threshold,
+            ..
         }) => AnalysisError::IllConditioned {
             what: "the Willis system".into(),
             condition,
@@ -240,7 +242,11 @@ impl Train {
             }
         }
         let solved = plan
-            .solve(ws, &Scenario::kinematic(&ratios, &values), Compute::Kinematics)
+            .solve(
+                ws,
+                &Scenario::kinematic(&ratios, &values),
+                Compute::Kinematics,
+            )
             .map_err(willis_named);
         let mut speed = vec![0.0; self.links().len()];
         for (&l, &w) in self.coordinates().iter().zip(ws.speeds()) {

@@ -229,7 +229,10 @@ fn prepared_solves_and_mass_fill_allocate_nothing() {
             let s2 = Scenario::kinematic(&other, &speeds);
             let (n, r) = allocations(|| pt.solve(&mut ws, &s2, Compute::Kinematics));
             assert!(r.is_ok());
-            assert_eq!(n, 0, "{name}: PreparedTrain::solve (kinematics, sparse {sparse})");
+            assert_eq!(
+                n, 0,
+                "{name}: PreparedTrain::solve (kinematics, sparse {sparse})"
+            );
         }
 
         // The single analyses' mode: a whole [M], forces only (eq. 8, 10),

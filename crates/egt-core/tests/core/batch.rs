@@ -671,7 +671,10 @@ fn runs_equal_fresh_row_by_row_solves_bit_for_bit() {
         let rows = 613;
         let params = sweep_rows(p);
         for block in params.chunks(256 * np) {
-            assert!(!p.is_linear_block(block) && !p.program_applies(block), "{name}");
+            assert!(
+                !p.is_linear_block(block) && !p.program_applies(block),
+                "{name}"
+            );
         }
         let mut out = vec![0.0; rows * nq];
         let errors = p.run(Layout::Rows(&params), &mut out, Threads::Pool).errors;

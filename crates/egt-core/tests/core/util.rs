@@ -85,7 +85,11 @@ pub fn prepared_speeds(
     let plan = PreparedTrain::for_analysis(t, links, links, links, &[])?.with_sparse(sparse)?;
     let ratios = t.ratios()?;
     let mut ws = plan.workspace();
-    plan.solve(&mut ws, &Scenario::kinematic(&ratios, speeds), Compute::Kinematics)?;
+    plan.solve(
+        &mut ws,
+        &Scenario::kinematic(&ratios, speeds),
+        Compute::Kinematics,
+    )?;
     let mut w = vec![0.0; t.links().len()];
     for (&l, &v) in t.coordinates().iter().zip(ws.speeds()) {
         w[l.index()] = v;
