@@ -47,11 +47,29 @@ fn temp(name: &str) -> PathBuf {
     dir.join(name)
 }
 
+/// The `egt` binary to spawn, with SIGINT at its default: egt leaves an
+/// ignored SIGINT ignored, and a test runner started in the background of
+/// a script passes SIGINT on ignored. `env --default-signal` (GNU
+/// coreutils) resets it, where there is one.
+fn egt_with_sigint_at_default() -> Command {
+    let reset = Command::new("env")
+        .args(["--default-signal=INT", "true"])
+        .status()
+        .is_ok_and(|s| s.success());
+    if reset {
+        let mut c = Command::new("env");
+        c.args(["--default-signal=INT", env!("CARGO_BIN_EXE_egt")]);
+        c
+    } else {
+        Command::new(env!("CARGO_BIN_EXE_egt"))
+    }
+}
+
 /// Run `egt args` with stdout into the file `name`, send SIGINT `when`, and
 /// wait for it to stop.
 fn interrupt(args: &[&str], name: &str, when: When) -> Stopped {
     let stdout = temp(name);
-    let mut child = Command::new(env!("CARGO_BIN_EXE_egt"))
+    let mut child = egt_with_sigint_at_default()
         .args(args)
         .current_dir(root())
         .stdin(Stdio::null())

@@ -27,10 +27,12 @@ pub(crate) fn requested() -> bool {
 /// flag, a second exits at once with [`EXIT`] (whatever was being written
 /// may then be cut). Only the binary calls this (`run_handling_ctrl_c`):
 /// the library never takes a signal from the program that hosts it (the
-/// Python module's `egt` command). Without a handler (one already set),
-/// Ctrl-C ends the process as it would have.
+/// Python module's `egt` command). SIGINT that was not at its default when
+/// egt started is left as it was: ignored (`nohup`, a script's background
+/// job, which Ctrl-C must not reach) or another handler's; then no flag is
+/// set and nothing changes.
 pub(crate) fn install() {
-    let _ = ctrlc::set_handler(|| {
+    let _ = ctrlc::try_set_handler(|| {
         if FLAG.swap(true, Ordering::SeqCst) {
             eprintln!("\ninterrupted twice: exiting at once (the output may be cut short)");
             std::process::exit(i32::from(EXIT));
