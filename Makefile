@@ -74,6 +74,7 @@ bench: ## Benchmarks by phase and train size, 3 to 30 links (divan, short settin
 
 chart: venv ## Re-measure Rust, SymPy and NumPy side by side; redraw docs/img/speed_accuracy.svg and the docs' tables
 	cargo run --release --quiet -p egt-core --features jit --example speed_accuracy -- target/speed_accuracy
+	EGT_JIT=0 cargo run --release --quiet -p egt-core --features jit --example speed_accuracy -- target/speed_accuracy/interpreted
 	$(VPY) bench/routes.py target/speed_accuracy
 	$(VPY) bench/chart.py target/speed_accuracy docs/img/speed_accuracy.svg docs/performance.md docs/accuracy.md
 

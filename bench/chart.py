@@ -1,7 +1,7 @@
 """Draw the speed-accuracy chart and refresh the generated sections of the docs.
 
-Reads OUT_DIR/rust.json (the `speed_accuracy` example) and OUT_DIR/python.json
-(bench/routes.py), writes the SVG chart (time per scenario against relative
+Reads OUT_DIR/rust.json (the `speed_accuracy` example), OUT_DIR/interpreted/rust.json
+(the same example with EGT_JIT=0, if present) and OUT_DIR/python.json (bench/routes.py), writes the SVG chart (time per scenario against relative
 error, one point per method and train size, and the flop floor), and replaces
 the text between the `<!-- speed-accuracy:begin/end -->` markers of
 docs/performance.md and between `<!-- sweeps:begin/end -->` of docs/accuracy.md.
@@ -43,9 +43,6 @@ SERIES = [
     ("sympy-subs", "SymPy: derive, subs/evalf", "#bcbd22", "triangle"),
     ("floor", "flop floor (this machine's rate)", "#000000", "ring"),
 ]
-
-# The leading SERIES that the Rust run measures.
-RUST_SERIES = 11
 
 
 def points(rust: dict[str, Any], python: dict[str, Any]) -> dict[str, list[tuple[int, float, float]]]:
@@ -180,109 +177,45 @@ def fmt_ratio(a: float | None, b: float | None) -> str:
     return f"{r:,.0f}×" if r >= 10 else f"{r:.1f}×"
 
 
-def summary(rust: dict[str, Any], python: dict[str, Any], data: dict[str, list[tuple[int, float, float]]]) -> str:
-    by = {k: {links: (t, e) for links, t, e in pts} for k, pts in data.items()}
+def summary(rust: dict[str, Any], python: dict[str, Any], interpreted: dict[str, Any] | None) -> str:
+    """The compact table of docs/performance.md: one scenario, the like-for-like batch kernel (compiled and, from a
+    second run with EGT_JIT=0, interpreted), NumPy and SymPy batched, and SymPy's time over egt's."""
 
-    def t(key: str, links: int) -> float | None:
-        return by.get(key, {}).get(links, (None, None))[0]
+    def rust_time(run: dict[str, Any] | None, links: int, method: str) -> float | None:
+        for size in (run or {}).get("sizes", []):
+            if size["links"] == links:
+                for m in size["methods"]:
+                    if m["method"] == method:
+                        return float(m["seconds"])
+        return None
 
-    derive = {r["links"]: r["derive_seconds"] for r in python["rows"] if "derive_seconds" in r}
-    codegen = {(r["route"], r["links"]): r.get("codegen_seconds") for r in python["rows"]}
+    def py_time(route: str, links: int) -> float | None:
+        for r in python["rows"]:
+            if r["route"] == route and r["links"] == links and r["seconds"] is not None:
+                return float(r["seconds"])
+        return None
+
     lines = [
-        f"Measured flop rate (one core, a 384 × 384 matrix product): **{rust['flop_rate'] / 1e9:.1f} GFLOP/s**; "
+        f"Host: flop rate {rust['flop_rate'] / 1e9:.1f} GFLOP/s on one core (a 384 × 384 matrix product); "
         f"NumPy {python['numpy']}, SymPy {python['sympy']}.",
         "",
-        "Per scenario, one core. egt is its prepared path one scenario at a time (a `Worker`); egt batch is "
-        "`BatchPlan::run` over 10 000 rows, every row its own factorisation, eight rows per SIMD group (its rows are the "
-        "worker's numbers bit for bit, checked in the run). \"batch\" routes evaluate 10 000 scenarios at once and divide. "
-        "The batch calls run on the calling thread, as with RAYON_NUM_THREADS=1 (a pool of one thread; handing each call "
-        "to a pool thread and back cost about 100 µs here, about 10 ns a row at 6 links, which the runs before "
-        "2026-11-26's fourth counted). "
-        "A ratio below 1× means the other route is faster than egt (batch against egt batch). egt program is the same "
-        "batch with condition bounds (the `cond.*` columns not wanted): the train's straight-line program over blocks of 64 rows, "
-        "compiled to AVX-512 code for the train where the machine has it, else to AVX2 code (the like-for-like table says which), its rows within rounding of the worker's (its errors against exact rationals are measured in the run). "
-        "egt columns is the program through `BatchPlan::run_columns`: parameters and outputs column-major, one contiguous "
-        "array each, as NumPy's and SymPy's routes hold them (the same numbers bit for bit, checked in the run).",
-        "",
-        "| links | n | egt | egt batch | egt program | egt columns | flop floor | egt batch / floor | program / floor | columns / floor | NumPy | NumPy / egt | NumPy batch | NumPy batch / egt batch | NumPy batch / program | NumPy batch / columns | SymPy lambdify | SymPy cse | SymPy cse batch | cse batch / egt batch | cse batch / program | cse batch / columns | SymPy subs |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| links | egt, one scenario | egt columns, their outputs (compiled, `jit`) | the same, interpreted (default build) "
+        "| NumPy batched | SymPy CSE batched | SymPy CSE / egt compiled | SymPy CSE / egt interpreted |",
+        "|---|---|---|---|---|---|---|---|",
     ]
+    budget = {r["links"] for r in python["rows"] if r["route"] == "sympy-budget"}
     for size in rust["sizes"]:
         links = size["links"]
-        egt = t("egt LU", links)
-        eb = t("egt batch", links)
-        ep = t("egt program", links)
-        ec = t("egt columns", links)
-        floor = size["floor_seconds"]
+        compiled = rust_time(rust, links, "egt columns, their outputs")
+        interp = rust_time(interpreted, links, "egt columns, their outputs")
+        sympy = py_time("sympy-cse-batch", links)
+        sympy_cell = fmt_time(sympy) if sympy is not None else (
+            "(no derivation in 60 s)" if budget and links >= min(budget) else "–")
         lines.append(
-            f"| {links} | {size['n']} | {fmt_time(egt)} | {fmt_time(eb)} | {fmt_time(ep)} | {fmt_time(ec)} | {fmt_time(floor)} "
-            f"| {fmt_ratio(eb, floor)} | {fmt_ratio(ep, floor)} | {fmt_ratio(ec, floor)} "
-            f"| {fmt_time(t('numpy', links))} | {fmt_ratio(t('numpy', links), egt)} | {fmt_time(t('numpy-batch', links))} "
-            f"| {fmt_ratio(t('numpy-batch', links), eb)} | {fmt_ratio(t('numpy-batch', links), ep)} "
-            f"| {fmt_ratio(t('numpy-batch', links), ec)} "
-            f"| {fmt_time(t('sympy', links))} | {fmt_time(t('sympy-cse', links))} "
-            f"| {fmt_time(t('sympy-cse-batch', links))} | {fmt_ratio(t('sympy-cse-batch', links), eb)} "
-            f"| {fmt_ratio(t('sympy-cse-batch', links), ep)} | {fmt_ratio(t('sympy-cse-batch', links), ec)} "
-            f"| {fmt_time(t('sympy-subs', links))} |"
+            f"| {links} | {fmt_time(rust_time(rust, links, 'egt LU'))} | {fmt_time(compiled)} | {fmt_time(interp)} "
+            f"| {fmt_time(py_time('numpy-batch', links))} | {sympy_cell} "
+            f"| {fmt_ratio(sympy, compiled)} | {fmt_ratio(sympy, interp)} |"
         )
-    lines += [
-        "",
-        "Like for like: egt columns computing only the outputs the SymPy and NumPy routes compute (speeds, "
-        "accelerations, multipliers and driving torques; no meshing forces and no `cond.*` columns, "
-        "`BatchPlan::with_outputs`), every row still checked (pivots, condition bounds, finite results). "
-        "The flop floor counts the same work.",
-        "",
-        "| links | egt, their outputs | program operations | flop floor | egt / floor | NumPy batch | NumPy batch / egt | SymPy cse batch | SymPy cse batch / egt |",
-        "|---|---|---|---|---|---|---|---|---|",
-    ]
-    for size in rust["sizes"]:
-        links = size["links"]
-        el = t("egt columns, their outputs", links)
-        floor = size["floor_seconds"]
-        like = next((m for m in size["methods"] if m["method"] == "egt columns, their outputs"), {})
-        ops = like.get("operations")
-        how = {True: ", compiled", False: ", interpreted"}.get(like.get("compiled"), "")
-        lines.append(
-            f"| {links} | {fmt_time(el)} | {f'{ops}{how}' if ops is not None else '–'} | {fmt_time(floor)} | {fmt_ratio(el, floor)} "
-            f"| {fmt_time(t('numpy-batch', links))} | {fmt_ratio(t('numpy-batch', links), el)} "
-            f"| {fmt_time(t('sympy-cse-batch', links))} | {fmt_ratio(t('sympy-cse-batch', links), el)} |"
-        )
-    lines += [
-        "",
-        "SymPy's one-off costs, apart from the per-scenario times above: the symbolic solve (derivation), "
-        "then code generation by `lambdify` (plain, with CSE, and with CSE for NumPy arrays):",
-        "",
-        "| links | derivation | lambdify | lambdify cse | lambdify cse numpy |",
-        "|---|---|---|---|---|",
-    ]
-    budget = [r for r in python["rows"] if r["route"] == "sympy-budget"]
-    for links in sorted(derive):
-        lines.append(
-            f"| {links} | {fmt_time(derive[links])} | {fmt_time(codegen.get(('sympy', links)))} "
-            f"| {fmt_time(codegen.get(('sympy-cse', links)))} | {fmt_time(codegen.get(('sympy-cse-batch', links)))} |"
-        )
-    for r in budget:
-        lines.append(f"| {r['links']} | more than {fmt_time(r['budget_seconds'])} for derivation and code generation together: stopped | | | |")
-    lines += [
-        "",
-        "Time per scenario of every Rust method and its largest relative error against exact rationals:",
-        "",
-        "| links | " + " | ".join(k for k, *_ in SERIES[:RUST_SERIES]) + " |",
-        "|---|" + "---|" * RUST_SERIES,
-    ]
-    for size in rust["sizes"]:
-        cells = []
-        for k, *_ in SERIES[:RUST_SERIES]:
-            tt, e = by[k].get(size["links"], (None, None))
-            cells.append(f"{fmt_time(tt)} ({e:.0e})" if tt is not None else "–")
-        lines.append(f"| {size['links']} | " + " | ".join(cells) + " |")
-    lines.append("")
-    lines.append(
-        "Python routes' errors: "
-        + ", ".join(f"{r['route']} {r['links']} links {r['error']:.0e}" for r in python["rows"]
-                    if r["error"] is not None and (r["links"] in (6, 30) or r["route"].startswith("sympy")))
-        + "."
-    )
     return "\n".join(lines) + "\n"
 
 
@@ -305,11 +238,17 @@ def main() -> None:
     with open(f"{out_dir}/python.json", encoding="utf-8") as fh:
         python = json.load(fh)
     data = points(rust, python)
+    interpreted = None
+    try:
+        with open(f"{out_dir}/interpreted/rust.json", encoding="utf-8") as fh:
+            interpreted = json.load(fh)
+    except FileNotFoundError:
+        print(f"{out_dir}/interpreted/rust.json: missing, so no interpreted column", file=sys.stderr)
     with open(chart, "w", encoding="utf-8") as fh:
         fh.write(svg(data))
     print(f"wrote {chart}", file=sys.stderr)
     if len(sys.argv) > 3:
-        replace_section(sys.argv[3], "speed-accuracy", summary(rust, python, data))
+        replace_section(sys.argv[3], "speed-accuracy", summary(rust, python, interpreted))
         print(f"updated {sys.argv[3]}", file=sys.stderr)
     if len(sys.argv) > 4:
         with open(f"{out_dir}/accuracy.md", encoding="utf-8") as fh:
