@@ -2,9 +2,10 @@
 //! bounded search) over the bundled base train its `base` names (the C4 by
 //! default). Any refusal is fine; a panic, an abort, a hang, or a candidate
 //! with a non-finite score or ratio is a bug. The harness bounds each run
-//! below the CLI's budgets (at most 200 leaves, each range cut to 24 values,
+//! below the CLI's budgets (at most 200 leaves, each range cut to 6 values,
 //! two freed elements), so that an execution of the unoptimised build CI
-//! runs stays under a second.
+//! runs stays under a second: with 24 values a Ravigneaux search whose
+//! tolerance prunes nothing (13 824 combinations) took 27.9 s there.
 #![no_main]
 
 use std::sync::LazyLock;
@@ -44,9 +45,9 @@ fuzz_target!(|data: &[u8]| {
     if spec.layout.len() > 2 {
         return;
     }
-    // Each range cut to its first 24 values (a reversed or negative range
+    // Each range cut to its first 6 values (a reversed or negative range
     // stays one, and validation refuses it as before).
-    let cut = |r: &mut [i64; 2]| r[1] = r[1].min(r[0].saturating_add(23));
+    let cut = |r: &mut [i64; 2]| r[1] = r[1].min(r[0].saturating_add(5));
     for s in spec.sets.values_mut() {
         cut(&mut s.sun);
         cut(&mut s.ring);
