@@ -201,7 +201,7 @@ fn capacity(v: &[f64], field: &str) -> Result<egt_core::shift_dynamics::Capacity
 
 /// A gear change in time (egt_core::shift_dynamics::ShiftSim), as its serde form.
 #[pyfunction]
-#[pyo3(signature = (core, from_, to, input_speed, input_torque, torque_table, road_load, vehicle_inertia, mu, mu_decay, off_going, on_coming, t_end, rtol, atol, method))]
+#[pyo3(signature = (core, from_, to, input_speed, input_torque, torque_table, road_load, vehicle_inertia, mu, mu_decay, off_going, on_coming, ramps, t_end, rtol, atol, method, max_steps))]
 #[allow(clippy::too_many_arguments)]
 pub fn shift_sim<'py>(
     py: Python<'py>,
@@ -215,12 +215,14 @@ pub fn shift_sim<'py>(
     vehicle_inertia: f64,
     mu: (f64, f64),
     mu_decay: Option<f64>,
-    off_going: Vec<f64>,
-    on_coming: Vec<f64>,
+    off_going: Option<Vec<f64>>,
+    on_coming: Option<Vec<f64>>,
+    ramps: Vec<(String, Vec<f64>)>,
     t_end: f64,
     rtol: f64,
     atol: f64,
     method: &str,
+    max_steps: Option<usize>,
 ) -> Result<Bound<'py, PyAny>> {
     use egt_core::shift_dynamics::{FrictionLaw, InputTorque, ShiftMethod, ShiftSim};
     let method = match method {
@@ -254,14 +256,20 @@ pub fn shift_sim<'py>(
             mu_kinetic: mu.1,
             decay: mu_decay,
         },
-        off_going: Some(capacity(&off_going, "off_going")?),
-        on_coming: Some(capacity(&on_coming, "on_coming")?),
-        ramps: Vec::new(),
+        off_going: off_going.map(|c| capacity(&c, "off_going")).transpose()?,
+        on_coming: on_coming.map(|c| capacity(&c, "on_coming")).transpose()?,
+        ramps: ramps
+            .into_iter()
+            .map(|(name, c)| {
+                let cap = capacity(&c, &format!("ramps[{name:?}]"))?;
+                Ok((name, cap))
+            })
+            .collect::<Result<_>>()?,
         t_end,
         rtol,
         atol,
         method,
-        max_steps: egt_core::shift_dynamics::DEFAULT_MAX_STEPS,
+        max_steps: max_steps.unwrap_or(egt_core::shift_dynamics::DEFAULT_MAX_STEPS),
     };
     // The document is the run's serde form (and the version): one payload.
     guard(|| {

@@ -71,3 +71,57 @@ def test_bad_shifts_raise_egt_errors_naming_the_field() -> None:
         train.simulate_shift("2", "3", method="rk4", **UPSHIFT)  # type: ignore[arg-type]
     with pytest.raises(egt.EgtError, match="input_torque"):
         train.simulate_shift("2", "3", **{**UPSHIFT, "input_torque": None})  # type: ignore[arg-type]
+
+
+DOUBLE_SWAP = {
+    "A": (0.05, 0.15, 20000.0, 0.0),
+    "C": (0.05, 0.15, 20000.0, 0.0),
+    "D": (0.05, 0.4, 0.0, 20000.0),
+    "E": (0.05, 0.4, 0.0, 20000.0),
+}
+
+
+def test_a_double_swap_by_ramps_is_the_clis_and_ends_in_fourth() -> None:
+    """The 8HP 1-4 (A and C off, D and E on), each element's capacity named
+    in ``ramps`` as ``--ramp NAME=RAMP``: the same document as the CLI's,
+    and the new gear's ratio at the end."""
+    base = {k: v for k, v in UPSHIFT.items() if k not in ("off_going", "on_coming")}
+    train = zf()
+    s = train.simulate_shift("1", "4", ramps=DOUBLE_SWAP, t_end=1.5, **base)  # type: ignore[arg-type]
+    assert s.off_going == ("A", "C") and s.on_coming == ("D", "E")
+    assert s.elements == s.off_going + s.on_coming and len(s.energy) == 4
+    assert s.slip.shape == (len(s.t), 4) and s.dissipated[-1].tolist() == list(s.energy)
+    ratio = s.speed("input")[-1] / s.speed("output")[-1]
+    assert ratio == pytest.approx(train.gear("4").ratio, rel=1e-9)
+    args = [
+        sys.executable, "-m", "egt", "shift-sim", str(EXAMPLES / "zf_8hp70.toml"),
+        "--from", "1", "--to", "4", "--input-speed", "250", "--input-torque", "300",
+        "--road-load", "20,0.2,0.002", "--vehicle-inertia", "12", "--t-end", "1.5",
+        "--format", "json",
+    ]
+    for name, r in DOUBLE_SWAP.items():
+        args += ["--ramp", f"{name}=" + ":".join(repr(x) for x in r)]
+    cli = json.loads(subprocess.run(args, capture_output=True, text=True, check=True).stdout)
+    assert s.to_dict() == cli
+
+
+def test_ramps_and_max_steps_are_checked_by_name() -> None:
+    train = zf()
+    base = {k: v for k, v in UPSHIFT.items() if k != "off_going"}
+    # The off-going A has no capacity: neither `off_going` nor `ramps` names it.
+    with pytest.raises(egt.EgtError, match="`A`"):
+        train.simulate_shift("2", "3", **base)  # type: ignore[arg-type]
+    with pytest.raises(egt.EgtError, match="ramps"):
+        train.simulate_shift("2", "3", ramps={"A": (1.0, 2.0)}, **base)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="ramps must be a mapping"):
+        train.simulate_shift("2", "3", ramps=[("A", 1.0)], **base)  # type: ignore[arg-type]
+    # Named in `ramps`, A runs: the same run as with `off_going`.
+    by_name = train.simulate_shift("2", "3", ramps={"A": UPSHIFT["off_going"]}, **base)  # type: ignore[arg-type]
+    assert by_name.to_dict() == train.simulate_shift("2", "3", **UPSHIFT).to_dict()  # type: ignore[arg-type]
+    with pytest.raises(egt.EgtError, match="max_steps"):
+        train.simulate_shift("2", "3", max_steps=0, **UPSHIFT)  # type: ignore[arg-type]
+    with pytest.raises(egt.AnalysisError, match="max_steps") as budget:
+        train.simulate_shift("2", "3", max_steps=5, **UPSHIFT)  # type: ignore[arg-type]
+    assert budget.value.kind == "budget"
+    with pytest.raises(ValueError, match="max_steps"):
+        train.simulate_shift("2", "3", max_steps=-1, **UPSHIFT)  # type: ignore[arg-type]

@@ -131,12 +131,14 @@ def shift_sim(
     vehicle_inertia: float,
     mu: Tuple[float, float],
     mu_decay: Optional[float],
-    off_going: List[float],
-    on_coming: List[float],
+    off_going: Optional[List[float]],
+    on_coming: Optional[List[float]],
+    ramps: List[Tuple[str, List[float]]],
     t_end: float,
     rtol: float,
     atol: float,
     method: str,
+    max_steps: Optional[int],
 ) -> Dict[str, Any]: ...
 def ratios_from_teeth(
     core: TrainCore, teeth: npt.NDArray[np.int64]

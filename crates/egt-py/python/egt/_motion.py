@@ -273,12 +273,18 @@ class Simulation(_Documented):
 class ShiftSimulation(_Documented):
     """A gear change in time (``Train.simulate_shift``; docs/shift_dynamics.md).
 
-    Element arrays have two columns: the off-going element, then the
-    on-coming one (``elements``). ``to_dict()`` is ``egt shift-sim --format json``.
+    Element arrays have a column per changing element: the off-going ones,
+    then the on-coming ones (``elements``): two in a single swap, four in a
+    double swap. ``to_dict()`` is ``egt shift-sim --format json``.
     """
 
     links: Tuple[str, ...]
-    elements: Tuple[str, str]
+    elements: Tuple[str, ...]
+    """The changing elements: ``off_going``, then ``on_coming``."""
+    off_going: Tuple[str, ...]
+    """Elements of the old gear that the new one does not engage (released)."""
+    on_coming: Tuple[str, ...]
+    """Elements of the new gear that the old one does not engage (applied)."""
     kept: Tuple[str, ...]
     """Elements engaged in both gears (locked throughout)."""
     t: np.ndarray
@@ -287,13 +293,13 @@ class ShiftSimulation(_Documented):
     speeds: np.ndarray
     """(samples, links) link speeds [rad/s]."""
     slip: np.ndarray
-    """(samples, 2) slip speeds of the two elements [rad/s]."""
+    """(samples, elements) slip speeds [rad/s]."""
     element_torque: np.ndarray
-    """(samples, 2) torques of the two elements on their first link [N m]."""
+    """(samples, elements) torques of the elements on their first link [N m]."""
     output_torque: np.ndarray
     """(samples,) torque delivered to the vehicle [N m]."""
     dissipated: np.ndarray
-    """(samples, 2) energy each element has dissipated [J]."""
+    """(samples, elements) energy each element has dissipated so far [J]."""
     energy_residual: np.ndarray
     """(samples,) W_applied - dKE - E_friction - E_lock [J]."""
     dof: np.ndarray
@@ -305,7 +311,7 @@ class ShiftSimulation(_Documented):
     shift_time: Optional[float]
     output_torque_range: Tuple[float, float]
     """(largest, smallest) output torque."""
-    energy: Tuple[float, float]
+    energy: Tuple[float, ...]
     """Energy each element dissipated over the run [J]."""
     lock_loss: float
     max_energy_residual: float
@@ -326,20 +332,22 @@ class ShiftSimulation(_Documented):
         def series(key: str) -> np.ndarray:
             return _array([x[key] for x in samples])
 
-        def pairs(key: str) -> np.ndarray:
-            return np.asarray([x[key] for x in samples], dtype=np.float64).reshape(n, 2)
+        def per_element(key: str) -> np.ndarray:
+            return np.asarray([x[key] for x in samples], dtype=np.float64).reshape(n, len(d["elements"]))
 
         return cls(
             _document=d,
             links=links,
-            elements=(d["elements"][0], d["elements"][1]),
+            elements=tuple(d["elements"]),
+            off_going=tuple(d["off_going"]),
+            on_coming=tuple(d["on_coming"]),
             kept=tuple(d["kept"]),
             t=series("t"),
             speeds=np.asarray([x["speed"] for x in samples], dtype=np.float64).reshape(n, len(links)),
-            slip=pairs("slip"),
-            element_torque=pairs("element_torque"),
+            slip=per_element("slip"),
+            element_torque=per_element("element_torque"),
             output_torque=series("output_torque"),
-            dissipated=pairs("dissipated"),
+            dissipated=per_element("dissipated"),
             energy_residual=series("energy_residual"),
             dof=np.asarray([x["dof"] for x in samples], dtype=np.int64),
             changes=tuple((c["t"], c["element"], c["now"], c["dof"]) for c in d["changes"]),
@@ -347,7 +355,7 @@ class ShiftSimulation(_Documented):
             lock_time=d["lock_time"],
             shift_time=d["shift_time"],
             output_torque_range=(d["output_torque_range"][0], d["output_torque_range"][1]),
-            energy=(d["dissipated"][0], d["dissipated"][1]),
+            energy=tuple(d["dissipated"]),
             lock_loss=d["lock_loss"],
             max_energy_residual=d["max_energy_residual"],
             steps=d["steps"],

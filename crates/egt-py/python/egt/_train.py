@@ -656,8 +656,9 @@ class Train:
         to: str,
         *,
         input_speed: float,
-        off_going: Union[float, Sequence[float]],
-        on_coming: Union[float, Sequence[float]],
+        off_going: Optional[Union[float, Sequence[float]]] = None,
+        on_coming: Optional[Union[float, Sequence[float]]] = None,
+        ramps: Optional[Mapping[str, Union[float, Sequence[float]]]] = None,
         input_torque: Optional[float] = None,
         torque_table: Optional[Sequence[Tuple[float, float]]] = None,
         road_load: Sequence[float] = (0.0, 0.0, 0.0),
@@ -668,6 +669,7 @@ class Train:
         rtol: float = 1e-8,
         atol: float = 1e-8,
         method: str = "auto",
+        max_steps: Optional[int] = None,
     ) -> ShiftSimulation:
         """A gear change in time, as ``egt shift-sim`` (docs/shift_dynamics.md).
 
@@ -681,6 +683,14 @@ class Train:
         ``mu`` is (static, kinetic). ``method``: ``"auto"`` (explicit until a
         stiff mode limits its steps, then implicit; ``stiff`` says when),
         ``"explicit"`` or ``"implicit"``.
+
+        ``off_going`` and ``on_coming`` give the capacities of a single swap
+        (one element off, one on); ``ramps`` gives each changing element's
+        capacity by name, for any change between the two gear states (a
+        skip shift, a double swap), as ``egt shift-sim --ramp NAME=RAMP``;
+        a name in ``ramps`` comes before ``off_going``/``on_coming``.
+        ``max_steps`` raises the step budget (``egt shift-sim --max-steps``;
+        default 2 000 000).
         """
 
         def cap(v: Union[float, Sequence[float]], field: str) -> List[float]:
@@ -694,6 +704,11 @@ class Train:
         m = [number(x, f"mu[{k}]") for k, x in enumerate(mu)]
         if len(m) != 2:
             raise ArgumentError(f"mu: expected (static, kinetic), got {len(m)} numbers")
+        changing: Mapping[Any, Any] = {} if ramps is None else ramps
+        if not isinstance(changing, Mapping):
+            raise ArgumentTypeError(
+                f"ramps must be a mapping of element names to capacities, got {type(ramps).__name__}"
+            )
         raw = _shift_sim(
             self._core,
             str(from_),
@@ -707,12 +722,14 @@ class Train:
             number(vehicle_inertia, "vehicle_inertia"),
             (m[0], m[1]),
             None if mu_decay is None else number(mu_decay, "mu_decay"),
-            cap(off_going, "off_going"),
-            cap(on_coming, "on_coming"),
+            None if off_going is None else cap(off_going, "off_going"),
+            None if on_coming is None else cap(on_coming, "on_coming"),
+            [(str(name), cap(c, f"ramps[{name!r}]")) for name, c in changing.items()],
             number(t_end, "t_end"),
             number(rtol, "rtol"),
             number(atol, "atol"),
             str(method),
+            None if max_steps is None else count(max_steps, "max_steps", 2**63 - 1),
         )
         return ShiftSimulation._from_core(self._links, raw)
 
