@@ -112,6 +112,7 @@ const RUNS: &[(&str, &str, Base, &[&str])] = &[
     ("synth", "progress", C4_SEARCH, &["--top", "2", "--progress"]),
     ("shift-sim", "spec-format", UP, &["--spec-format", "toml"]),
     ("shift-sim", "format", UP, &["--format", "csv"]),
+    ("shift-sim", "shift", ZF, &["--shift", "2-3"]),
     ("shift-sim", "from", UP, &[]),
     ("shift-sim", "to", UP, &[]),
     ("shift-sim", "input-speed", UP, &[]),

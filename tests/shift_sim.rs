@@ -464,3 +464,129 @@ fn a_single_swap_by_ramp_flags_is_bit_for_bit_the_off_going_on_coming_run() {
     assert_eq!(names.code, 0, "{}", names.stderr);
     assert_eq!(roles.stdout, names.stdout);
 }
+
+#[test]
+fn a_shift_the_spec_names_is_bit_for_bit_the_run_its_flags_give() {
+    // The 8HP example's [[shift]] "2-3" is the documented upshift of UPSHIFT.
+    let flags = run(&with(&["--format", "json"]));
+    assert_eq!(flags.code, 0, "{}", flags.stderr);
+    let named = egt(
+        &[
+            "shift-sim",
+            "examples/zf_8hp70.toml",
+            "--shift",
+            "2-3",
+            "--format",
+            "json",
+        ],
+        None,
+    );
+    assert_eq!(named.code, 0, "{}", named.stderr);
+    assert_eq!(flags.stdout, named.stdout);
+    // "1-4", a double swap, is the ramps of the by-flag double-swap test.
+    let by_flags = by_ramps(
+        "1",
+        "4",
+        &[
+            "A=0.05:0.15:20000:0",
+            "C=0.05:0.15:20000:0",
+            "D=0.05:0.4:0:20000",
+            "E=0.05:0.4:0:20000",
+        ],
+    );
+    let r = egt(
+        &[
+            "shift-sim",
+            "examples/zf_8hp70.toml",
+            "--shift",
+            "1-4",
+            "--format",
+            "json",
+        ],
+        None,
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let by_name: Value = serde_json::from_str(&r.stdout).expect("json");
+    assert_eq!(by_flags, by_name);
+    // The integration settings still come from the command line.
+    let loose = egt(
+        &[
+            "shift-sim",
+            "examples/zf_8hp70.toml",
+            "--shift",
+            "2-3",
+            "--rtol",
+            "1e-5",
+            "--format",
+            "json",
+        ],
+        None,
+    );
+    assert_eq!(loose.code, 0, "{}", loose.stderr);
+    let loose: Value = serde_json::from_str(&loose.stdout).expect("json");
+    let tight: Value = serde_json::from_str(&named.stdout).expect("json");
+    assert!(loose["steps"].as_u64() < tight["steps"].as_u64());
+}
+
+#[test]
+fn a_bad_shift_section_or_name_exits_2_naming_it() {
+    let spec = std::fs::read_to_string(root().join("examples/zf_8hp70.toml")).expect("example");
+    let cut = spec.find("[[shift]]").expect("the example names shifts");
+    let (head, shifts) = spec.split_at(cut);
+    let no_transmission = {
+        let t = head.find("[transmission]").expect("transmission");
+        format!("{}{shifts}", &head[..t])
+    };
+    let twice = format!(
+        "{spec}\n{}",
+        &shifts[..shifts[9..].find("[[shift]]").expect("two") + 9]
+    );
+    for (text, args, says) in [
+        (
+            spec.replace("from = \"1\"", "from = \"9\""),
+            &["check", "-"][..],
+            "shift[1].from: unknown gear state `9`",
+        ),
+        (
+            spec.replace("to = \"3\"", "to = \"2\""),
+            &["check", "-"][..],
+            "shift[0].to",
+        ),
+        (no_transmission, &["check", "-"][..], "shift[0]"),
+        (twice, &["check", "-"][..], "shift[2].name: `2-3` names shift[0] too"),
+        (
+            spec.replace("ramps = { A = [0.05, 0.15, 5000.0, 0.0], ", "ramps = { A = [0.05, 0.15], "),
+            &["check", "-"][..],
+            "shift[0].ramps.A",
+        ),
+        (
+            spec.replace("name = \"2-3\"", "name = \"2-3\"\ninput_torques = 1"),
+            &["check", "-"][..],
+            "input_torques",
+        ),
+        (
+            spec.clone(),
+            &["shift-sim", "-", "--shift", "2-4"][..],
+            "unknown shift `2-4` (did you mean `2-3`?)",
+        ),
+        (
+            spec.replace("input_torque = 300.0\nroad_load = [20.0, 0.2, 0.002]\nvehicle_inertia = 12.0\nramps = { A", "road_load = [20.0, 0.2, 0.002]\nvehicle_inertia = 12.0\nramps = { A"),
+            &["shift-sim", "-", "--shift", "2-3"][..],
+            "[[shift]] `2-3`: shift.input_torque",
+        ),
+        (
+            spec.replace("ramps = { A = [0.05, 0.15, 5000.0, 0.0], ", "ramps = { "),
+            &["shift-sim", "-", "--shift", "2-3"][..],
+            "`A`",
+        ),
+        (
+            spec.clone(),
+            &["shift-sim", "-", "--shift", "2-3", "--from", "1"][..],
+            "cannot be used with",
+        ),
+    ] {
+        let r = egt(args, Some(&text));
+        assert_eq!(r.code, 2, "{args:?} {says}: {}", r.stderr);
+        assert!(r.stderr.contains(says), "{args:?}: wanted {says:?} in {}", r.stderr);
+    }
+}

@@ -38,6 +38,8 @@ fn _egt(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(motion::stability, m)?)?;
     m.add_function(wrap_pyfunction!(motion::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(motion::shift_sim, m)?)?;
+    m.add_function(wrap_pyfunction!(motion::shift_named, m)?)?;
+    m.add_function(wrap_pyfunction!(motion::shift_names, m)?)?;
     m.add_function(wrap_pyfunction!(transmission::gear, m)?)?;
     m.add_function(wrap_pyfunction!(transmission::shift_table, m)?)?;
     #[cfg(feature = "command")]

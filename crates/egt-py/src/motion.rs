@@ -199,6 +199,57 @@ fn capacity(v: &[f64], field: &str) -> Result<egt_core::shift_dynamics::Capacity
     }
 }
 
+/// `method` of a shift run by name.
+fn shift_method(method: &str) -> Result<egt_core::shift_dynamics::ShiftMethod> {
+    use egt_core::shift_dynamics::ShiftMethod;
+    match method {
+        "auto" => Ok(ShiftMethod::Auto),
+        "explicit" => Ok(ShiftMethod::Explicit),
+        "implicit" => Ok(ShiftMethod::Implicit),
+        other => Err(value_error(format!(
+            "method: expected \"auto\", \"explicit\" or \"implicit\", got {other:?}"
+        ))),
+    }
+}
+
+/// The names of the spec's `[[shift]]` entries, in spec order.
+#[pyfunction]
+pub fn shift_names(core: &TrainCore) -> Vec<String> {
+    core.train
+        .transmission()
+        .map(|t| t.shifts.iter().map(|s| s.name.clone()).collect())
+        .unwrap_or_default()
+}
+
+/// The spec's shift `name` in time (`ShiftSim::named`), with the given
+/// integration settings, as its serde form.
+#[pyfunction]
+#[pyo3(signature = (core, name, rtol, atol, method, max_steps))]
+pub fn shift_named<'py>(
+    py: Python<'py>,
+    core: &TrainCore,
+    name: &str,
+    rtol: f64,
+    atol: f64,
+    method: &str,
+    max_steps: Option<usize>,
+) -> Result<Bound<'py, PyAny>> {
+    use egt_core::shift_dynamics::{DEFAULT_MAX_STEPS, ShiftSim};
+    let method = shift_method(method)?;
+    guard(|| {
+        let sim = ShiftSim {
+            rtol,
+            atol,
+            method,
+            max_steps: max_steps.unwrap_or(DEFAULT_MAX_STEPS),
+            ..ShiftSim::named(&core.train, name)?
+        };
+        let doc = egt_views::shift_simulation(&sim.run(&core.train)?)
+            .map_err(|e| value_error(e.to_string()))?;
+        to_py(py, &doc)
+    })
+}
+
 /// A gear change in time (egt_core::shift_dynamics::ShiftSim), as its serde form.
 #[pyfunction]
 #[pyo3(signature = (core, from_, to, input_speed, input_torque, torque_table, road_load, vehicle_inertia, mu, mu_decay, off_going, on_coming, ramps, t_end, rtol, atol, method, max_steps))]
@@ -224,17 +275,8 @@ pub fn shift_sim<'py>(
     method: &str,
     max_steps: Option<usize>,
 ) -> Result<Bound<'py, PyAny>> {
-    use egt_core::shift_dynamics::{FrictionLaw, InputTorque, ShiftMethod, ShiftSim};
-    let method = match method {
-        "auto" => ShiftMethod::Auto,
-        "explicit" => ShiftMethod::Explicit,
-        "implicit" => ShiftMethod::Implicit,
-        other => {
-            return Err(value_error(format!(
-                "method: expected \"auto\", \"explicit\" or \"implicit\", got {other:?}"
-            )));
-        }
-    };
+    use egt_core::shift_dynamics::{FrictionLaw, InputTorque, ShiftSim};
+    let method = shift_method(method)?;
     let input_torque = match (input_torque, torque_table) {
         (Some(t), None) => InputTorque::Constant(t),
         (None, Some(table)) => InputTorque::Table(table),

@@ -125,3 +125,16 @@ def test_ramps_and_max_steps_are_checked_by_name() -> None:
     assert budget.value.kind == "budget"
     with pytest.raises(ValueError, match="max_steps"):
         train.simulate_shift("2", "3", max_steps=-1, **UPSHIFT)  # type: ignore[arg-type]
+
+
+def test_a_shift_the_spec_names_is_the_run_its_arguments_give() -> None:
+    """``[[shift]]`` "2-3" of the 8HP example is UPSHIFT: the same document."""
+    train = zf()
+    assert train.shifts == ("2-3", "1-4")
+    named = train.simulate_named_shift("2-3")
+    assert named.to_dict() == train.simulate_shift("2", "3", **UPSHIFT).to_dict()  # type: ignore[arg-type]
+    assert train.simulate_named_shift("2-3", rtol=1e-6).steps < named.steps
+    with pytest.raises(egt.EgtError, match=r"unknown shift `2-4` \(did you mean `2-3`\?\)"):
+        train.simulate_named_shift("2-4")
+    with pytest.raises(egt.EgtError, match="no \\[\\[shift\\]\\]"):
+        egt.Train.from_file(EXAMPLES / "ford_c4_simpson.toml").simulate_named_shift("1-2")

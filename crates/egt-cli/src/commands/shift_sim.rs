@@ -37,49 +37,65 @@ pub enum MethodArg {
 pub struct Args {
     #[command(flatten)]
     pub spec: SpecArgs<SeriesFormat>,
+    /// Run the spec's `[[shift]]` of this name: its gears, operating point
+    /// and ramps, instead of the flags that define a shift (`--from` to
+    /// `--t-end`, which it excludes); the tolerances, `--method`,
+    /// `--max-steps` and the outputs still apply.
+    #[arg(long, value_name = "NAME")]
+    pub shift: Option<String>,
     /// The gear before the shift (a state of `[transmission.states]`).
-    #[arg(long)]
-    pub from: String,
+    #[arg(long, required_unless_present = "shift", conflicts_with = "shift")]
+    pub from: Option<String>,
     /// The gear after the shift. The elements of `--from` not in `--to`
     /// release, those of `--to` not in `--from` apply (one or more each way:
     /// single swaps, skip shifts, double swaps); the others stay locked.
-    #[arg(long)]
-    pub to: String,
+    #[arg(long, required_unless_present = "shift", conflicts_with = "shift")]
+    pub to: Option<String>,
     /// Input speed at t = 0 [rad/s]; the train starts in the `--from` gear's steady motion.
-    #[arg(long, value_name = "W")]
-    pub input_speed: f64,
+    #[arg(
+        long,
+        value_name = "W",
+        required_unless_present = "shift",
+        conflicts_with = "shift"
+    )]
+    pub input_speed: Option<f64>,
     /// Constant input torque [N m].
     #[arg(
         long,
         value_name = "T",
-        conflicts_with = "torque_table",
-        required_unless_present = "torque_table"
+        conflicts_with_all = ["torque_table", "shift"],
+        required_unless_present_any = ["torque_table", "shift"]
     )]
     pub input_torque: Option<f64>,
     /// Input torque over input speed, `W:T,W:T,...` [rad/s : N m], linear between points.
-    #[arg(long, value_name = "TABLE", value_parser = parse_table)]
+    #[arg(long, value_name = "TABLE", value_parser = parse_table, conflicts_with = "shift")]
     pub torque_table: Option<TorqueTable>,
     /// Road load at the output, `C0,C1,C2`: c0 sgn(w) + c1 w + c2 w|w| [N m].
-    #[arg(long, value_name = "C0,C1,C2", value_parser = parse_three, default_value = "0,0,0")]
+    #[arg(long, value_name = "C0,C1,C2", value_parser = parse_three, default_value = "0,0,0", conflicts_with = "shift")]
     pub road_load: [f64; 3],
     /// Vehicle inertia reflected to the output link [kg m^2].
-    #[arg(long, value_name = "J", default_value_t = 0.0)]
+    #[arg(
+        long,
+        value_name = "J",
+        default_value_t = 0.0,
+        conflicts_with = "shift"
+    )]
     pub vehicle_inertia: f64,
     /// Friction coefficients `STATIC,KINETIC` of both elements (typical wet clutch: 0.15,0.12).
-    #[arg(long, value_name = "MU_S,MU_K", value_parser = parse_two, default_value = "0.15,0.12")]
+    #[arg(long, value_name = "MU_S,MU_K", value_parser = parse_two, default_value = "0.15,0.12", conflicts_with = "shift")]
     pub mu: [f64; 2],
     /// Slip speed [rad/s] over which the coefficient falls from static to
     /// kinetic (exp(-|slip|/decay)); default: a step.
-    #[arg(long, value_name = "W")]
+    #[arg(long, value_name = "W", conflicts_with = "shift")]
     pub mu_decay: Option<f64>,
     /// Off-going capacity [N m per unit friction coefficient]: `C` or a ramp
     /// `T0:T1:FROM:TO`. For a shift that releases one element; otherwise
     /// give each its `--ramp`.
-    #[arg(long, value_name = "RAMP", value_parser = parse_capacity)]
+    #[arg(long, value_name = "RAMP", value_parser = parse_capacity, conflicts_with = "shift")]
     pub off_going: Option<Capacity>,
     /// On-coming capacity, as `--off-going` (e.g. a pressure ramp
     /// `0.05:0.35:0:8000`), for a shift that applies one element.
-    #[arg(long, value_name = "RAMP", value_parser = parse_capacity)]
+    #[arg(long, value_name = "RAMP", value_parser = parse_capacity, conflicts_with = "shift")]
     pub on_coming: Option<Capacity>,
     /// One changing element's capacity, `NAME=RAMP` (RAMP as `--off-going`);
     /// repeat it for each element released or applied, e.g. the 8HP's 1-4
@@ -87,10 +103,15 @@ pub struct Args {
     /// --ramp D=0.05:0.3:0:9000 --ramp E=0.1:0.35:0:9000`. It comes before
     /// `--off-going`/`--on-coming`; every changing element needs a capacity
     /// (a missing one exits 2, naming it).
-    #[arg(long = "ramp", value_name = "NAME=RAMP", value_parser = parse_ramp)]
+    #[arg(long = "ramp", value_name = "NAME=RAMP", value_parser = parse_ramp, conflicts_with = "shift")]
     pub ramps: Vec<(String, Capacity)>,
     /// End time [s].
-    #[arg(long, value_name = "T", default_value_t = 1.0)]
+    #[arg(
+        long,
+        value_name = "T",
+        default_value_t = 1.0,
+        conflicts_with = "shift"
+    )]
     pub t_end: f64,
     /// Relative tolerance of the adaptive steps.
     #[arg(long, default_value_t = 1e-8)]
@@ -182,33 +203,51 @@ fn parse_table(s: &str) -> Result<TorqueTable, String> {
 pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
     let loaded = input::load(&args.spec)?;
     let train = &loaded.train;
-    let sim = ShiftSim {
-        from: args.from.clone(),
-        to: args.to.clone(),
-        input_speed: args.input_speed,
-        input_torque: match (&args.torque_table, args.input_torque) {
-            (Some(t), _) => InputTorque::Table(t.0.clone()),
-            (None, t) => InputTorque::Constant(t.unwrap_or_default()),
+    let method = match args.method {
+        MethodArg::Auto => ShiftMethod::Auto,
+        MethodArg::Explicit => ShiftMethod::Explicit,
+        MethodArg::Implicit => ShiftMethod::Implicit,
+    };
+    let sim = match &args.shift {
+        Some(name) => ShiftSim {
+            rtol: args.rtol,
+            atol: args.atol,
+            method,
+            max_steps: args.max_steps,
+            ..ShiftSim::named(train, name).map_err(|e| {
+                // An unknown name is the flag's; anything else the section's.
+                let context = if e.location().0 == Some("shift") {
+                    format!("{} (flag `--shift`)", loaded.source)
+                } else {
+                    format!("{}: [[shift]] `{name}`", loaded.source)
+                };
+                anyhow::Error::new(e).context(context)
+            })?
         },
-        road_load: args.road_load,
-        vehicle_inertia: args.vehicle_inertia,
-        law: FrictionLaw {
-            mu_static: args.mu[0],
-            mu_kinetic: args.mu[1],
-            decay: args.mu_decay,
+        None => ShiftSim {
+            from: args.from.clone().unwrap_or_default(),
+            to: args.to.clone().unwrap_or_default(),
+            input_speed: args.input_speed.unwrap_or_default(),
+            input_torque: match (&args.torque_table, args.input_torque) {
+                (Some(t), _) => InputTorque::Table(t.0.clone()),
+                (None, t) => InputTorque::Constant(t.unwrap_or_default()),
+            },
+            road_load: args.road_load,
+            vehicle_inertia: args.vehicle_inertia,
+            law: FrictionLaw {
+                mu_static: args.mu[0],
+                mu_kinetic: args.mu[1],
+                decay: args.mu_decay,
+            },
+            off_going: args.off_going,
+            on_coming: args.on_coming,
+            ramps: args.ramps.clone(),
+            t_end: args.t_end,
+            rtol: args.rtol,
+            atol: args.atol,
+            method,
+            max_steps: args.max_steps,
         },
-        off_going: args.off_going,
-        on_coming: args.on_coming,
-        ramps: args.ramps.clone(),
-        t_end: args.t_end,
-        rtol: args.rtol,
-        atol: args.atol,
-        method: match args.method {
-            MethodArg::Auto => ShiftMethod::Auto,
-            MethodArg::Explicit => ShiftMethod::Explicit,
-            MethodArg::Implicit => ShiftMethod::Implicit,
-        },
-        max_steps: args.max_steps,
     };
     let r = sim.run(train).map_err(|e| {
         // A refused field `shift.x_y` is this command's flag `--x-y`.
@@ -218,9 +257,11 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
             .and_then(|p| p.strip_prefix("shift."))
             .map(|f| f.split(['.', '[']).next().unwrap_or(f).replace('_', "-"))
             .map(|f| if f == "ramps" { "ramp".into() } else { f });
-        let context = match flag {
-            Some(f) => format!("{} (flag `--{f}`)", loaded.source),
-            None => loaded.source.clone(),
+        let context = match (&args.shift, flag) {
+            // A shift the spec names: its field, not a flag.
+            (Some(name), _) => format!("{}: [[shift]] `{name}`", loaded.source),
+            (None, Some(f)) => format!("{} (flag `--{f}`)", loaded.source),
+            (None, None) => loaded.source.clone(),
         };
         anyhow::Error::new(e).context(context)
     })?;
@@ -231,7 +272,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
     match args.spec.format {
         SeriesFormat::Json => report::json(out, &r),
         SeriesFormat::Csv => csv(out, train, &r),
-        SeriesFormat::Table => table(out, train, &loaded.source, &args.from, &args.to, &r),
+        SeriesFormat::Table => table(out, train, &loaded.source, &sim.from, &sim.to, &r),
     }
 }
 

@@ -17,7 +17,7 @@ use crate::model::topology::{self, Tree};
 use crate::numerics::exact::{self, Q};
 use crate::spec::expand::{self, Draft, DraftGear};
 use crate::spec::parse::{self, Format};
-use crate::spec::{ElementKind, MeshKind, RatioSpec, Spec};
+use crate::spec::{ElementKind, MeshKind, RatioSpec, ShiftSpec, Spec};
 
 mod build;
 mod extras;
@@ -123,6 +123,10 @@ pub struct Transmission {
     pub output: LinkId,
     /// Gear states in shift order.
     pub states: Vec<GearState>,
+    /// The spec's named shifts (`[[shift]]`), as written: names unique,
+    /// `from` and `to` known states; the rest is checked when one runs.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub shifts: Vec<ShiftSpec>,
 }
 
 /// A linearised torque-speed curve on a link, resolved.

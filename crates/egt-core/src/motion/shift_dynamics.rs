@@ -21,8 +21,9 @@
 //!   pieces: `request` (the shift asked for, checked: numbers, budgets,
 //!   each changing element's ramp), `train_mode` (one mode of the train: forces, multipliers,
 //!   events), `consistent` (the consistent mode at `t = 0` and after every
-//!   event: release what cannot hold, lock what can) and `extremes` (the
-//!   reported ranges, over both sides of every event and between samples).
+//!   event: release what cannot hold, lock what can), `extremes` (the
+//!   reported ranges, over both sides of every event and between samples)
+//!   and `named` (a spec's `[[shift]]` made into a [`ShiftSim`]).
 //!
 //! Not built yet: a stiff method, mesh losses in the shift, compliance. See
 //! docs/shift_dynamics.md.
@@ -33,6 +34,7 @@ mod extremes;
 pub mod friction;
 pub mod lockup;
 pub mod mode;
+mod named;
 pub mod ode;
 mod request;
 pub mod shift;
@@ -42,6 +44,7 @@ pub use engagement::{Engagement, EngagementResult, EngagementSample, Phase};
 pub use friction::{Capacity, FrictionLaw};
 pub use lockup::{LockUp, lock_projection};
 pub use mode::{ModeBasis, mode_basis};
+pub use named::{DEFAULT_MU, DEFAULT_T_END, DEFAULT_TOLERANCE};
 pub use shift::{
     DEFAULT_MAX_STEPS, InputTorque, MAX_STEP, MIN_RTOL, ModeChange, ShiftMethod, ShiftResult,
     ShiftSample, ShiftSim, Stiffness,

@@ -59,6 +59,67 @@ pub struct Spec {
     /// Operating data for the analyses (speeds, loads, accelerations, curves).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub analysis: Option<AnalysisSpec>,
+    /// Named gear changes in time (`[[shift]]`), run by `egt shift-sim
+    /// --shift NAME`: the spec's alternative to the command's shift flags.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub shift: Vec<ShiftSpec>,
+}
+
+/// A gear change in time between two gear states of `[transmission]`, with
+/// the operating point and each changing element's capacity (`egt shift-sim
+/// --shift NAME`; each field is the flag of the same name). The integration
+/// settings (tolerances, method, step budget) stay on the command line.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ShiftSpec {
+    /// Unique name, e.g. `"2-3 power-on"`.
+    pub name: String,
+    /// The gear before (a state of `[transmission.states]`).
+    pub from: String,
+    /// The gear after. The elements of `from` not in `to` release, those of
+    /// `to` not in `from` apply; every one of them needs a capacity in `ramps`.
+    pub to: String,
+    /// Input speed at t = 0 [rad/s]; the train starts in `from`'s steady motion.
+    pub input_speed: f64,
+    /// Constant input torque [N m] (or `torque_table`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub input_torque: Option<f64>,
+    /// Input torque over input speed, `[[w, T], ...]` [rad/s, N m], linear between points.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub torque_table: Option<Vec<[f64; 2]>>,
+    /// Road load at the output `[c0, c1, c2]`: c0 sgn(w) + c1 w + c2 w|w| [N m]. Default 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub road_load: Option<[f64; 3]>,
+    /// Vehicle inertia reflected to the output link [kg m^2]. Default 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vehicle_inertia: Option<f64>,
+    /// Friction coefficients `[static, kinetic]`. Default `[0.15, 0.12]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mu: Option<[f64; 2]>,
+    /// Slip speed [rad/s] over which the coefficient falls from static to
+    /// kinetic; default: a step.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mu_decay: Option<f64>,
+    /// Each changing element's capacity [N m per unit friction coefficient]
+    /// by name: a number, or a ramp `[t0, t1, from, to]`.
+    #[serde(default)]
+    pub ramps: IndexMap<String, CapacitySpec>,
+    /// End time [s]. Default 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub t_end: Option<f64>,
+}
+
+/// A shift element's capacity as written: constant, or a linear ramp.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(
+    untagged,
+    expecting = "a capacity: a number C, or a ramp [t0, t1, from, to] (linear from `from` at t0 to `to` at t1)"
+)]
+pub enum CapacitySpec {
+    /// Constant capacity.
+    Constant(f64),
+    /// `[t0, t1, from, to]`.
+    Ramp([f64; 4]),
 }
 
 /// One link (rigid body). All physical data is optional: each analysis asks

@@ -140,6 +140,15 @@ def shift_sim(
     method: str,
     max_steps: Optional[int],
 ) -> Dict[str, Any]: ...
+def shift_named(
+    core: TrainCore,
+    name: str,
+    rtol: float,
+    atol: float,
+    method: str,
+    max_steps: Optional[int],
+) -> Dict[str, Any]: ...
+def shift_names(core: TrainCore) -> List[str]: ...
 def ratios_from_teeth(
     core: TrainCore, teeth: npt.NDArray[np.int64]
 ) -> Tuple[npt.NDArray[np.float64], List[Tuple[int, str, str]]]: ...

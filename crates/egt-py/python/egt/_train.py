@@ -36,6 +36,8 @@ from ._egt import TrainCore, batch_plan
 from ._egt import atlas_member as _atlas_member
 from ._egt import gear as _gear
 from ._egt import shift_table as _shift_table
+from ._egt import shift_named as _shift_named
+from ._egt import shift_names as _shift_names
 from ._egt import shift_sim as _shift_sim
 from ._egt import simulate as _simulate
 from ._egt import stability as _stability
@@ -726,6 +728,35 @@ class Train:
             None if on_coming is None else cap(on_coming, "on_coming"),
             [(str(name), cap(c, f"ramps[{name!r}]")) for name, c in changing.items()],
             number(t_end, "t_end"),
+            number(rtol, "rtol"),
+            number(atol, "atol"),
+            str(method),
+            None if max_steps is None else count(max_steps, "max_steps", 2**63 - 1),
+        )
+        return ShiftSimulation._from_core(self._links, raw)
+
+    @property
+    def shifts(self) -> Tuple[str, ...]:
+        """The names of the spec's ``[[shift]]`` entries (docs/spec.md), for
+        :meth:`simulate_named_shift`."""
+        return tuple(_shift_names(self._core))
+
+    def simulate_named_shift(
+        self,
+        name: str,
+        *,
+        rtol: float = 1e-8,
+        atol: float = 1e-8,
+        method: str = "auto",
+        max_steps: Optional[int] = None,
+    ) -> ShiftSimulation:
+        """The spec's shift ``name`` (``[[shift]]``) in time, as ``egt
+        shift-sim SPEC --shift NAME``: its gears, operating point and ramps
+        from the spec, the integration settings from here (as
+        :meth:`simulate_shift`)."""
+        raw = _shift_named(
+            self._core,
+            str(name),
             number(rtol, "rtol"),
             number(atol, "atol"),
             str(method),

@@ -133,11 +133,18 @@ pub(super) fn resolve_extras(spec: &Spec, train: &mut Train) -> Result<()> {
                 engaged: ids,
             });
         }
+        let shifts = named_shifts(&spec.shift, &states)?;
         train.transmission = Some(Transmission {
             input,
             output,
             states,
+            shifts,
         });
+    } else if !spec.shift.is_empty() {
+        return Err(Error::invalid(
+            "shift[0]",
+            "a [[shift]] runs between gear states: the spec needs a [transmission] with `states`",
+        ));
     }
 
     if let Some(a) = &spec.analysis {
@@ -216,4 +223,41 @@ pub(super) fn resolve_extras(spec: &Spec, train: &mut Train) -> Result<()> {
         train.analysis = out;
     }
     Ok(())
+}
+
+/// The spec's `[[shift]]` entries, checked as far as the spec alone can:
+/// unique names, `from` and `to` gear states of `states`.
+fn named_shifts(shifts: &[ShiftSpec], states: &[GearState]) -> Result<Vec<ShiftSpec>> {
+    for (k, sh) in shifts.iter().enumerate() {
+        let path = format!("shift[{k}]");
+        if sh.name.trim().is_empty() {
+            return Err(Error::invalid(format!("{path}.name"), "is empty"));
+        }
+        if let Some(first) = shifts[..k].iter().position(|o| o.name == sh.name) {
+            return Err(Error::invalid(
+                format!("{path}.name"),
+                format!("`{}` names shift[{first}] too", sh.name),
+            ));
+        }
+        for (field, state) in [("from", &sh.from), ("to", &sh.to)] {
+            if !states.iter().any(|g| &g.name == state) {
+                return Err(Error::invalid(
+                    format!("{path}.{field}"),
+                    format!(
+                        "unknown gear state `{state}`{}",
+                        suggest(state, states.iter().map(|g| g.name.as_str()))
+                            .map(|s| format!(" (did you mean `{s}`?)"))
+                            .unwrap_or_default()
+                    ),
+                ));
+            }
+        }
+        if sh.from == sh.to {
+            return Err(Error::invalid(
+                format!("{path}.to"),
+                format!("is `from` (`{}`): a shift changes the gear", sh.to),
+            ));
+        }
+    }
+    Ok(shifts.to_vec())
 }
