@@ -23,6 +23,10 @@
 //!   events), `consistent` (the consistent mode at `t = 0` and after every
 //!   event: release what cannot hold, lock what can) and `extremes` (the
 //!   reported ranges, over both sides of every event and between samples).
+//! - [`quality`]: the torque and inertia phases of a finished shift and its
+//!   quality measures (output-torque dip and overshoot, oscillation after the
+//!   lock, jerk, steps at events, each element's energy and peak power),
+//!   read from the samples.
 //!
 //! Not built yet: a stiff method, mesh losses in the shift, compliance. See
 //! docs/shift_dynamics.md.
@@ -34,6 +38,7 @@ pub mod friction;
 pub mod lockup;
 pub mod mode;
 pub mod ode;
+pub mod quality;
 mod request;
 pub mod shift;
 mod train_mode;
@@ -42,6 +47,7 @@ pub use engagement::{Engagement, EngagementResult, EngagementSample, Phase};
 pub use friction::{Capacity, FrictionLaw};
 pub use lockup::{LockUp, lock_projection};
 pub use mode::{ModeBasis, mode_basis};
+pub use quality::{AtTime, ElementQuality, ShiftQuality};
 pub use shift::{
     DEFAULT_MAX_STEPS, InputTorque, MAX_STEP, MIN_RTOL, ModeChange, ShiftMethod, ShiftResult,
     ShiftSample, ShiftSim, Stiffness,
