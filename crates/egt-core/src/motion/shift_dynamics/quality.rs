@@ -225,7 +225,9 @@ fn lowest(values: impl Iterator<Item = (f64, f64)>) -> Option<(f64, f64)> {
 #[cfg(test)]
 #[allow(clippy::unwrap_used)]
 mod tests {
-    use super::super::shift::tests::{rel, two_speed, two_speed_upshift, zf, zf_2_3};
+    use super::super::shift::tests::{
+        APPLY, RELEASE, rel, two_speed, two_speed_upshift, zf, zf_2_3, zf_change,
+    };
     use super::super::{Capacity, FrictionLaw, InputTorque, ShiftSample, ShiftSim};
     use super::*;
 
@@ -459,6 +461,39 @@ mod tests {
             assert!(jerk.value.is_finite() && jerk.value > 0.0);
             println!("{} -> {} {:?}: {q:?}", sim.from, sim.to, train.name());
         }
+    }
+
+    #[test]
+    fn a_double_swaps_torque_phase_ends_when_the_last_off_going_element_lets_go() {
+        // The 8HP 1-4: A and C off (the same ramp), D and E on.
+        let r = zf_change(
+            "1",
+            "4",
+            &[("A", RELEASE), ("C", RELEASE), ("D", APPLY), ("E", APPLY)],
+        )
+        .run(&zf())
+        .unwrap();
+        let released = |e: &str| {
+            r.changes
+                .iter()
+                .find(|c| c.element == e && c.now != "locked")
+                .unwrap()
+                .t
+        };
+        let last = released("A").max(released("C"));
+        let q = &r.quality;
+        assert_eq!(q.torque_phase, Some([r.shift_start.unwrap(), last]));
+        assert_eq!(q.inertia_phase, Some([last, r.lock_time.unwrap()]));
+        assert_eq!(q.elements.len(), 4);
+        for (e, m) in q.elements.iter().enumerate() {
+            assert_eq!(m.element, r.elements[e]);
+            assert!(m.peak_power.unwrap().value >= 0.0);
+        }
+        println!(
+            "1 -> 4: A lets go at {}, C at {}: {q:?}",
+            released("A"),
+            released("C")
+        );
     }
 
     /// A result with the output torques `torques` at the times `times`, one

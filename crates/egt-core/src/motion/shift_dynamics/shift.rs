@@ -1251,7 +1251,11 @@ output = "carrier"
     }
 
     /// An 8HP change from `from` to `to` with a ramp for each element named.
-    fn zf_change(from: &str, to: &str, ramps: &[(&str, Capacity)]) -> ShiftSim {
+    pub(in crate::motion::shift_dynamics) fn zf_change(
+        from: &str,
+        to: &str,
+        ramps: &[(&str, Capacity)],
+    ) -> ShiftSim {
         ShiftSim {
             from: from.into(),
             to: to.into(),
@@ -1263,13 +1267,13 @@ output = "carrier"
         }
     }
 
-    const RELEASE: Capacity = Capacity::Ramp {
+    pub(in crate::motion::shift_dynamics) const RELEASE: Capacity = Capacity::Ramp {
         t0: 0.05,
         t1: 0.15,
         from: 20000.0,
         to: 0.0,
     };
-    const APPLY: Capacity = Capacity::Ramp {
+    pub(in crate::motion::shift_dynamics) const APPLY: Capacity = Capacity::Ramp {
         t0: 0.05,
         t1: 0.4,
         from: 0.0,
