@@ -133,6 +133,15 @@ fn csv_and_plot_carry_the_time_series() {
             && plot.contains("output torque")
             && plot.contains("element torques")
     );
+    // the phases shaded, the dip and the overshoot marked
+    for words in [
+        "torque phase</text>",
+        "inertia phase</text>",
+        ">dip -",
+        ">overshoot ",
+    ] {
+        assert!(plot.contains(words), "{words}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
     let _ = root();
 }
@@ -588,5 +597,73 @@ fn a_bad_shift_section_or_name_exits_2_naming_it() {
         let r = egt(args, Some(&text));
         assert_eq!(r.code, 2, "{args:?} {says}: {}", r.stderr);
         assert!(r.stderr.contains(says), "{args:?}: wanted {says:?} in {}", r.stderr);
+    }
+}
+
+/// The numbers after `label` on the summary's line that starts with it (up
+/// to a `(` or a `,`): `0.05 .. 0.133081 s` gives both.
+fn numbers_on(stdout: &str, label: &str) -> Vec<f64> {
+    let line = stdout
+        .lines()
+        .find(|l| l.trim_start().starts_with(label))
+        .unwrap_or_else(|| panic!("a line `{label}` in\n{stdout}"));
+    let rest = &line.trim_start()[label.len()..];
+    let rest = rest.split(['(', ',']).next().unwrap_or(rest);
+    rest.split_whitespace()
+        .filter_map(|w| w.parse::<f64>().ok())
+        .collect()
+}
+
+#[test]
+fn the_summary_names_the_phases_and_quality_measures_of_the_json() {
+    let text = run(&with(&[]));
+    assert_eq!(text.code, 0, "{}", text.stderr);
+    let json = run(&with(&["--format", "json"]));
+    let v: Value = serde_json::from_str(&json.stdout).expect("json");
+    let q = &v["quality"];
+    // printed to 6 decimals
+    let close = |printed: f64, exact: &Value| {
+        let exact = exact.as_f64().expect("a number");
+        assert!(
+            (printed - exact).abs() <= 5e-7 * exact.abs().max(1.0),
+            "{printed} printed, {exact} in the JSON"
+        );
+    };
+    for (label, key) in [
+        ("torque phase:", "torque_phase"),
+        ("inertia phase:", "inertia_phase"),
+    ] {
+        let printed = numbers_on(&text.stdout, label);
+        assert_eq!(printed.len(), 2, "{label} {printed:?}");
+        close(printed[0], &q[key][0]);
+        close(printed[1], &q[key][1]);
+    }
+    // The phases meet at the release and end at the lock.
+    assert_eq!(q["torque_phase"][0], v["shift_start"]);
+    assert_eq!(q["torque_phase"][1], q["inertia_phase"][0]);
+    assert_eq!(q["inertia_phase"][1], v["lock_time"]);
+    for (label, key) in [
+        ("dip (torque phase)", "dip"),
+        ("overshoot (inertia phase to lock)", "overshoot"),
+        ("jerk", "jerk"),
+        ("largest step", "largest_step"),
+    ] {
+        let printed = numbers_on(&text.stdout, label);
+        close(printed[0], &q[key]["value"]);
+        close(printed[1], &q[key]["t"]);
+    }
+    // A power-on upshift: the output torque dips in the torque phase and
+    // overshoots its final value before the lock.
+    assert!(q["dip"]["value"].as_f64().expect("dip") < 0.0);
+    assert!(q["overshoot"]["value"].as_f64().expect("overshoot") > 0.0);
+    let oscillation = numbers_on(&text.stdout, "oscillation after lock");
+    close(oscillation[0], &q["oscillation_after_lock"]);
+    for (k, e) in ["A", "C"].iter().enumerate() {
+        let element = &q["elements"][k];
+        assert_eq!(element["element"], *e);
+        assert_eq!(element["energy"], v["dissipated"][k]);
+        let printed = numbers_on(&text.stdout, &format!("`{e}` peak power"));
+        close(printed[0], &element["peak_power"]["value"]);
+        close(printed[1], &element["peak_power"]["t"]);
     }
 }

@@ -1,6 +1,7 @@
 //! The SVG pieces the plots share (`egt simulate --plot`, `egt shift --plot`,
 //! `egt shift-sim --plot`): the palette, text escaping, round tick positions
-//! and tick labels, and the time-series panel.
+//! and tick labels, and the time-series panel (with shaded stretches of
+//! time and marked moments, e.g. a shift's phases and its dip).
 
 use std::fmt::Write as _;
 
@@ -194,6 +195,66 @@ pub fn panel(
             svg,
             r#"<polyline points="{}" fill="none" stroke="{colour}" stroke-width="1.8"/>"#,
             pts.trim_end()
+        );
+    }
+}
+
+/// A stretch of time shaded across a panel (drawn before the panel, so its
+/// lines lie on top), with its name at the top left of the stretch.
+#[derive(Debug, Clone, Copy)]
+pub struct Band<'a> {
+    /// Start and end time.
+    pub t: [f64; 2],
+    /// Fill colour.
+    pub colour: &'a str,
+    /// Its name, written inside the band.
+    pub label: &'a str,
+}
+
+/// A moment marked on a panel: a dashed vertical line and a label.
+#[derive(Debug, Clone)]
+pub struct Mark {
+    /// Time.
+    pub t: f64,
+    /// Label, written beside the line near the panel's bottom.
+    pub label: String,
+}
+
+/// The time axis's x of `t` on a panel ending at `t_end` (as `panel` draws it).
+fn time_x(t: f64, t_end: f64) -> f64 {
+    let (xa, xb, _) = ticks(0.0, t_end);
+    LEFT + (t - xa) / (xb - xa) * PLOT_W
+}
+
+/// `bands` shaded over the panel at `top` whose time axis ends at `t_end`;
+/// their names go on rows of their own (a short band's name overruns it).
+pub fn bands(svg: &mut String, top: f64, t_end: f64, bands: &[Band<'_>]) {
+    for (k, b) in bands.iter().enumerate() {
+        let (x0, x1) = (time_x(b.t[0], t_end), time_x(b.t[1], t_end));
+        let _ = writeln!(
+            svg,
+            r#"<rect x="{x0:.2}" y="{top}" width="{:.2}" height="{PLOT_H}" fill="{}" fill-opacity="0.14"/><text x="{:.1}" y="{:.1}" class="tick">{}</text>"#,
+            (x1 - x0).max(0.5),
+            b.colour,
+            x0 + 3.0,
+            top + 14.0 + 15.0 * k as f64,
+            esc(b.label)
+        );
+    }
+}
+
+/// `marks` on the panel at `top` whose time axis ends at `t_end`, their
+/// labels stacked from the bottom up.
+pub fn marks(svg: &mut String, top: f64, t_end: f64, marks: &[Mark]) {
+    for (k, m) in marks.iter().enumerate() {
+        let x = time_x(m.t, t_end);
+        let _ = writeln!(
+            svg,
+            r##"<line x1="{x:.2}" y1="{top}" x2="{x:.2}" y2="{:.1}" stroke="#333" stroke-width="1" stroke-dasharray="3 3"/><text x="{:.1}" y="{:.1}" class="tick">{}</text>"##,
+            top + PLOT_H,
+            x + 4.0,
+            top + PLOT_H - 8.0 - 16.0 * k as f64,
+            esc(&m.label)
         );
     }
 }

@@ -4,6 +4,7 @@ against the steady gear (egt shift)."""
 import json
 import subprocess
 import sys
+from typing import Any, Dict
 
 import numpy as np
 import pytest
@@ -43,8 +44,8 @@ def test_the_upshift_ends_in_third_with_its_energy_balanced() -> None:
     assert {"input", "slip_C", "torque_A", "output_torque", "dof"} <= set(df.columns)
 
 
-def test_python_and_the_cli_give_the_same_shift() -> None:
-    s = zf().simulate_shift("2", "3", **UPSHIFT)  # type: ignore[arg-type]
+def cli_upshift() -> Dict[str, Any]:
+    """`egt shift-sim --format json` of the upshift."""
     out = subprocess.run(
         [
             sys.executable, "-m", "egt", "shift-sim", str(EXAMPLES / "zf_8hp70.toml"),
@@ -55,7 +56,13 @@ def test_python_and_the_cli_give_the_same_shift() -> None:
         ],
         capture_output=True, text=True, check=True,
     )
-    cli = json.loads(out.stdout)
+    cli: Dict[str, Any] = json.loads(out.stdout)
+    return cli
+
+
+def test_python_and_the_cli_give_the_same_shift() -> None:
+    s = zf().simulate_shift("2", "3", **UPSHIFT)  # type: ignore[arg-type]
+    cli = cli_upshift()
     assert cli["lock_time"] == s.lock_time
     assert cli["dissipated"] == list(s.energy)
     assert s.to_dict() == cli
@@ -138,3 +145,27 @@ def test_a_shift_the_spec_names_is_the_run_its_arguments_give() -> None:
         train.simulate_named_shift("2-4")
     with pytest.raises(egt.EgtError, match="no \\[\\[shift\\]\\]"):
         egt.Train.from_file(EXAMPLES / "ford_c4_simpson.toml").simulate_named_shift("1-2")
+
+
+def test_the_phases_and_quality_measures_are_the_cli_s() -> None:
+    s = zf().simulate_shift("2", "3", **UPSHIFT)  # type: ignore[arg-type]
+    q, cli = s.quality, cli_upshift()["quality"]
+    assert isinstance(q, egt.ShiftQuality)
+    assert q.torque_phase == tuple(cli["torque_phase"])
+    assert q.inertia_phase == tuple(cli["inertia_phase"])
+    assert q.dip == (cli["dip"]["t"], cli["dip"]["value"])
+    assert q.overshoot == (cli["overshoot"]["t"], cli["overshoot"]["value"])
+    assert q.jerk == (cli["jerk"]["t"], cli["jerk"]["value"])
+    assert q.oscillation_after_lock == cli["oscillation_after_lock"]
+    assert [p and p[1] for p in q.peak_power] == [e["peak_power"]["value"] for e in cli["elements"]]
+    # the phases of a power-on upshift, in order, and its dip
+    assert q.torque_phase is not None and q.inertia_phase is not None and q.dip is not None
+    assert s.shift_start == q.torque_phase[0] <= q.torque_phase[1] == q.inertia_phase[0]
+    assert q.inertia_phase[1] == s.lock_time
+    assert q.dip[1] < 0.0
+    # the dip is the lowest output torque in the torque phase (here a sample:
+    # the left limit at the release)
+    t0, t1 = q.torque_phase
+    inside = (s.t >= t0) & (s.t <= t1)
+    assert q.output_torque_start is not None
+    assert s.output_torque[inside].min() - q.output_torque_start == pytest.approx(q.dip[1], abs=1e-9)

@@ -2,10 +2,13 @@
 //! (egt_core::shift_dynamics::ShiftSim). The off-going elements' capacities
 //! fall and the on-coming ones' rise (`--off-going`/`--on-coming` for a single
 //! swap, `--ramp NAME=RAMP` for each element of any change). The report gives the mode changes,
-//! the shift time, the output-torque range and each element's dissipated
-//! energy. `--format json` adds every sample, `--format csv` gives the time
-//! series, and `--plot FILE` writes the shift plot: link speeds, element
-//! torques and output torque against time.
+//! the shift time, the output-torque range, each element's dissipated
+//! energy, and the torque and inertia phases with the shift-quality measures
+//! (dip, overshoot, oscillation after the lock, jerk, the largest step,
+//! each element's peak power). `--format json` adds every sample,
+//! `--format csv` gives the time series, and `--plot FILE` writes the shift
+//! plot: link speeds, element torques and output torque against time, with
+//! the phases shaded and the dip and the overshoot marked.
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -13,13 +16,15 @@ use std::path::PathBuf;
 use anyhow::Context;
 use egt_core::Train;
 use egt_core::shift_dynamics::{
-    Capacity, FrictionLaw, InputTorque, ShiftMethod, ShiftResult, ShiftSim,
+    AtTime, Capacity, FrictionLaw, InputTorque, ShiftMethod, ShiftResult, ShiftSim,
 };
 
 use crate::args::{SeriesFormat, SpecArgs};
 use crate::input;
 use crate::report::{self, Table};
-use crate::svg::{GAP, Line, PLOT_H, Panel, TOP, legend, panel, plain_lines};
+use crate::svg::{
+    Band, GAP, Line, Mark, PLOT_H, Panel, TOP, bands, legend, marks, panel, plain_lines,
+};
 
 /// The integrator, as on the command line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -386,6 +391,90 @@ fn table(
             }
         )?;
     }
+    quality(out, r)
+}
+
+/// `0.05 .. 0.133081 s`, or `none`.
+fn phase(p: Option<[f64; 2]>) -> String {
+    p.map_or_else(
+        || "none".into(),
+        |[a, b]| format!("{} .. {} s", report::float(a), report::float(b)),
+    )
+}
+
+/// `-514.637615 N m at 0.133081 s`, or `-`.
+fn at(v: Option<AtTime>, unit: &str) -> String {
+    v.map_or_else(
+        || "-".into(),
+        |a| {
+            format!(
+                "{} {unit} at {} s",
+                report::float(a.value),
+                report::float(a.t)
+            )
+        },
+    )
+}
+
+/// The phases and the shift-quality measures (docs/shift_dynamics.md,
+/// "Phases and shift quality").
+fn quality(out: &mut dyn Write, r: &ShiftResult) -> anyhow::Result<()> {
+    let q = &r.quality;
+    let reference = |v: Option<f64>| v.map_or_else(|| "-".into(), report::float);
+    writeln!(out)?;
+    writeln!(out, "phases:")?;
+    writeln!(
+        out,
+        "  torque phase:  {} (on-coming capacity > 0, to the off-going release)",
+        phase(q.torque_phase)
+    )?;
+    writeln!(
+        out,
+        "  inertia phase: {} (off-going release, to the on-coming lock)",
+        phase(q.inertia_phase)
+    )?;
+    writeln!(out, "shift quality (output torque T_out to the vehicle):")?;
+    let mut t = Table::new(&["measure", "value", "what"]);
+    t.row(vec![
+        "dip (torque phase)".into(),
+        at(q.dip, "N m"),
+        format!(
+            "lowest T_out minus T_out(0), {} N m",
+            reference(q.output_torque_start)
+        ),
+    ]);
+    t.row(vec![
+        "overshoot (inertia phase to lock)".into(),
+        at(q.overshoot, "N m"),
+        format!(
+            "highest T_out minus the final T_out, {} N m",
+            reference(q.output_torque_end)
+        ),
+    ]);
+    t.row(vec![
+        "oscillation after lock".into(),
+        q.oscillation_after_lock
+            .map_or_else(|| "-".into(), |v| format!("{} N m", report::float(v))),
+        "peak to peak".into(),
+    ]);
+    t.row(vec![
+        "jerk".into(),
+        at(q.jerk, "rad/s^3"),
+        "max |dT_out/dt| / vehicle inertia, steps at events excluded".into(),
+    ]);
+    t.row(vec![
+        "largest step".into(),
+        at(q.largest_step, "N m"),
+        "jump of T_out at a mode change (right - left limit)".into(),
+    ]);
+    for e in &q.elements {
+        t.row(vec![
+            format!("`{}` peak power", e.element),
+            at(e.peak_power, "W"),
+            format!("max |T slip|; energy {} J", report::float(e.energy)),
+        ]);
+    }
+    t.write(out, 2)?;
     Ok(())
 }
 
@@ -419,7 +508,8 @@ fn csv(out: &mut dyn Write, train: &Train, r: &ShiftResult) -> anyhow::Result<()
 }
 
 /// The standard shift plot: link speeds; the two elements' torques; the
-/// output torque.
+/// output torque. The torque and inertia phases are shaded on every panel,
+/// the dip and the overshoot marked on the output torque's.
 fn plot(train: &Train, title: &str, r: &ShiftResult) -> String {
     let s = &r.samples;
     let t_end = s.last().map_or(1.0, |x| x.t).max(f64::MIN_POSITIVE);
@@ -435,6 +525,17 @@ fn plot(train: &Train, title: &str, r: &ShiftResult) -> String {
     );
     crate::svg::open_plot(&mut svg, height, title, &subtitle);
     let time = |i: usize| s[i].t;
+    let q = &r.quality;
+    let phases: Vec<Band<'_>> = [
+        (q.torque_phase, "#E69F00", "torque phase"),
+        (q.inertia_phase, "#56B4E9", "inertia phase"),
+    ]
+    .into_iter()
+    .filter_map(|(p, colour, label)| p.map(|t| Band { t, colour, label }))
+    .collect();
+    for k in 0..3 {
+        bands(&mut svg, TOP + k as f64 * (PLOT_H + GAP), t_end, &phases);
+    }
     let links: Vec<usize> = train.coordinates().iter().map(|l| l.index()).collect();
     let speeds: Vec<Box<dyn Fn(usize) -> f64 + '_>> = links
         .iter()
@@ -496,6 +597,16 @@ fn plot(train: &Train, title: &str, r: &ShiftResult) -> String {
         }],
         t_end,
     );
+    let moments: Vec<Mark> = [(q.dip, "dip"), (q.overshoot, "overshoot")]
+        .into_iter()
+        .filter_map(|(m, what)| {
+            m.map(|m| Mark {
+                t: m.t,
+                label: format!("{what} {} N m", report::float(m.value)),
+            })
+        })
+        .collect();
+    marks(&mut svg, TOP + 2.0 * (PLOT_H + GAP), t_end, &moments);
     let labels: Vec<String> = links
         .iter()
         .map(|&l| format!("link {}", train.links()[l].name))

@@ -24,6 +24,10 @@
 //!   event: release what cannot hold, lock what can), `extremes` (the
 //!   reported ranges, over both sides of every event and between samples)
 //!   and `named` (a spec's `[[shift]]` made into a [`ShiftSim`]).
+//! - [`quality`]: the torque and inertia phases of a finished shift and its
+//!   quality measures (output-torque dip and overshoot, oscillation after the
+//!   lock, jerk, steps at events, each element's energy and peak power),
+//!   read from the samples.
 //!
 //! Not built yet: a stiff method, mesh losses in the shift, compliance. See
 //! docs/shift_dynamics.md.
@@ -36,6 +40,7 @@ pub mod lockup;
 pub mod mode;
 mod named;
 pub mod ode;
+pub mod quality;
 mod request;
 pub mod shift;
 mod train_mode;
@@ -45,6 +50,7 @@ pub use friction::{Capacity, FrictionLaw};
 pub use lockup::{LockUp, lock_projection};
 pub use mode::{ModeBasis, mode_basis};
 pub use named::{DEFAULT_MU, DEFAULT_T_END, DEFAULT_TOLERANCE};
+pub use quality::{AtTime, ElementQuality, ShiftQuality};
 pub use shift::{
     DEFAULT_MAX_STEPS, InputTorque, MAX_STEP, MIN_RTOL, ModeChange, ShiftMethod, ShiftResult,
     ShiftSample, ShiftSim, Stiffness,

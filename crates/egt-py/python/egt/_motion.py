@@ -1,4 +1,5 @@
-"""Results of :meth:`egt.Train.stability` and :meth:`egt.Train.simulate`.
+"""Results of :meth:`egt.Train.stability`, :meth:`egt.Train.simulate` and
+:meth:`egt.Train.simulate_shift`.
 
 Sign convention (eq. 13-15, as in the spec): a curve is an *applied* torque
 T = T0 + K (w - w0) on a link, positive along positive rotation, so K = dT/dw.
@@ -269,6 +270,64 @@ class Simulation(_Documented):
         return df
 
 
+def _at(v: Optional[Mapping[str, Any]]) -> Optional[Tuple[float, float]]:
+    """A measure and its time, ``(t, value)``, or None."""
+    return None if v is None else (v["t"], v["value"])
+
+
+def _span(v: Optional[Sequence[float]]) -> Optional[Tuple[float, float]]:
+    return None if v is None else (v[0], v[1])
+
+
+@dataclass(frozen=True)
+class ShiftQuality:
+    """The phases and shift-quality measures of a gear change
+    (``ShiftSimulation.quality``; docs/shift_dynamics.md, "Phases and shift
+    quality"). Output torques in N m; a measure that cannot be defined (no
+    such phase, no lock, no vehicle inertia) is None. Measures at a time are
+    ``(t, value)``."""
+
+    torque_phase: Optional[Tuple[float, float]]
+    """(start, end) [s]: the on-coming capacity starts, to the last off-going
+    element's release."""
+    inertia_phase: Optional[Tuple[float, float]]
+    """(start, end) [s]: that release, to the on-coming lock."""
+    output_torque_start: Optional[float]
+    """Output torque of the first sample (t = 0) [N m]: the dip's reference."""
+    output_torque_end: Optional[float]
+    """Output torque of the last sample [N m]: the overshoot's reference."""
+    dip: Optional[Tuple[float, float]]
+    """(t, lowest output torque in the torque phase minus ``output_torque_start``) [s, N m]."""
+    overshoot: Optional[Tuple[float, float]]
+    """(t, highest output torque from the inertia phase to the lock minus
+    ``output_torque_end``) [s, N m]."""
+    oscillation_after_lock: Optional[float]
+    """Peak-to-peak output torque from the lock to the end [N m]."""
+    jerk: Optional[Tuple[float, float]]
+    """(t, largest abs(dT_out/dt) / vehicle inertia between samples at distinct
+    times) [s, rad/s^3]; the steps at mode changes are excluded."""
+    largest_step: Optional[Tuple[float, float]]
+    """(t, largest jump of the output torque at a mode change, right minus left limit) [s, N m]."""
+    peak_power: Tuple[Optional[Tuple[float, float]], ...]
+    """Per element (``ShiftSimulation.elements``): (t, largest abs(torque * slip)) [s, W]."""
+
+    @classmethod
+    def _from_core(cls, q: Mapping[str, Any]) -> "ShiftQuality":
+        """From the ``quality`` object of the shift's document."""
+        return cls(
+            torque_phase=_span(q["torque_phase"]),
+            inertia_phase=_span(q["inertia_phase"]),
+            output_torque_start=q["output_torque_start"],
+            output_torque_end=q["output_torque_end"],
+            dip=_at(q["dip"]),
+            overshoot=_at(q["overshoot"]),
+            oscillation_after_lock=q["oscillation_after_lock"],
+            jerk=_at(q["jerk"]),
+            largest_step=_at(q["largest_step"]),
+            peak_power=tuple(_at(e["peak_power"]) for e in q["elements"]),
+        )
+
+
 @dataclass(frozen=True, eq=False)
 class ShiftSimulation(_Documented):
     """A gear change in time (``Train.simulate_shift``; docs/shift_dynamics.md).
@@ -321,6 +380,8 @@ class ShiftSimulation(_Documented):
     stiff: Optional[Tuple[float, float, float]]
     """(time, explicit step, decay rate 1/s) where a stiff mode began to limit
     the explicit steps, if one did."""
+    quality: ShiftQuality
+    """The torque and inertia phases and the shift-quality measures."""
     _document: Dict[str, Any] = _document_field()
 
     @classmethod
@@ -361,6 +422,7 @@ class ShiftSimulation(_Documented):
             steps=d["steps"],
             method=d["method"],
             stiff=None if d["stiff"] is None else (d["stiff"]["t"], d["stiff"]["h"], d["stiff"]["rate"]),
+            quality=ShiftQuality._from_core(d["quality"]),
         )
 
     def speed(self, link: str) -> np.ndarray:

@@ -20,6 +20,21 @@ use super::train_mode::Observed;
 pub(super) struct Extremes {
     pub(super) max: Observed,
     pub(super) min: Observed,
+    /// The turning points found by golden section between samples, in the
+    /// order found (the shift quality takes the output torque's as candidates
+    /// for its dip and overshoot, `quality.rs`).
+    pub(super) turns: Vec<Turn>,
+}
+
+/// A turning point between samples, found on a step's dense output.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Turn {
+    /// Which quantity (its index in [`Observed`]).
+    pub(super) quantity: usize,
+    /// Time (s).
+    pub(super) t: f64,
+    /// The quantity's value there.
+    pub(super) value: f64,
 }
 
 /// Golden-section iterations: the bracket shrinks by 0.618^40, about 4e-9 of
@@ -33,6 +48,7 @@ impl Extremes {
         Self {
             max: vec![f64::NEG_INFINITY; len],
             min: vec![f64::INFINITY; len],
+            turns: Vec::new(),
         }
     }
 
@@ -100,7 +116,13 @@ impl Extremes {
             if guess + rise < held {
                 continue;
             }
-            let best = golden(|s| sign * at(s)[k], t0, t1) * sign;
+            let (t, peak) = golden(|s| sign * at(s)[k], t0, t1);
+            let best = peak * sign;
+            self.turns.push(Turn {
+                quantity: k,
+                t,
+                value: best,
+            });
             self.max[k] = self.max[k].max(best);
             self.min[k] = self.min[k].min(best);
         }
@@ -134,8 +156,9 @@ fn cubic_peak(p0: f64, p1: f64, m0: f64, m1: f64) -> f64 {
         .fold(p0.max(p1), f64::max)
 }
 
-/// The largest value of `f` on `[a, b]` by golden-section search (`f` one-peaked there).
-fn golden(mut f: impl FnMut(f64) -> f64, mut a: f64, mut b: f64) -> f64 {
+/// Where on `[a, b]` `f` is largest, and its value there, by golden-section
+/// search (`f` one-peaked there).
+fn golden(mut f: impl FnMut(f64) -> f64, mut a: f64, mut b: f64) -> (f64, f64) {
     let r = 0.5 * (5f64.sqrt() - 1.0);
     let mut c = b - r * (b - a);
     let mut d = a + r * (b - a);
@@ -155,7 +178,7 @@ fn golden(mut f: impl FnMut(f64) -> f64, mut a: f64, mut b: f64) -> f64 {
             fd = f(d);
         }
     }
-    fc.max(fd)
+    if fc > fd { (c, fc) } else { (d, fd) }
 }
 
 #[cfg(test)]
@@ -173,6 +196,16 @@ mod tests {
         e.within(at, 1.0, 2.0, &q0, &q1, &[None; 5]);
         assert!((e.max[0] - 1.0).abs() < 1e-14, "{}", e.max[0]);
         assert!((e.min[1] + 1.0).abs() < 1e-14, "{}", e.min[1]);
+        // and recorded with its time
+        let turn = e
+            .turns
+            .iter()
+            .find(|t| t.quantity == 0)
+            .expect("the turn of sin");
+        assert!(
+            (turn.t - std::f64::consts::FRAC_PI_2).abs() < 1e-7,
+            "{turn:?}"
+        );
         // a monotone quantity keeps its end values
         assert_eq!(e.min[0], 2f64.sin().min(1f64.sin()));
     }

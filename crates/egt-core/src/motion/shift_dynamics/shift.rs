@@ -34,7 +34,9 @@
 //! carries the energy residual `W_applied - dKE - E_friction - E_lock`.
 //! Every change is sampled on both sides (the old mode's state at it, then
 //! the new mode's), and the reported ranges take the turning points between
-//! samples too (`extremes.rs`), so they converge with the tolerance.
+//! samples too (`extremes.rs`), so they converge with the tolerance. The
+//! torque and inertia phases and the quality measures are read from the
+//! finished samples (`quality.rs`).
 
 use nalgebra::DVector;
 use serde::Serialize;
@@ -44,6 +46,7 @@ use super::extremes::Extremes;
 use super::friction::{Capacity, FrictionLaw};
 use super::mode::{element_row, mode_basis};
 use super::ode;
+use super::quality::ShiftQuality;
 use super::request::{first_positive, listed};
 use super::train_mode::{Mode, Observed, Phase, Setup, refuse};
 use crate::analysis::transmission::is_one_way;
@@ -275,6 +278,10 @@ pub struct ShiftResult {
     /// if they did: with `auto` the run went on implicitly from there; with
     /// `explicit` it kept taking steps of about `h`.
     pub stiff: Option<Stiffness>,
+    /// The torque and inertia phases and the shift-quality measures (dip,
+    /// overshoot, oscillation after the lock, jerk, steps at events, each
+    /// element's energy and peak power), from the samples (`quality.rs`).
+    pub quality: ShiftQuality,
 }
 
 /// Consecutive stability-limited explicit steps that call a mode stiff.
@@ -409,6 +416,7 @@ impl ShiftSim {
             steps: 0,
             method: String::new(),
             stiff: None,
+            quality: ShiftQuality::default(),
         };
         let mut extremes = Extremes::new(1 + 2 * k);
         // Takes a consistent mode: its changes, the on-coming lock, the loss.
@@ -675,6 +683,13 @@ impl ShiftSim {
             (Some(s), Some(l)) => Some(l - s),
             _ => None,
         };
+        let turns: Vec<(f64, f64)> = extremes
+            .turns
+            .iter()
+            .filter(|turn| turn.quantity == 0)
+            .map(|turn| (turn.t, turn.value))
+            .collect();
+        out.quality = ShiftQuality::of(&out, self.vehicle_inertia, &turns);
         Ok(out)
     }
 }
@@ -692,11 +707,11 @@ fn slip_rates(setup: &Setup<'_>, f0: &[f64], f1: &[f64]) -> Vec<Option<(f64, f64
 
 #[cfg(test)]
 #[allow(clippy::unwrap_used)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::spec::parse::Format;
 
-    fn simpson() -> Train {
+    pub(in crate::motion::shift_dynamics) fn simpson() -> Train {
         let text = include_str!(concat!(
             env!("CARGO_MANIFEST_DIR"),
             "/../../examples/ford_c4_simpson.toml"
@@ -704,7 +719,7 @@ mod tests {
         Train::from_str(text, Format::Toml, "ford_c4_simpson.toml").unwrap()
     }
 
-    fn upshift() -> ShiftSim {
+    pub(in crate::motion::shift_dynamics) fn upshift() -> ShiftSim {
         ShiftSim {
             from: "2".into(),
             to: "3".into(),
@@ -738,7 +753,7 @@ mod tests {
         }
     }
 
-    fn rel(a: f64, b: f64) -> f64 {
+    pub(in crate::motion::shift_dynamics) fn rel(a: f64, b: f64) -> f64 {
         (a - b).abs() / b.abs().max(1e-300)
     }
 
@@ -897,7 +912,7 @@ mod tests {
         assert!(r.max_energy_residual < 1e-7 * (r.dissipated[0] + r.dissipated[1]));
     }
 
-    fn zf() -> Train {
+    pub(in crate::motion::shift_dynamics) fn zf() -> Train {
         let text = include_str!(concat!(
             env!("CARGO_MANIFEST_DIR"),
             "/../../examples/zf_8hp70.toml"
@@ -1179,13 +1194,13 @@ output = "carrier"
 "2" = ["direct_clutch"]
 "#;
 
-    fn two_speed() -> Train {
+    pub(in crate::motion::shift_dynamics) fn two_speed() -> Train {
         Train::from_str(TWO_SPEED, Format::Toml, "two_speed.toml").unwrap()
     }
 
     /// A power-on 1-2 upshift of the two-speed train: the brake's capacity
     /// falls while the clutch's rises (a torque phase, then an inertia phase).
-    fn two_speed_upshift() -> ShiftSim {
+    pub(in crate::motion::shift_dynamics) fn two_speed_upshift() -> ShiftSim {
         ShiftSim {
             from: "1".into(),
             to: "2".into(),
@@ -1211,7 +1226,7 @@ output = "carrier"
     }
 
     /// The 8HP 2-3 upshift of docs/shift_dynamics.md.
-    fn zf_2_3() -> ShiftSim {
+    pub(in crate::motion::shift_dynamics) fn zf_2_3() -> ShiftSim {
         ShiftSim {
             from: "2".into(),
             to: "3".into(),
@@ -1236,7 +1251,11 @@ output = "carrier"
     }
 
     /// An 8HP change from `from` to `to` with a ramp for each element named.
-    fn zf_change(from: &str, to: &str, ramps: &[(&str, Capacity)]) -> ShiftSim {
+    pub(in crate::motion::shift_dynamics) fn zf_change(
+        from: &str,
+        to: &str,
+        ramps: &[(&str, Capacity)],
+    ) -> ShiftSim {
         ShiftSim {
             from: from.into(),
             to: to.into(),
@@ -1248,13 +1267,13 @@ output = "carrier"
         }
     }
 
-    const RELEASE: Capacity = Capacity::Ramp {
+    pub(in crate::motion::shift_dynamics) const RELEASE: Capacity = Capacity::Ramp {
         t0: 0.05,
         t1: 0.15,
         from: 20000.0,
         to: 0.0,
     };
-    const APPLY: Capacity = Capacity::Ramp {
+    pub(in crate::motion::shift_dynamics) const APPLY: Capacity = Capacity::Ramp {
         t0: 0.05,
         t1: 0.4,
         from: 0.0,
