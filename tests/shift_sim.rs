@@ -120,6 +120,9 @@ fn csv_and_plot_carry_the_time_series() {
         "slip_A",
         "torque_C",
         "dissipated_C",
+        // the kept elements' torques
+        "torque_B",
+        "torque_E",
         "output_torque",
         "dof",
     ] {
@@ -165,8 +168,9 @@ fn bad_shifts_exit_2_naming_the_flag_or_field() {
         (double, "--off-going"),
         (unramped, "element `E`"),
         (
-            with(&["--ramp", "B=1000"]),
-            "`B` is not an element that changes",
+            // D is engaged in neither 2 nor 3 (B, kept, may have a capacity)
+            with(&["--ramp", "D=1000"]),
+            "`D` is not engaged in `2` or `3`",
         ),
         (with(&["--ramp", "1000"]), "NAME=RAMP"),
         (with(&["--mu", "0.1"]), "--mu"),
@@ -666,4 +670,50 @@ fn the_summary_names_the_phases_and_quality_measures_of_the_json() {
         close(printed[0], &element["peak_power"]["value"]);
         close(printed[1], &element["peak_power"]["t"]);
     }
+}
+
+#[test]
+fn kept_elements_report_their_torques_and_hold_by_a_capacity_when_given_one() {
+    let rigid = run(&with(&["--format", "json"]));
+    assert_eq!(rigid.code, 0, "{}", rigid.stderr);
+    let rigid: Value = serde_json::from_str(&rigid.stdout).expect("json");
+    assert_eq!(rigid["kept"], serde_json::json!(["B", "E"]));
+    let range = rigid["kept_torque_range"].as_array().expect("ranges");
+    assert_eq!(range.len(), 2);
+    let text = run(&with(&[]));
+    assert!(
+        text.stdout
+            .contains("torque of the elements locked throughout: `B` max"),
+        "{}",
+        text.stdout
+    );
+    // E given a capacity below its largest torque: held by it, it slips.
+    let peak = range[1]
+        .as_array()
+        .expect("[max, min]")
+        .iter()
+        .map(|v| v.as_f64().expect("N m").abs())
+        .fold(0.0, f64::max);
+    let cap = format!("E={}", 0.5 * peak / 0.15);
+    let held = run(&with(&["--ramp", &cap, "--format", "json"]));
+    assert_eq!(held.code, 0, "{}", held.stderr);
+    let held: Value = serde_json::from_str(&held.stdout).expect("json");
+    assert_eq!(held["kept"], serde_json::json!(["B"]));
+    assert_eq!(held["held"], serde_json::json!(["E"]));
+    assert_eq!(held["elements"], serde_json::json!(["A", "C", "E"]));
+    assert!(
+        held["changes"]
+            .as_array()
+            .expect("changes")
+            .iter()
+            .any(|c| c["element"] == "E" && c["now"] == "slipping"),
+        "{}",
+        held["changes"]
+    );
+    let text = run(&with(&["--ramp", &cap]));
+    assert!(
+        text.stdout.contains("held by a capacity: `E`"),
+        "{}",
+        text.stdout
+    );
 }

@@ -41,7 +41,21 @@ def test_the_upshift_ends_in_third_with_its_energy_balanced() -> None:
     assert s.dof[0] == 1 and s.dof.max() == 2 and s.dof[-1] == 1
     assert s.method == "explicit" and s.stiff is None
     df = s.to_pandas()
-    assert {"input", "slip_C", "torque_A", "output_torque", "dof"} <= set(df.columns)
+    assert {"input", "slip_C", "torque_A", "torque_B", "torque_E", "output_torque", "dof"} <= set(df.columns)
+    # the kept elements' torques, within the reported ranges
+    assert s.held == () and s.kept_torque.shape == (len(s.t), 2)
+    for k, (hi, lo) in enumerate(s.to_dict()["kept_torque_range"]):
+        assert lo <= s.kept_torque[:, k].min() and s.kept_torque[:, k].max() <= hi
+
+
+def test_a_kept_element_given_a_capacity_is_held_by_it() -> None:
+    train = zf()
+    rigid = train.simulate_shift("2", "3", **UPSHIFT)  # type: ignore[arg-type]
+    peak = float(np.abs(rigid.kept_torque[:, 1]).max())
+    s = train.simulate_shift("2", "3", ramps={"E": 0.5 * peak / 0.15}, **UPSHIFT)  # type: ignore[arg-type]
+    assert s.kept == ("B",) and s.held == ("E",) and s.elements == ("A", "C", "E")
+    assert any(c[1] == "E" and c[2] == "slipping" for c in s.changes)
+    assert np.abs(s.element_torque[:, 2]).max() <= 0.5 * peak * (1 + 1e-9)
 
 
 def cli_upshift() -> Dict[str, Any]:

@@ -107,7 +107,9 @@ pub struct Args {
     /// double swap: `--ramp A=0.05:0.15:5000:0 --ramp C=0.05:0.15:5000:0
     /// --ramp D=0.05:0.3:0:9000 --ramp E=0.1:0.35:0:9000`. It comes before
     /// `--off-going`/`--on-coming`; every changing element needs a capacity
-    /// (a missing one exits 2, naming it).
+    /// (a missing one exits 2, naming it). For an element engaged in both
+    /// gears it gives a capacity to hold by: it then slips if its torque
+    /// exceeds it (without one it is held rigidly).
     #[arg(long = "ramp", value_name = "NAME=RAMP", value_parser = parse_ramp, conflicts_with = "shift")]
     pub ramps: Vec<(String, Capacity)>,
     /// End time [s].
@@ -305,17 +307,18 @@ fn table(
     writeln!(out, "{}", report::title(train, source))?;
     writeln!(
         out,
-        "shift {from} -> {to}: off-going {}, on-coming {}; locked throughout: {}",
+        "shift {from} -> {to}: off-going {}, on-coming {}; locked throughout: {}{}",
         quoted(&r.off_going),
         quoted(&r.on_coming),
         if r.kept.is_empty() {
             "none".to_string()
         } else {
-            r.kept
-                .iter()
-                .map(|k| format!("`{k}`"))
-                .collect::<Vec<_>>()
-                .join(", ")
+            quoted(&r.kept)
+        },
+        if r.held.is_empty() {
+            String::new()
+        } else {
+            format!("; held by a capacity: {}", quoted(&r.held))
         }
     )?;
     writeln!(out)?;
@@ -357,6 +360,22 @@ fn table(
         report::float(r.output_torque_range[0]),
         report::float(r.output_torque_range[1])
     )?;
+    if !r.kept.is_empty() {
+        writeln!(
+            out,
+            "torque of the elements locked throughout: {}",
+            r.kept
+                .iter()
+                .zip(&r.kept_torque_range)
+                .map(|(e, [hi, lo])| format!(
+                    "`{e}` max {} N m, min {} N m",
+                    report::float(*hi),
+                    report::float(*lo)
+                ))
+                .collect::<Vec<_>>()
+                .join("; ")
+        )?;
+    }
     writeln!(
         out,
         "energy dissipated: {}; at lock-ups {} J",
@@ -491,6 +510,11 @@ fn csv(out: &mut dyn Write, train: &Train, r: &ShiftResult) -> anyhow::Result<()
         header.push(format!("torque_{}", report::csv_name(e)));
         header.push(format!("dissipated_{}", report::csv_name(e)));
     }
+    header.extend(
+        r.kept
+            .iter()
+            .map(|e| format!("torque_{}", report::csv_name(e))),
+    );
     header.extend(["output_torque", "energy_residual", "dof"].map(String::from));
     writeln!(out, "{}", header.join(","))?;
     for s in &r.samples {
@@ -499,6 +523,7 @@ fn csv(out: &mut dyn Write, train: &Train, r: &ShiftResult) -> anyhow::Result<()
         for i in 0..r.elements.len() {
             row.extend([s.slip[i], s.element_torque[i], s.dissipated[i]].map(|v| format!("{v:e}")));
         }
+        row.extend(s.kept_torque.iter().map(|v| format!("{v:e}")));
         row.push(format!("{:e}", s.output_torque));
         row.push(format!("{:e}", s.energy_residual));
         row.push(s.dof.to_string());

@@ -339,13 +339,18 @@ class ShiftSimulation(_Documented):
 
     links: Tuple[str, ...]
     elements: Tuple[str, ...]
-    """The changing elements: ``off_going``, then ``on_coming``."""
+    """The elements with a capacity: ``off_going``, ``on_coming``, then ``held``."""
     off_going: Tuple[str, ...]
     """Elements of the old gear that the new one does not engage (released)."""
     on_coming: Tuple[str, ...]
     """Elements of the new gear that the old one does not engage (applied)."""
     kept: Tuple[str, ...]
-    """Elements engaged in both gears (locked throughout)."""
+    """Elements engaged in both gears without a capacity (locked throughout)."""
+    held: Tuple[str, ...]
+    """Elements engaged in both gears given a capacity (``ramps``): they slip
+    when their torque exceeds it, and have their columns in ``elements``."""
+    kept_torque: np.ndarray
+    """(samples, kept) torques of the kept elements on their first link [N m]."""
     t: np.ndarray
     """(samples,) times [s]. A mode change has two samples at its time: the
     old mode's state there (the left limit), then the new mode's."""
@@ -403,6 +408,8 @@ class ShiftSimulation(_Documented):
             off_going=tuple(d["off_going"]),
             on_coming=tuple(d["on_coming"]),
             kept=tuple(d["kept"]),
+            held=tuple(d.get("held", ())),
+            kept_torque=np.asarray([x["kept_torque"] for x in samples], dtype=np.float64).reshape(n, len(d["kept"])),
             t=series("t"),
             speeds=np.asarray([x["speed"] for x in samples], dtype=np.float64).reshape(n, len(links)),
             slip=per_element("slip"),
@@ -431,13 +438,16 @@ class ShiftSimulation(_Documented):
 
     def to_pandas(self) -> "pandas.DataFrame":
         """The time series: link speeds, then slip, torque and dissipated
-        energy per element, output torque, energy residual and DOF; indexed by t."""
+        energy per element, each kept element's torque, output torque, energy
+        residual and DOF; indexed by t."""
         pd = _pandas()
         df = pd.DataFrame(self.speeds, columns=list(self.links), index=pd.Index(self.t, name="t"))
         for k, e in enumerate(self.elements):
             df[f"slip_{e}"] = self.slip[:, k]
             df[f"torque_{e}"] = self.element_torque[:, k]
             df[f"dissipated_{e}"] = self.dissipated[:, k]
+        for k, e in enumerate(self.kept):
+            df[f"torque_{e}"] = self.kept_torque[:, k]
         df["output_torque"] = self.output_torque
         df["energy_residual"] = self.energy_residual
         df["dof"] = self.dof

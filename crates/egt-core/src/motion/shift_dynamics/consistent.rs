@@ -56,7 +56,7 @@ pub(super) fn settle(
     let k = phases.len();
     let now = setup.mode(phases)?;
     let dy = setup.rhs(&now, t, y);
-    let lam = setup.locked_torques(&now, t, y, &dy);
+    let (lam, _) = setup.locked_torques(&now, t, y, &dy);
     let options: Vec<Vec<Phase>> = (0..k)
         .map(|i| {
             let release = if setup.one_way[i] {
@@ -112,7 +112,7 @@ pub(super) fn settle(
             lost = l;
         }
         let d = setup.rhs(&mode, t, &yc);
-        let torque = setup.locked_torques(&mode, t, &yc, &d);
+        let (torque, _) = setup.locked_torques(&mode, t, &yc, &d);
         let slack = RATE_SLACK * d[..n].iter().fold(0.0f64, |m, x| m.max(x.abs()));
         let entered = |i: usize| fired == Some(i) || c[i] != phases[i];
         let holds = (0..k).all(|i| match c[i] {

@@ -511,6 +511,7 @@ mod tests {
                 dissipated: vec![0.0; 2],
                 energy_residual: 0.0,
                 dof: 1,
+                kept_torque: Vec::new(),
             })
             .collect();
         ShiftResult {
@@ -518,6 +519,7 @@ mod tests {
             off_going: vec!["off".into()],
             on_coming: vec!["on".into()],
             kept: Vec::new(),
+            held: Vec::new(),
             samples,
             changes: Vec::new(),
             shift_start: None,
@@ -526,6 +528,7 @@ mod tests {
             output_torque_range: [0.0; 2],
             element_torque_range: vec![[0.0; 2]; 2],
             slip_range: vec![[0.0; 2]; 2],
+            kept_torque_range: Vec::new(),
             dissipated: vec![0.0; 2],
             lock_loss: 0.0,
             max_energy_residual: 0.0,

@@ -85,17 +85,23 @@ impl ShiftSim {
         Ok(())
     }
 
-    /// The capacity of each changing element, off-going then on-coming:
-    /// its ramp in `ramps`, else `off_going` / `on_coming` when it is the only
-    /// element going its way.
-    pub(super) fn capacities(&self, off: &[String], on: &[String]) -> Result<Vec<Capacity>> {
+    /// The capacity of each element that has one: off-going, on-coming,
+    /// then held (engaged in both gears and named in `ramps`): its ramp in
+    /// `ramps`, else `off_going` / `on_coming` when it is the only element
+    /// going its way.
+    pub(super) fn capacities(
+        &self,
+        off: &[String],
+        on: &[String],
+        held: &[String],
+    ) -> Result<Vec<Capacity>> {
         let changing: Vec<&String> = off.iter().chain(on).collect();
         for (name, _) in &self.ramps {
-            if !changing.contains(&name) {
+            if !changing.contains(&name) && !held.contains(name) {
                 return Err(Error::invalid(
                     format!("shift.ramps.{name}"),
                     format!(
-                        "`{name}` is not an element that changes in `{}` -> `{}` (those are {})",
+                        "`{name}` is not engaged in `{}` or `{}`: a capacity is for an element that changes (here {}) or one engaged in both (then held by it, not rigidly)",
                         self.from,
                         self.to,
                         listed(&changing)
@@ -141,6 +147,11 @@ impl ShiftSim {
                 }
             }
         }
+        // A held element has its own ramp (that is what makes it held).
+        out.extend(
+            held.iter()
+                .filter_map(|h| self.ramps.iter().find(|(n, _)| n == h).map(|r| r.1)),
+        );
         Ok(out)
     }
 }

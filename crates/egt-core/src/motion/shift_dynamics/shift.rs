@@ -227,20 +227,29 @@ pub struct ShiftSample {
     pub energy_residual: f64,
     /// Degrees of freedom of the mode.
     pub dof: usize,
+    /// Torque of each kept element on its first link (its Lagrange
+    /// multiplier), in the order of [`ShiftResult::kept`].
+    pub kept_torque: Vec<f64>,
 }
 
 /// The result of a shift.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ShiftResult {
-    /// The changing elements' names: the off-going ones, then the on-coming
-    /// ones (the columns of every per-element array).
+    /// The elements with a capacity: the off-going ones, the on-coming
+    /// ones, then the held ones (the columns of every per-element array).
     pub elements: Vec<String>,
     /// The off-going elements (released: in the old gear, not the new).
     pub off_going: Vec<String>,
     /// The on-coming elements (applied: in the new gear, not the old).
     pub on_coming: Vec<String>,
-    /// The elements engaged in both gears (locked throughout).
+    /// The elements engaged in both gears and given no capacity: held
+    /// rigidly throughout, their torques in [`ShiftSample::kept_torque`].
     pub kept: Vec<String>,
+    /// The elements engaged in both gears and given a capacity (`ramps`):
+    /// locked while their torque stays within it, slipping (and
+    /// dissipating) when it does not, like the changing elements.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub held: Vec<String>,
     /// Samples at every accepted step and on both sides of every mode
     /// change: two samples share the change's time, the first the old mode's
     /// state there (the left limit), the second the new mode's (a change at
@@ -263,6 +272,9 @@ pub struct ShiftResult {
     /// Largest and smallest slip of each changing element, as
     /// `output_torque_range`.
     pub slip_range: Vec<[f64; 2]>,
+    /// Largest and smallest torque of each kept element, as
+    /// `output_torque_range`.
+    pub kept_torque_range: Vec<[f64; 2]>,
     /// Energy each changing element dissipated (J).
     pub dissipated: Vec<f64>,
     /// Energy removed by the lock-up projections (J).
@@ -351,9 +363,15 @@ impl ShiftSim {
                 ),
             ));
         }
-        let capacity = self.capacities(&names(&off), &names(&on))?;
-        let changing: Vec<ElementId> = off.iter().chain(&on).copied().collect();
+        // Kept elements given a capacity are held by it, not rigidly.
+        let (held, kept): (Vec<ElementId>, Vec<ElementId>) = kept
+            .into_iter()
+            .partition(|&e| self.ramps.iter().any(|(r, _)| *r == name(e)));
+        let capacity = self.capacities(&names(&off), &names(&on), &names(&held))?;
+        let changing: Vec<ElementId> = off.iter().chain(&on).chain(&held).copied().collect();
         let (k, n_off) = (changing.len(), off.len());
+        // The on-coming elements' indices among the changing ones.
+        let coming = n_off..n_off + on.len();
         let (input, output) = (
             train.coordinate(t.input).expect("checked: input moves"),
             train.coordinate(t.output).expect("checked: output moves"),
@@ -390,7 +408,7 @@ impl ShiftSim {
         let first: Vec<Phase> = (0..k)
             .map(|i| {
                 let slip = setup.slip(i, &y[..n]);
-                if i < n_off || slip == 0.0 {
+                if !coming.contains(&i) || slip == 0.0 {
                     Phase::Locked
                 } else {
                     Phase::Slipping(slip.signum())
@@ -401,7 +419,8 @@ impl ShiftSim {
             elements: names(&changing),
             off_going: names(&off),
             on_coming: names(&on),
-            kept: kept.iter().map(|&e| name(e)).collect(),
+            kept: names(&kept),
+            held: names(&held),
             samples: Vec::new(),
             changes: Vec::new(),
             shift_start: None,
@@ -410,6 +429,7 @@ impl ShiftSim {
             output_torque_range: [f64::NEG_INFINITY, f64::INFINITY],
             element_torque_range: vec![[f64::NEG_INFINITY, f64::INFINITY]; k],
             slip_range: vec![[f64::NEG_INFINITY, f64::INFINITY]; k],
+            kept_torque_range: Vec::new(),
             dissipated: vec![0.0; k],
             lock_loss: 0.0,
             max_energy_residual: 0.0,
@@ -418,7 +438,7 @@ impl ShiftSim {
             stiff: None,
             quality: ShiftQuality::default(),
         };
-        let mut extremes = Extremes::new(1 + 2 * k);
+        let mut extremes = Extremes::new(1 + 2 * k + kept.len());
         // Takes a consistent mode: its changes, the on-coming lock, the loss.
         let take = |out: &mut ShiftResult, s: &Settled, t: f64| {
             for &i in &s.changed {
@@ -427,10 +447,12 @@ impl ShiftSim {
                     Phase::Slipping(_) if setup.one_way[i] => "overrunning",
                     Phase::Slipping(_) => "slipping",
                 };
-                if i >= n_off
+                if coming.contains(&i)
                     && now == "locked"
                     && out.lock_time.is_none()
-                    && s.mode.phases[n_off..].iter().all(|p| *p == Phase::Locked)
+                    && s.mode.phases[coming.clone()]
+                        .iter()
+                        .all(|p| *p == Phase::Locked)
                 {
                     out.lock_time = Some(t);
                 }
@@ -467,12 +489,13 @@ impl ShiftSim {
             out.samples.push(ShiftSample {
                 t,
                 speed,
-                slip: q[1 + k..].to_vec(),
+                slip: q[1 + k..1 + 2 * k].to_vec(),
                 element_torque: q[1..1 + k].to_vec(),
                 output_torque: q[0],
                 dissipated: y[n..n + k].to_vec(),
                 energy_residual: residual,
                 dof: mode.basis.ncols(),
+                kept_torque: q[1 + 2 * k..].to_vec(),
             });
             q
         };
@@ -673,9 +696,12 @@ impl ShiftSim {
         out.slip_range = (0..k)
             .map(|i| [extremes.max[1 + k + i], extremes.min[1 + k + i]])
             .collect();
+        out.kept_torque_range = (0..setup.kept.len())
+            .map(|j| [extremes.max[1 + 2 * k + j], extremes.min[1 + 2 * k + j]])
+            .collect();
         out.dissipated = y[n..n + k].to_vec();
         out.lock_loss = lock_loss;
-        out.shift_start = capacity[n_off..]
+        out.shift_start = capacity[coming.clone()]
             .iter()
             .filter_map(|c| first_positive(c, self.t_end))
             .reduce(f64::min);
@@ -702,6 +728,7 @@ fn slip_rates(setup: &Setup<'_>, f0: &[f64], f1: &[f64]) -> Vec<Option<(f64, f64
     let rate = |i: usize, f: &[f64]| setup.slip(i, &f[..n]);
     let mut rates = vec![None; 1 + k];
     rates.extend((0..k).map(|i| Some((rate(i, f0), rate(i, f1)))));
+    rates.extend(std::iter::repeat_n(None, setup.kept.len()));
     rates
 }
 
@@ -850,6 +877,82 @@ pub(super) mod tests {
         // and the output speed is where the load balances it
         let out = train.checked_transmission().unwrap().output.index();
         assert!(rel(last.speed[out], torque * third.output_torque / 2.0) < 1e-7);
+        // The kept forward clutch's torque, its multiplier, is the static
+        // analysis's too (an independent solve: egt shift's gear equilibrium).
+        assert_eq!(r.kept, ["forward_clutch"]);
+        let kept = third
+            .elements
+            .iter()
+            .find(|e| train.elements()[e.element.index()].name == "forward_clutch")
+            .unwrap();
+        assert!(
+            rel(last.kept_torque[0], torque * kept.torque) < 1e-7,
+            "{} vs {}",
+            last.kept_torque[0],
+            torque * kept.torque
+        );
+        let [hi, lo] = r.kept_torque_range[0];
+        assert!(
+            r.samples
+                .iter()
+                .all(|x| x.kept_torque[0] <= hi && x.kept_torque[0] >= lo)
+        );
+    }
+
+    #[test]
+    fn a_kept_element_with_a_capacity_holds_within_it_and_slips_past_it() {
+        let train = simpson();
+        let rigid = upshift().run(&train).unwrap();
+        // A capacity far above its torque: held throughout, the same run.
+        let big = ShiftSim {
+            ramps: vec![("forward_clutch".into(), Capacity::Constant(1e6))],
+            ..upshift()
+        };
+        let r = big.run(&train).unwrap();
+        assert_eq!(r.held, ["forward_clutch"]);
+        assert!(r.kept.is_empty());
+        assert_eq!(r.elements[2], "forward_clutch");
+        assert!(r.changes.iter().all(|c| c.element != "forward_clutch"));
+        assert!(rel(r.lock_time.unwrap(), rigid.lock_time.unwrap()) < 1e-9);
+        for (a, b) in r.dissipated.iter().zip(&rigid.dissipated) {
+            assert!(rel(*a, *b) < 1e-8, "{a} vs {b}");
+        }
+        let [hi, lo] = rigid.kept_torque_range[0];
+        let [hh, hl] = r.element_torque_range[2];
+        assert!(
+            rel(hh, hi) < 1e-8 && rel(hl, lo) < 1e-8,
+            "{hh} {hl} vs {hi} {lo}"
+        );
+        // A capacity below what it must carry: it slips from t = 0, never
+        // carries more than mu_s C, and the energy balances with its loss.
+        let peak = hi.abs().max(lo.abs());
+        let cap = 0.5 * peak / big.law.mu_static;
+        let small = ShiftSim {
+            ramps: vec![("forward_clutch".into(), Capacity::Constant(cap))],
+            ..upshift()
+        };
+        let r = small.run(&train).unwrap();
+        assert!(
+            r.changes
+                .iter()
+                .any(|c| c.element == "forward_clutch" && c.now == "slipping"),
+            "{:?}",
+            r.changes
+        );
+        let limit = small.law.mu_static * cap;
+        assert!(
+            r.samples
+                .iter()
+                .all(|x| x.element_torque[2].abs() <= limit * (1.0 + 1e-9)),
+            "limit {limit}"
+        );
+        assert!(r.dissipated[2] > 0.0);
+        let total: f64 = r.dissipated.iter().sum();
+        assert!(
+            r.max_energy_residual < 1e-7 * total,
+            "{} of {total}",
+            r.max_energy_residual
+        );
     }
 
     #[test]
@@ -1129,7 +1232,7 @@ pub(super) mod tests {
             ..upshift()
         });
         assert!(
-            e.contains("shift.ramps.low_one_way") && e.contains("not an element that changes"),
+            e.contains("shift.ramps.low_one_way") && e.contains("is not engaged in `2` or `3`"),
             "{e}"
         );
         let e = err(ShiftSim {

@@ -31,6 +31,9 @@ pub(super) struct Mode {
     pub(super) gram_inverse: DMatrix<f64>,
     /// Row index of each changing element when locked.
     pub(super) row_of: Vec<Option<usize>>,
+    /// Row index of the first kept element (held rigidly, always locked):
+    /// they follow the Willis rows, in the order of [`Setup::kept`].
+    pub(super) kept_row0: usize,
 }
 
 pub(super) struct Setup<'a> {
@@ -39,8 +42,10 @@ pub(super) struct Setup<'a> {
     pub(super) m: DMatrix<f64>,
     pub(super) input: usize,
     pub(super) output: usize,
+    /// The elements engaged in both gears without a capacity: held rigidly.
     pub(super) kept: Vec<ElementId>,
-    /// The changing elements: the off-going ones, then the on-coming ones.
+    /// The elements with a capacity: the off-going ones, the on-coming ones,
+    /// then the held ones (engaged in both gears, given a capacity).
     pub(super) elements: Vec<ElementId>,
     pub(super) rows: Vec<DVector<f64>>,
     pub(super) one_way: Vec<bool>,
@@ -101,6 +106,7 @@ impl Setup<'_> {
             rows: mb.rows,
             gram_inverse,
             row_of,
+            kept_row0: willis,
         })
     }
 
@@ -159,23 +165,35 @@ impl Setup<'_> {
         d
     }
 
-    /// The locked elements' torques on their first links (`0` where slipping).
-    pub(super) fn locked_torques(&self, mode: &Mode, t: f64, y: &[f64], dy: &[f64]) -> Vec<f64> {
+    /// The locked elements' torques on their first links: each changing
+    /// element's (`0` where slipping), then each kept element's.
+    pub(super) fn locked_torques(
+        &self,
+        mode: &Mode,
+        t: f64,
+        y: &[f64],
+        dy: &[f64],
+    ) -> (Vec<f64>, Vec<f64>) {
         let n = self.n;
         let (f, _) = self.forces(&mode.phases, t, &y[..n]);
         let a = DVector::from_column_slice(&dy[..n]);
         let r = &self.m * a - f;
         let lambda = &mode.gram_inverse * (&mode.rows * r);
-        mode.row_of
+        let changing = mode
+            .row_of
             .iter()
             .map(|k| k.map_or(0.0, |k| lambda[k]))
-            .collect()
+            .collect();
+        let kept = (0..self.kept.len())
+            .map(|j| lambda[mode.kept_row0 + j])
+            .collect();
+        (changing, kept)
     }
 
     /// Event functions of the current phases: each crosses zero at a change.
     pub(super) fn events(&self, mode: &Mode, t: f64, y: &[f64], dy: &[f64]) -> Vec<f64> {
         let phases = &mode.phases;
-        let lam = self.locked_torques(mode, t, y, dy);
+        let (lam, _) = self.locked_torques(mode, t, y, dy);
         let mut g = vec![f64::INFINITY; phases.len()];
         for i in 0..phases.len() {
             g[i] = match phases[i] {
@@ -210,18 +228,20 @@ impl Setup<'_> {
     /// What the report follows at a state with derivative `dy`: the output
     /// torque (vehicle inertia times output acceleration plus the road load),
     /// each changing element's torque on its first link (the multiplier where
-    /// locked, the friction torque where slipping), then each one's slip.
+    /// locked, the friction torque where slipping), then each one's slip,
+    /// then each kept element's torque (its multiplier).
     pub(super) fn observe(&self, mode: &Mode, t: f64, y: &[f64], dy: &[f64]) -> Observed {
         let (v, phases) = (&y[..self.n], &mode.phases);
-        let lam = self.locked_torques(mode, t, y, dy);
+        let (lam, kept) = self.locked_torques(mode, t, y, dy);
         let k = phases.len();
-        let mut q = Vec::with_capacity(1 + 2 * k);
+        let mut q = Vec::with_capacity(1 + 2 * k + kept.len());
         q.push(self.sim.vehicle_inertia * dy[self.output] + self.road(v[self.output]));
         q.extend((0..k).map(|i| match phases[i] {
             Phase::Locked => lam[i],
             Phase::Slipping(dir) => self.friction(i, dir, t, v),
         }));
         q.extend((0..k).map(|i| self.slip(i, v)));
+        q.extend(kept);
         q
     }
 
@@ -233,7 +253,7 @@ impl Setup<'_> {
 
 /// The quantities a shift report follows, in the order of
 /// [`Setup::observe`]: the output torque, the `k` changing elements'
-/// torques, their `k` slips.
+/// torques, their `k` slips, the kept elements' torques.
 pub(super) type Observed = Vec<f64>;
 
 pub(super) fn refuse(detail: String) -> Error {
