@@ -121,6 +121,7 @@ const RUNS: &[(&str, &str, Base, &[&str])] = &[
     ("shift-sim", "ramp", Base::Upshift { torque: true, ramps: false }, &["--ramp", "A=0.05:0.15:5000:0", "--ramp", "C=0.05:0.3:0:9000"]),
     ("shift-sim", "road-load", UP, &[]),
     ("shift-sim", "vehicle-inertia", UP, &[]),
+    ("shift-sim", "output-shaft", UP, &["--output-shaft", "5000,1"]),
     ("shift-sim", "mu", UP, &["--mu", "0.15,0.12"]),
     ("shift-sim", "mu-decay", UP, &["--mu-decay", "10"]),
     ("shift-sim", "off-going", UP, &[]),

@@ -717,3 +717,79 @@ fn kept_elements_report_their_torques_and_hold_by_a_capacity_when_given_one() {
         text.stdout
     );
 }
+
+#[test]
+fn a_compliant_output_from_the_flag_or_the_spec_is_one_run_and_bad_shafts_exit_2() {
+    let spec = std::fs::read_to_string(root().join("examples/zf_8hp70.toml")).expect("example");
+    let with_shaft = spec.replace(
+        "name = \"2-3\"\n",
+        "name = \"2-3\"\noutput_shaft = { stiffness = 5000.0, damping = 1.0 }\n",
+    );
+    let mut flags: Vec<String> = UPSHIFT.iter().map(|s| s.to_string()).collect();
+    flags[1] = "-".into();
+    flags.extend(
+        [
+            "--output-shaft",
+            "5000,1",
+            "--rtol",
+            "1e-9",
+            "--format",
+            "json",
+        ]
+        .map(String::from),
+    );
+    let flags: Vec<&str> = flags.iter().map(String::as_str).collect();
+    let by_flag = egt(&flags, Some(&spec));
+    assert_eq!(by_flag.code, 0, "{}", by_flag.stderr);
+    let by_spec = egt(
+        &[
+            "shift-sim",
+            "-",
+            "--shift",
+            "2-3",
+            "--rtol",
+            "1e-9",
+            "--format",
+            "json",
+        ],
+        Some(&with_shaft),
+    );
+    assert_eq!(by_spec.code, 0, "{}", by_spec.stderr);
+    assert_eq!(by_flag.stdout, by_spec.stdout);
+    // The shaft changes the run (the shuffle) and keeps the energy balanced
+    // (the residual is the integrator's: 1.3e-3, 1.3e-4, 1.3e-5 J at rtol
+    // 1e-8, 1e-9, 1e-10, of about 4 100 J dissipated).
+    let rigid = run(&with(&["--format", "json"]));
+    assert_ne!(rigid.stdout, by_flag.stdout);
+    let v: Value = serde_json::from_str(&by_flag.stdout).expect("json");
+    let dissipated: f64 = (v["dissipated"].as_array().expect("J").iter())
+        .map(|d| d.as_f64().expect("J"))
+        .sum();
+    assert!(v["max_energy_residual"].as_f64().expect("J") < 1e-7 * dissipated);
+    for (bad, says) in [
+        (&["--output-shaft", "0"][..], "--output-shaft"),
+        (&["--output-shaft", "5000,-1"][..], "--output-shaft"),
+        (&["--output-shaft", "5000,1,2"][..], "--output-shaft"),
+        (
+            &["--output-shaft", "5000", "--vehicle-inertia", "0"][..],
+            "--vehicle-inertia",
+        ),
+    ] {
+        let mut args: Vec<&str> = UPSHIFT
+            .iter()
+            .copied()
+            .filter(|a| *a != "--vehicle-inertia")
+            .collect();
+        if let Some(i) = args.iter().position(|a| *a == "12") {
+            args.remove(i);
+        }
+        args.extend(if bad.contains(&"--vehicle-inertia") {
+            bad.to_vec()
+        } else {
+            [bad, &["--vehicle-inertia", "12"][..]].concat()
+        });
+        let r = egt(&args, None);
+        assert_eq!(r.code, 2, "{bad:?}: {}", r.stderr);
+        assert!(r.stderr.contains(says), "{bad:?}: {}", r.stderr);
+    }
+}

@@ -43,44 +43,15 @@ fn one_engagement_rtol_1e8() -> usize {
 }
 
 fn zf_2_3() -> (egt_core::Train, egt_core::shift_dynamics::ShiftSim) {
-    use egt_core::shift_dynamics::{InputTorque, ShiftSim};
+    use egt_core::shift_dynamics::ShiftSim;
     let text = include_str!(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../../examples/zf_8hp70.toml"
     ));
     let train = egt_core::Train::from_str(text, egt_core::Format::Toml, "zf_8hp70.toml")
         .expect("example parses");
-    let sim = ShiftSim {
-        from: "2".into(),
-        to: "3".into(),
-        input_speed: 250.0,
-        input_torque: InputTorque::Constant(300.0),
-        road_load: [20.0, 0.2, 0.002],
-        vehicle_inertia: 12.0,
-        law: FrictionLaw {
-            mu_static: 0.15,
-            mu_kinetic: 0.12,
-            decay: None,
-        },
-        off_going: Some(Capacity::Ramp {
-            t0: 0.05,
-            t1: 0.15,
-            from: 5000.0,
-            to: 0.0,
-        }),
-        on_coming: Some(Capacity::Ramp {
-            t0: 0.05,
-            t1: 0.3,
-            from: 0.0,
-            to: 9000.0,
-        }),
-        t_end: 1.0,
-        rtol: 1e-8,
-        atol: 1e-8,
-        method: egt_core::shift_dynamics::ShiftMethod::Auto,
-        max_steps: egt_core::shift_dynamics::DEFAULT_MAX_STEPS,
-        ramps: Vec::new(),
-    };
+    // The example's [[shift]] "2-3": the upshift of docs/shift_dynamics.md.
+    let sim = ShiftSim::named(&train, "2-3").expect("the example names it");
     (train, sim)
 }
 

@@ -183,3 +183,24 @@ def test_the_phases_and_quality_measures_are_the_cli_s() -> None:
     inside = (s.t >= t0) & (s.t <= t1)
     assert q.output_torque_start is not None
     assert s.output_torque[inside].min() - q.output_torque_start == pytest.approx(q.dip[1], abs=1e-9)
+
+
+def test_a_compliant_output_is_the_clis_and_checked_by_name() -> None:
+    train = zf()
+    s = train.simulate_shift("2", "3", output_shaft=(5000.0, 1.0), rtol=1e-9, **UPSHIFT)  # type: ignore[arg-type]
+    out = subprocess.run(
+        [
+            sys.executable, "-m", "egt", "shift-sim", str(EXAMPLES / "zf_8hp70.toml"),
+            "--from", "2", "--to", "3", "--input-speed", "250", "--input-torque", "300",
+            "--road-load", "20,0.2,0.002", "--vehicle-inertia", "12",
+            "--off-going", "0.05:0.15:5000:0", "--on-coming", "0.05:0.3:0:9000",
+            "--output-shaft", "5000,1", "--rtol", "1e-9", "--format", "json",
+        ],
+        capture_output=True, text=True, check=True,
+    )
+    assert s.to_dict() == json.loads(out.stdout)
+    assert s.max_energy_residual < 1e-7 * sum(s.energy)
+    with pytest.raises(egt.EgtError, match="output_shaft.stiffness"):
+        train.simulate_shift("2", "3", output_shaft=0.0, **UPSHIFT)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="output_shaft"):
+        train.simulate_shift("2", "3", output_shaft=(1.0, 2.0, 3.0), **UPSHIFT)  # type: ignore[arg-type]

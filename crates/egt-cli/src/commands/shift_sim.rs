@@ -16,7 +16,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use egt_core::Train;
 use egt_core::shift_dynamics::{
-    AtTime, Capacity, FrictionLaw, InputTorque, ShiftMethod, ShiftResult, ShiftSim,
+    AtTime, Capacity, FrictionLaw, InputTorque, OutputShaft, ShiftMethod, ShiftResult, ShiftSim,
 };
 
 use crate::args::{SeriesFormat, SpecArgs};
@@ -86,6 +86,11 @@ pub struct Args {
         conflicts_with = "shift"
     )]
     pub vehicle_inertia: f64,
+    /// A compliant output shaft to the vehicle inertia, `K` or `K,C`:
+    /// stiffness [N m/rad] and damping [N m s/rad], reduced to the output
+    /// link (shows the shuffle after a lock-up); default: rigid.
+    #[arg(long, value_name = "K[,C]", value_parser = parse_shaft, conflicts_with = "shift")]
+    pub output_shaft: Option<OutputShaft>,
     /// Friction coefficients `STATIC,KINETIC` of both elements (typical wet clutch: 0.15,0.12).
     #[arg(long, value_name = "MU_S,MU_K", value_parser = parse_two, default_value = "0.15,0.12", conflicts_with = "shift")]
     pub mu: [f64; 2],
@@ -179,6 +184,18 @@ fn parse_capacity(s: &str) -> Result<Capacity, String> {
     }
 }
 
+fn parse_shaft(s: &str) -> Result<OutputShaft, String> {
+    let v = if s.contains(',') {
+        numbers(s, 2, ',')?
+    } else {
+        vec![numbers(s, 1, ',')?[0], 0.0]
+    };
+    Ok(OutputShaft {
+        stiffness: v[0],
+        damping: v[1],
+    })
+}
+
 fn parse_ramp(s: &str) -> Result<(String, Capacity), String> {
     let (name, ramp) = s
         .split_once('=')
@@ -241,6 +258,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
             },
             road_load: args.road_load,
             vehicle_inertia: args.vehicle_inertia,
+            output_shaft: args.output_shaft,
             law: FrictionLaw {
                 mu_static: args.mu[0],
                 mu_kinetic: args.mu[1],

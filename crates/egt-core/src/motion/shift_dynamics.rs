@@ -23,15 +23,17 @@
 //!   events), `consistent` (the consistent mode at `t = 0` and after every
 //!   event: release what cannot hold, lock what can), `extremes` (the
 //!   reported ranges, over both sides of every event and between samples)
-//!   and `named` (a spec's `[[shift]]` made into a [`ShiftSim`]).
+//!   `named` (a spec's `[[shift]]` made into a [`ShiftSim`]) and `compliance`
+//!   (an optional compliant output shaft to the vehicle, [`OutputShaft`]).
 //! - [`quality`]: the torque and inertia phases of a finished shift and its
 //!   quality measures (output-torque dip and overshoot, oscillation after the
 //!   lock, jerk, steps at events, each element's energy and peak power),
 //!   read from the samples.
 //!
-//! Not built yet: a stiff method, mesh losses in the shift, compliance. See
+//! Not built yet: mesh losses in the shift. See
 //! docs/shift_dynamics.md.
 
+mod compliance;
 mod consistent;
 pub mod engagement;
 mod extremes;
@@ -45,6 +47,7 @@ mod request;
 pub mod shift;
 mod train_mode;
 
+pub use compliance::OutputShaft;
 pub use engagement::{Engagement, EngagementResult, EngagementSample, Phase};
 pub use friction::{Capacity, FrictionLaw};
 pub use lockup::{LockUp, lock_projection};

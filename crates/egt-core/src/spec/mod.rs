@@ -79,34 +79,50 @@ pub struct ShiftSpec {
     /// The gear after. The elements of `from` not in `to` release, those of
     /// `to` not in `from` apply; every one of them needs a capacity in `ramps`.
     pub to: String,
-    /// Input speed at t = 0 [rad/s]; the train starts in `from`'s steady motion.
+    /// Input speed at t = 0 (rad/s); the train starts in `from`'s steady motion.
     pub input_speed: f64,
-    /// Constant input torque [N m] (or `torque_table`).
+    /// Constant input torque (N m) (or `torque_table`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub input_torque: Option<f64>,
-    /// Input torque over input speed, `[[w, T], ...]` [rad/s, N m], linear between points.
+    /// Input torque over input speed, `[[w, T], ...]` (rad/s, N m), linear between points.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub torque_table: Option<Vec<[f64; 2]>>,
-    /// Road load at the output `[c0, c1, c2]`: c0 sgn(w) + c1 w + c2 w|w| [N m]. Default 0.
+    /// Road load at the output `[c0, c1, c2]`: c0 sgn(w) + c1 w + c2 w|w| (N m). Default 0.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub road_load: Option<[f64; 3]>,
-    /// Vehicle inertia reflected to the output link [kg m^2]. Default 0.
+    /// Vehicle inertia reflected to the output link (kg m^2). Default 0.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub vehicle_inertia: Option<f64>,
     /// Friction coefficients `[static, kinetic]`. Default `[0.15, 0.12]`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mu: Option<[f64; 2]>,
-    /// Slip speed [rad/s] over which the coefficient falls from static to
+    /// Slip speed (rad/s) over which the coefficient falls from static to
     /// kinetic; default: a step.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mu_decay: Option<f64>,
-    /// Each changing element's capacity [N m per unit friction coefficient]
+    /// Each changing element's capacity (N m per unit friction coefficient)
     /// by name: a number, or a ramp `[t0, t1, from, to]`.
     #[serde(default)]
     pub ramps: IndexMap<String, CapacitySpec>,
-    /// End time [s]. Default 1.
+    /// End time (s). Default 1.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub t_end: Option<f64>,
+    /// A compliant shaft from the output link to the vehicle inertia;
+    /// default: rigid.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub output_shaft: Option<OutputShaftSpec>,
+}
+
+/// A torsional shaft from the output link to the vehicle, reduced to the
+/// output link.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct OutputShaftSpec {
+    /// Stiffness (N m/rad).
+    pub stiffness: f64,
+    /// Damping (N m s/rad). Default 0.
+    #[serde(default)]
+    pub damping: f64,
 }
 
 /// A shift element's capacity as written: constant, or a linear ramp.

@@ -139,6 +139,7 @@ def shift_sim(
     atol: float,
     method: str,
     max_steps: Optional[int],
+    output_shaft: Optional[Tuple[float, float]],
 ) -> Dict[str, Any]: ...
 def shift_named(
     core: TrainCore,

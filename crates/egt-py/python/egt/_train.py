@@ -672,6 +672,7 @@ class Train:
         atol: float = 1e-8,
         method: str = "auto",
         max_steps: Optional[int] = None,
+        output_shaft: Optional[Union[float, Sequence[float]]] = None,
     ) -> ShiftSimulation:
         """A gear change in time, as ``egt shift-sim`` (docs/shift_dynamics.md).
 
@@ -692,7 +693,9 @@ class Train:
         skip shift, a double swap), as ``egt shift-sim --ramp NAME=RAMP``;
         a name in ``ramps`` comes before ``off_going``/``on_coming``.
         ``max_steps`` raises the step budget (``egt shift-sim --max-steps``;
-        default 2 000 000).
+        default 2 000 000). ``output_shaft`` is a compliant shaft from the
+        output link to the vehicle inertia, ``k`` or ``(k, c)`` [N m/rad,
+        N m s/rad] (``egt shift-sim --output-shaft K,C``); default rigid.
         """
 
         def cap(v: Union[float, Sequence[float]], field: str) -> List[float]:
@@ -706,6 +709,12 @@ class Train:
         m = [number(x, f"mu[{k}]") for k, x in enumerate(mu)]
         if len(m) != 2:
             raise ArgumentError(f"mu: expected (static, kinetic), got {len(m)} numbers")
+        shaft: Optional[Tuple[float, float]] = None
+        if output_shaft is not None:
+            sh = cap(output_shaft, "output_shaft")
+            if len(sh) not in (1, 2):
+                raise ArgumentError(f"output_shaft: expected k or (k, c), got {len(sh)} numbers")
+            shaft = (sh[0], sh[1] if len(sh) == 2 else 0.0)
         changing: Mapping[Any, Any] = {} if ramps is None else ramps
         if not isinstance(changing, Mapping):
             raise ArgumentTypeError(
@@ -732,6 +741,7 @@ class Train:
             number(atol, "atol"),
             str(method),
             None if max_steps is None else count(max_steps, "max_steps", 2**63 - 1),
+            shaft,
         )
         return ShiftSimulation._from_core(self._links, raw)
 

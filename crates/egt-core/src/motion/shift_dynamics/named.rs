@@ -2,6 +2,7 @@
 //! into a [`ShiftSim`]: the spec's fields, the command line's defaults for
 //! those it leaves out, and the integration settings the caller gives.
 
+use super::compliance::OutputShaft;
 use super::friction::{Capacity, FrictionLaw};
 use super::shift::{DEFAULT_MAX_STEPS, InputTorque, ShiftMethod, ShiftSim};
 use crate::error::{Error, Result, suggest};
@@ -76,6 +77,10 @@ impl ShiftSim {
                 .map(|(element, c)| (element.clone(), capacity(*c)))
                 .collect(),
             t_end: s.t_end.unwrap_or(DEFAULT_T_END),
+            output_shaft: s.output_shaft.map(|o| OutputShaft {
+                stiffness: o.stiffness,
+                damping: o.damping,
+            }),
             rtol: DEFAULT_TOLERANCE,
             atol: DEFAULT_TOLERANCE,
             method: ShiftMethod::Auto,

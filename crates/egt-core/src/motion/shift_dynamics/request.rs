@@ -65,6 +65,9 @@ impl ShiftSim {
                 raise: "shorten `t_end` (`--t-end`) or raise `max_steps` (`--max-steps`)".into(),
             }));
         }
+        if let Some(shaft) = &self.output_shaft {
+            shaft.validate(self.vehicle_inertia)?;
+        }
         self.input_torque.validate()?;
         self.law.validate("shift.law")?;
         if let Some(c) = &self.off_going {

@@ -41,6 +41,7 @@
 use nalgebra::DVector;
 use serde::Serialize;
 
+use super::compliance::OutputShaft;
 use super::consistent::{Settled, settle};
 use super::extremes::Extremes;
 use super::friction::{Capacity, FrictionLaw};
@@ -154,8 +155,12 @@ pub struct ShiftSim {
     pub input_torque: InputTorque,
     /// Road load at the output, resisting motion: `c0 sgn(w) + c1 w + c2 w |w|` (N m).
     pub road_load: [f64; 3],
-    /// Vehicle inertia reflected to the output link (kg m^2), added to \[M\].
+    /// Vehicle inertia reflected to the output link (kg m^2), added to \[M\]
+    /// (or, with `output_shaft`, driven through the shaft).
     pub vehicle_inertia: f64,
+    /// A compliant shaft from the output link to the vehicle inertia
+    /// (`compliance.rs`); `None` joins them rigidly.
+    pub output_shaft: Option<OutputShaft>,
     /// Friction law of the off-going and on-coming elements.
     pub law: FrictionLaw,
     /// Capacity (N m per unit friction coefficient) of the off-going element,
@@ -377,7 +382,9 @@ impl ShiftSim {
             train.coordinate(t.output).expect("checked: output moves"),
         );
         let mut m = train.mass_matrix()?.matrix()?;
-        m[(output, output)] += self.vehicle_inertia;
+        if self.output_shaft.is_none() {
+            m[(output, output)] += self.vehicle_inertia;
+        }
         let n = m.nrows();
         let rows = changing
             .iter()
@@ -404,7 +411,19 @@ impl ShiftSim {
         let mut y: Vec<f64> = col.iter().map(|c| c * scale).collect();
         // the dissipation of each changing element, then the applied work
         y.extend(std::iter::repeat_n(0.0, k + 1));
-        let ke0 = setup.kinetic(&y[..n]);
+        if let Some(shaft) = &self.output_shaft {
+            // The vehicle turns with the output; the shaft's twist carries
+            // the torque of the common acceleration (no shuffle at t = 0).
+            let (w_in, w_out) = (y[input], y[output]);
+            let reduced = col.dot(&(&setup.m * col)) / (col[output] * col[output]);
+            let drive = self.input_torque.at(w_in) * col[input] / col[output];
+            let accel = (drive - setup.road(w_out)) / (reduced + self.vehicle_inertia);
+            y.extend([
+                w_out,
+                shaft.twist_for(self.vehicle_inertia * accel + setup.road(w_out)),
+            ]);
+        }
+        let ke0 = setup.energy(&y);
         let first: Vec<Phase> = (0..k)
             .map(|i| {
                 let slip = setup.slip(i, &y[..n]);
@@ -479,7 +498,7 @@ impl ShiftSim {
             // W_applied - dKE - each element's friction work - E_lock, in that order
             let residual = y[n..n + k]
                 .iter()
-                .fold(y[n + k] - (setup.kinetic(v) - ke0), |r, d| r - d)
+                .fold(y[n + k] - (setup.energy(y) - ke0), |r, d| r - d)
                 - loss;
             out.max_energy_residual = out.max_energy_residual.max(residual.abs());
             let mut speed = vec![0.0; train.links().len()];
@@ -777,6 +796,7 @@ pub(super) mod tests {
             method: ShiftMethod::Auto,
             max_steps: DEFAULT_MAX_STEPS,
             ramps: Vec::new(),
+            output_shaft: None,
         }
     }
 
@@ -896,6 +916,67 @@ pub(super) mod tests {
             r.samples
                 .iter()
                 .all(|x| x.kept_torque[0] <= hi && x.kept_torque[0] >= lo)
+        );
+    }
+
+    #[test]
+    fn a_compliant_output_shuffles_after_the_lock_at_the_closed_form_frequency() {
+        let train = simpson();
+        let (k, jv, c0, tin) = (5000.0, 15.0, 30.0, 150.0);
+        let sim = ShiftSim {
+            road_load: [c0, 0.0, 0.0],
+            vehicle_inertia: jv,
+            output_shaft: Some(OutputShaft {
+                stiffness: k,
+                damping: 0.0,
+            }),
+            t_end: 1.5,
+            rtol: 1e-10,
+            atol: 1e-10,
+            ..upshift()
+        };
+        let r = sim.run(&train).unwrap();
+        let lock = r.lock_time.unwrap();
+        // The train reduced to the output in third, from egt shift's speeds
+        // (per unit input speed) and [M]: an independent route to J_t.
+        let third = train.analyse_gear("3").unwrap();
+        let m = train.mass_matrix().unwrap().matrix().unwrap();
+        let s: Vec<f64> = (train.coordinates().iter())
+            .map(|l| third.speed[l.index()].unwrap())
+            .collect();
+        let out = train.checked_transmission().unwrap().output;
+        let s_out = third.speed[out.index()].unwrap();
+        let jt = (0..s.len())
+            .map(|i| (0..s.len()).map(|j| m[(i, j)] * s[i] * s[j]).sum::<f64>())
+            .sum::<f64>()
+            / (s_out * s_out);
+        let omega = (k * (1.0 / jt + 1.0 / jv)).sqrt();
+        // The shaft torque oscillates about the torque of the common
+        // acceleration once only constant forces act: after the lock and
+        // after the released band's ramp has reached 0 (t1 = 0.25 s).
+        let mean = (jv * tin / s_out + jt * c0) / (jt + jv);
+        let settled = lock.max(0.25);
+        let after: Vec<(f64, f64)> = (r.samples.iter())
+            .filter(|x| x.t > settled)
+            .map(|x| (x.t, x.output_torque - mean))
+            .collect();
+        let crossings: Vec<f64> = after
+            .windows(2)
+            .filter(|w| w[0].1 * w[1].1 < 0.0)
+            .map(|w| w[0].0 + (w[1].0 - w[0].0) * w[0].1 / (w[0].1 - w[1].1))
+            .collect();
+        assert!(crossings.len() > 10, "{} crossings", crossings.len());
+        let half = (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64;
+        let measured = std::f64::consts::PI / half;
+        assert!(
+            rel(measured, omega) < 1e-6,
+            "{measured} rad/s vs {omega} (J_t {jt})"
+        );
+        let total: f64 = r.dissipated.iter().sum();
+        assert!(
+            r.max_energy_residual < 1e-7 * total,
+            "{} of {total}",
+            r.max_energy_residual
         );
     }
 

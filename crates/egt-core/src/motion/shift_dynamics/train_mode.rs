@@ -6,6 +6,7 @@
 
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
+use super::compliance::OutputShaft;
 use super::friction::Capacity;
 use super::mode::mode_basis;
 use super::shift::ShiftSim;
@@ -110,12 +111,41 @@ impl Setup<'_> {
         })
     }
 
-    /// The applied torques (input and road load) at speeds `v`.
-    pub(super) fn applied(&self, v: &[f64]) -> DVector<f64> {
+    /// The applied torques at state `y`: the input torque, and at the
+    /// output the road load (or, with a compliant output, the shaft's torque).
+    pub(super) fn applied(&self, y: &[f64]) -> DVector<f64> {
+        let v = &y[..self.n];
         let mut f = DVector::zeros(self.n);
         f[self.input] += self.sim.input_torque.at(v[self.input]);
-        f[self.output] -= self.road(v[self.output]);
+        f[self.output] -= match self.shaft_state(y) {
+            Some((shaft, w_v, phi)) => shaft.torque(v[self.output], w_v, phi),
+            None => self.road(v[self.output]),
+        };
         f
+    }
+
+    /// With a compliant output: the shaft, the vehicle's speed and the
+    /// shaft's twist (the states after the applied work).
+    fn shaft_state(&self, y: &[f64]) -> Option<(&OutputShaft, f64, f64)> {
+        let at = self.n + self.k() + 1;
+        self.sim
+            .output_shaft
+            .as_ref()
+            .map(|shaft| (shaft, y[at], y[at + 1]))
+    }
+
+    /// The energy the balance follows: the train's kinetic energy, and with a
+    /// compliant output the vehicle's and the shaft's.
+    pub(super) fn energy(&self, y: &[f64]) -> f64 {
+        let train = self.kinetic(&y[..self.n]);
+        match self.shaft_state(y) {
+            Some((shaft, w_v, phi)) => {
+                train
+                    + 0.5 * self.sim.vehicle_inertia * w_v * w_v
+                    + 0.5 * shaft.stiffness * phi * phi
+            }
+            None => train,
+        }
     }
 
     /// The road load at output speed `w`, resisting motion.
@@ -137,9 +167,10 @@ impl Setup<'_> {
         }
     }
 
-    /// All generalised forces in `phases` (applied plus slipping friction).
-    pub(super) fn forces(&self, phases: &[Phase], t: f64, v: &[f64]) -> (DVector<f64>, Vec<f64>) {
-        let mut f = self.applied(v);
+    /// All generalised forces in `phases` at state `y` (applied plus slipping friction).
+    pub(super) fn forces(&self, phases: &[Phase], t: f64, y: &[f64]) -> (DVector<f64>, Vec<f64>) {
+        let v = &y[..self.n];
+        let mut f = self.applied(y);
         let mut tf = vec![0.0; phases.len()];
         for (i, p) in phases.iter().enumerate() {
             if let Phase::Slipping(dir) = *p {
@@ -154,14 +185,29 @@ impl Setup<'_> {
     pub(super) fn rhs(&self, mode: &Mode, t: f64, y: &[f64]) -> Vec<f64> {
         let n = self.n;
         let v = &y[..n];
-        let (f, tf) = self.forces(&mode.phases, t, v);
+        let (f, tf) = self.forces(&mode.phases, t, y);
         let q = mode.reduced.solve(&(mode.basis.transpose() * &f));
         let a = &mode.basis * q;
         let mut d = a.as_slice().to_vec();
         for (i, t) in tf.iter().enumerate() {
             d.push(-t * self.slip(i, v));
         }
-        d.push(self.applied(v).iter().zip(v).map(|(x, w)| x * w).sum());
+        match self.shaft_state(y) {
+            None => d.push(self.applied(y).iter().zip(v).map(|(x, w)| x * w).sum()),
+            Some((shaft, w_v, phi)) => {
+                // The input's work, the road's on the vehicle, the damper's loss.
+                let w_out = v[self.output];
+                let (t_s, road) = (shaft.torque(w_out, w_v, phi), self.road(w_v));
+                let slip = w_out - w_v;
+                d.push(
+                    self.sim.input_torque.at(v[self.input]) * v[self.input]
+                        - road * w_v
+                        - shaft.damping * slip * slip,
+                );
+                d.push((t_s - road) / self.sim.vehicle_inertia);
+                d.push(slip);
+            }
+        }
         d
     }
 
@@ -175,7 +221,7 @@ impl Setup<'_> {
         dy: &[f64],
     ) -> (Vec<f64>, Vec<f64>) {
         let n = self.n;
-        let (f, _) = self.forces(&mode.phases, t, &y[..n]);
+        let (f, _) = self.forces(&mode.phases, t, y);
         let a = DVector::from_column_slice(&dy[..n]);
         let r = &self.m * a - f;
         let lambda = &mode.gram_inverse * (&mode.rows * r);
@@ -235,7 +281,10 @@ impl Setup<'_> {
         let (lam, kept) = self.locked_torques(mode, t, y, dy);
         let k = phases.len();
         let mut q = Vec::with_capacity(1 + 2 * k + kept.len());
-        q.push(self.sim.vehicle_inertia * dy[self.output] + self.road(v[self.output]));
+        q.push(match self.shaft_state(y) {
+            Some((shaft, w_v, phi)) => shaft.torque(v[self.output], w_v, phi),
+            None => self.sim.vehicle_inertia * dy[self.output] + self.road(v[self.output]),
+        });
         q.extend((0..k).map(|i| match phases[i] {
             Phase::Locked => lam[i],
             Phase::Slipping(dir) => self.friction(i, dir, t, v),
