@@ -1,0 +1,109 @@
+//! The modes document (`egt modes --format json`): the lumped torsional
+//! model's coordinates and springs, and per mode its frequency,
+//! multiplicity, mass-normalised shape and energy shares (docs/vibration.md).
+
+use egt_core::analysis::modes::ElasticKind;
+use egt_core::{NaturalModes, Train};
+use serde::Serialize;
+
+#[derive(Debug, Serialize)]
+pub struct CoordinateOut {
+    /// `link` or `link#c`.
+    pub name: String,
+    pub link: String,
+    /// The planet copy, from 1 (None for a link without copies).
+    pub copy: Option<u32>,
+    /// A copy's angular position \[degrees\].
+    pub angle: Option<f64>,
+    /// Its entry of the diagonal \[M\] \[kg m^2\].
+    pub inertia: f64,
+}
+
+#[derive(Debug, Serialize)]
+pub struct SpringOut {
+    pub name: String,
+    pub kind: ElasticKind,
+    /// N/m for a mesh, N m/rad otherwise.
+    pub stiffness: f64,
+    pub damping: f64,
+}
+
+#[derive(Debug, Serialize)]
+pub struct ModeOut {
+    pub rigid: bool,
+    /// rad/s.
+    pub omega: f64,
+    pub hertz: f64,
+    pub multiplicity: usize,
+    /// Index (in `modes`) of the first mode with this frequency.
+    pub group: usize,
+    /// phi^T M phi = 1, one value per coordinate.
+    pub shape: Vec<f64>,
+    /// Shares of strain energy, one per spring.
+    pub strain_energy: Vec<f64>,
+    /// Shares of kinetic energy, one per coordinate.
+    pub kinetic_energy: Vec<f64>,
+    pub damping_ratio: Option<f64>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct Report {
+    pub source: String,
+    pub name: Option<String>,
+    pub state: Option<String>,
+    /// The rigid-body modes' count.
+    pub dof: usize,
+    pub coordinates: Vec<CoordinateOut>,
+    pub springs: Vec<SpringOut>,
+    /// Engaged elements held rigid.
+    pub constraints: Vec<String>,
+    pub modes: Vec<ModeOut>,
+}
+
+pub fn build(train: &Train, source: &str, m: &NaturalModes) -> Report {
+    let model = &m.model;
+    Report {
+        source: source.to_string(),
+        name: train.name().map(str::to_string),
+        state: m.state.clone(),
+        dof: m.dof,
+        coordinates: model
+            .coordinates
+            .iter()
+            .zip(&model.mass)
+            .map(|(c, &inertia)| CoordinateOut {
+                name: c.name.clone(),
+                link: train.link_name(c.link).to_string(),
+                copy: (train.link(c.link).copies > 1).then_some(c.copy + 1),
+                angle: c.angle,
+                inertia,
+            })
+            .collect(),
+        springs: model
+            .elastic
+            .iter()
+            .map(|e| SpringOut {
+                name: e.name.clone(),
+                kind: e.kind,
+                stiffness: e.stiffness,
+                damping: e.damping,
+            })
+            .collect(),
+        constraints: model.constraint_names.clone(),
+        modes: m
+            .modes
+            .iter()
+            .map(|x| ModeOut {
+                rigid: x.rigid,
+                omega: x.omega,
+                hertz: x.hertz,
+                multiplicity: x.multiplicity,
+                group: x.group,
+                shape: x.shape.clone(),
+                strain_energy: x.strain_energy.clone(),
+                kinetic_energy: x.kinetic_energy.clone(),
+                damping_ratio: x.damping_ratio,
+            })
+            .collect(),
+    }
+}

@@ -1,0 +1,94 @@
+//! `egt modes` as a user runs it (issue 43): the JSON is what the library
+//! computes, the text table, `--state`, and a spec without compliance data
+//! refused with `missing_data` naming the gear pairs. The physics is tested
+//! in egt-core's tests (`crates/egt-core/tests/analyses/modes.rs`).
+
+// A failed unwrap is a failed test that prints the error: what a test wants.
+#![allow(clippy::unwrap_used)]
+
+use egt_core::ModesRequest;
+
+use crate::util::{Run, close, example};
+
+const SPEC: &str = "examples/simple_planetary_compliant.toml";
+
+fn egt(args: &[&str]) -> Run {
+    crate::util::egt(args, None)
+}
+
+#[test]
+fn cli_modes_json_is_the_librarys_modes() {
+    let t = example("simple_planetary_compliant.toml");
+    for state in [None, Some("low"), Some("direct")] {
+        let mut args = vec!["modes", SPEC, "--format", "json"];
+        if let Some(s) = state {
+            args.extend(["--state", s]);
+        }
+        let out = egt(&args);
+        assert_eq!(out.code, 0, "{}", out.stderr);
+        let v: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
+        let m = t
+            .modes(&ModesRequest {
+                state: state.map(String::from),
+            })
+            .unwrap();
+        assert_eq!(v["dof"], m.dof);
+        assert_eq!(v["state"], serde_json::json!(state));
+        assert_eq!(v["coordinates"][2]["name"], m.model.coordinates[2].name);
+        let modes = v["modes"].as_array().unwrap();
+        assert_eq!(modes.len(), m.modes.len());
+        for (j, x) in modes.iter().zip(&m.modes) {
+            assert!(close(j["hertz"].as_f64().unwrap(), x.hertz, 1e-15));
+            assert!(close(j["omega"].as_f64().unwrap(), x.omega, 1e-15));
+            assert_eq!(j["multiplicity"], x.multiplicity);
+            assert_eq!(j["rigid"], x.rigid);
+        }
+        // Three planets: one planet mode of multiplicity 2 in every state.
+        assert_eq!(
+            modes
+                .iter()
+                .filter(|x| x["rigid"] == false && x["multiplicity"] == 2)
+                .count(),
+            2,
+            "{state:?}"
+        );
+    }
+}
+
+#[test]
+fn cli_modes_table_names_the_modes() {
+    let out = egt(&["modes", SPEC, "--state", "low"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let s = &out.stdout;
+    assert!(s.contains("torsional modes in gear state low"), "{s}");
+    assert!(
+        s.contains("held rigidly: B; rigid-body modes (DOF): 1"),
+        "{s}"
+    );
+    assert!(s.contains("2 (degenerate)"), "{s}");
+    assert!(s.contains("P.planet#3"), "{s}");
+    assert!(s.contains("strain energy per spring"), "{s}");
+}
+
+#[test]
+fn cli_modes_without_stiffness_is_missing_data_naming_the_gear_pairs() {
+    let out = egt(&[
+        "modes",
+        "examples/simple_planetary.toml",
+        "--format",
+        "json",
+    ]);
+    assert_eq!(out.code, 1);
+    let v: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
+    assert_eq!(v["error"]["code"], "missing_data");
+    let msg = v["error"]["message"].as_str().unwrap();
+    assert!(
+        msg.contains("`P/sun-planet`") && msg.contains("`P/planet-ring`"),
+        "{msg}"
+    );
+    assert!(out.stderr.contains("compliance.meshes"), "{}", out.stderr);
+
+    let out = egt(&["modes", SPEC, "--state", "lo"]);
+    assert_eq!(out.code, 2);
+    assert!(out.stderr.contains("low"), "{}", out.stderr);
+}
