@@ -92,3 +92,16 @@ fn cli_modes_without_stiffness_is_missing_data_naming_the_gear_pairs() {
     assert_eq!(out.code, 2);
     assert!(out.stderr.contains("low"), "{}", out.stderr);
 }
+
+/// The frequency table pasted in docs/vibration.md is what `egt modes` prints.
+#[test]
+fn docs_vibration_md_shows_the_real_output() {
+    let out = egt(&["modes", SPEC, "--state", "low"]);
+    let doc = std::fs::read_to_string(crate::util::root().join("docs/vibration.md")).unwrap();
+    for line in out.stdout.lines().take(10) {
+        assert!(
+            doc.contains(line),
+            "docs/vibration.md lacks the line\n{line}"
+        );
+    }
+}

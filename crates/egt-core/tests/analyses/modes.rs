@@ -2,6 +2,9 @@
 //! against models written out by hand from the textbook formulas (Lin &
 //! Parker 1999, purely torsional), closed forms, and the kinematics.
 
+// A failed unwrap is a failed test that prints the error: what a test wants.
+#![allow(clippy::unwrap_used)]
+
 use egt_core::{AnalysisError, Error, ModesRequest, NaturalModes, SpeedInput, Train};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 

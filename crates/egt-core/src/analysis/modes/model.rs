@@ -307,7 +307,7 @@ impl Train {
                 ));
             }
             let j = m.get(k, k) / f64::from(link.copies);
-            if !(j > 0.0) {
+            if j.is_nan() || j <= 0.0 {
                 let what = if link.inertia.is_some() {
                     format!("a positive inertia of link `{}`", link.name)
                 } else {
