@@ -30,6 +30,7 @@ fn cli_modes_json_is_the_librarys_modes() {
         let m = t
             .modes(&ModesRequest {
                 state: state.map(String::from),
+                ..ModesRequest::default()
             })
             .unwrap();
         assert_eq!(v["dof"], m.dof);
@@ -99,6 +100,65 @@ fn docs_vibration_md_shows_the_real_output() {
     let out = egt(&["modes", SPEC, "--state", "low"]);
     let doc = std::fs::read_to_string(crate::util::root().join("docs/vibration.md")).unwrap();
     for line in out.stdout.lines().take(10) {
+        assert!(
+            doc.contains(line),
+            "docs/vibration.md lacks the line\n{line}"
+        );
+    }
+}
+
+/// `--campbell --speed MIN:MAX`: the crossings of the JSON are the
+/// library's, within the range; `--speed` alone is a usage error.
+#[test]
+fn cli_modes_campbell_crossings() {
+    let out = egt(&[
+        "modes",
+        SPEC,
+        "--state",
+        "low",
+        "--campbell",
+        "--speed",
+        "0:55000",
+        "--format",
+        "json",
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let v: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
+    let m = &v["meshing"];
+    assert_eq!(m["input"], "sun");
+    assert_eq!(m["range"], serde_json::json!([0.0, 55000.0]));
+    let crossings = m["crossings"].as_array().unwrap();
+    // Two meshes of order 30 x 72 / 102 cross the two lowest distinct
+    // elastic frequencies (7928 Hz, 19233 Hz) below 55 000 rpm.
+    assert_eq!(crossings.len(), 4);
+    for c in crossings {
+        let speed = c["speed"].as_f64().unwrap();
+        let f = c["hertz"].as_f64().unwrap();
+        assert!(close(speed, 60.0 * f / (30.0 * 72.0 / 102.0), 1e-12));
+        assert!(speed <= 55000.0);
+    }
+    let out = egt(&["modes", SPEC, "--speed", "0:10"]);
+    assert_eq!(out.code, 2);
+    let out = egt(&["modes", SPEC, "--campbell"]);
+    assert_eq!(out.code, 1);
+    assert!(out.stderr.contains("one rigid-body mode"), "{}", out.stderr);
+}
+
+/// The Campbell table pasted in docs/vibration.md is what `egt modes` prints.
+#[test]
+fn docs_vibration_md_shows_the_real_campbell_table() {
+    let out = egt(&[
+        "modes",
+        SPEC,
+        "--state",
+        "low",
+        "--campbell",
+        "--speed",
+        "0:55000",
+    ]);
+    let doc = std::fs::read_to_string(crate::util::root().join("docs/vibration.md")).unwrap();
+    let start = out.stdout.find("mesh (tooth-pass)").unwrap();
+    for line in out.stdout[start..].lines() {
         assert!(
             doc.contains(line),
             "docs/vibration.md lacks the line\n{line}"

@@ -58,6 +58,20 @@ pub struct Report {
     /// Engaged elements held rigid.
     pub constraints: Vec<String>,
     pub modes: Vec<ModeOut>,
+    /// Mesh orders and Campbell crossings (one rigid-body mode only).
+    pub meshing: Option<MeshingOut>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct MeshingOut {
+    pub input: String,
+    /// Per gear pair: tooth passes per input revolution, and Hz per rpm.
+    pub orders: Vec<egt_core::analysis::modes::MeshOrder>,
+    /// Input speed range \[rpm\] of the crossings, when asked for.
+    pub range: Option<[f64; 2]>,
+    /// Input speeds \[rpm\] where a tooth-pass frequency meets a natural
+    /// frequency; `mode` indexes `modes`.
+    pub crossings: Vec<egt_core::analysis::modes::Crossing>,
 }
 
 pub fn build(train: &Train, source: &str, m: &NaturalModes) -> Report {
@@ -105,5 +119,11 @@ pub fn build(train: &Train, source: &str, m: &NaturalModes) -> Report {
                 damping_ratio: x.damping_ratio,
             })
             .collect(),
+        meshing: m.meshing.as_ref().map(|x| MeshingOut {
+            input: train.link_name(x.input).to_string(),
+            orders: x.orders.clone(),
+            range: x.range,
+            crossings: x.crossings.clone(),
+        }),
     }
 }

@@ -24,6 +24,27 @@ pub struct Args {
     /// train, no element engaged.
     #[arg(long = "state", value_name = "NAME")]
     pub state: Option<String>,
+    /// Also list the Campbell diagram's crossings: the input speeds at which
+    /// a mesh's tooth-pass frequency equals a natural frequency (needs one
+    /// rigid-body mode: a gear state, or a train of one DOF).
+    #[arg(long = "campbell")]
+    pub campbell: bool,
+    /// The input speed range of `--campbell`, `MIN:MAX` [rpm].
+    #[arg(long = "speed", value_name = "MIN:MAX", default_value = "0:7000", value_parser = parse_range, requires = "campbell")]
+    pub speed: [f64; 2],
+}
+
+/// `MIN:MAX` as two numbers.
+fn parse_range(s: &str) -> Result<[f64; 2], String> {
+    let (a, b) = s
+        .split_once(':')
+        .ok_or_else(|| format!("`{s}`: expected MIN:MAX, e.g. 0:7000"))?;
+    let num = |x: &str| {
+        x.trim()
+            .parse::<f64>()
+            .map_err(|e| format!("`{x}` in `{s}`: {e}"))
+    };
+    Ok([num(a)?, num(b)?])
 }
 
 /// Run `egt modes`.
@@ -37,6 +58,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
     let train = &loaded.train;
     let req = ModesRequest {
         state: args.state.clone(),
+        campbell: args.campbell.then_some(args.speed),
     };
     let modes = train
         .modes(&req)
@@ -157,6 +179,46 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
         t.row(cells);
     }
     t.write(out, 2)?;
+    if let Some(m) = &r.meshing {
+        writeln!(
+            out,
+            "mesh (tooth-pass) frequencies per unit input speed (input `{}`):",
+            m.input
+        )?;
+        let mut t =
+            Table::new(&["gear pair", "order [per input rev]", "Hz per rpm"]).right(&[1, 2]);
+        for o in &m.orders {
+            t.row(vec![
+                o.gear.clone(),
+                report::float(o.order),
+                report::sci(o.hertz_per_rpm),
+            ]);
+        }
+        t.write(out, 2)?;
+        if let Some([lo, hi]) = m.range {
+            writeln!(
+                out,
+                "Campbell crossings, input {} to {} rpm (tooth-pass frequency = natural frequency):",
+                report::float(lo),
+                report::float(hi)
+            )?;
+            if m.crossings.is_empty() {
+                writeln!(out, "  none")?;
+            } else {
+                let mut t =
+                    Table::new(&["input [rpm]", "gear pair", "mode", "f [Hz]"]).right(&[0, 2, 3]);
+                for c in &m.crossings {
+                    t.row(vec![
+                        report::float(c.speed),
+                        c.gear.clone(),
+                        (c.mode + 1).to_string(),
+                        report::sci(c.hertz),
+                    ]);
+                }
+                t.write(out, 2)?;
+            }
+        }
+    }
     Ok(())
 }
 

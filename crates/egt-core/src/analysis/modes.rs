@@ -6,12 +6,14 @@
 //! energy per coordinate.
 
 mod eigen;
+mod meshing;
 mod model;
 
 use nalgebra::DMatrix;
 use serde::Serialize;
 
 pub use eigen::NULL_TOLERANCE;
+pub use meshing::{Crossing, MeshOrder, Meshing};
 pub use model::{ElasticElement, ElasticKind, ModeCoordinate, TorsionalModel};
 
 use crate::error::Result;
@@ -26,6 +28,9 @@ pub const DEGENERATE_REL: f64 = 1e-6;
 pub struct ModesRequest {
     /// The gear state whose engaged elements hold (None: the bare train).
     pub state: Option<String>,
+    /// The input speed range \[rpm\] of the Campbell diagram's crossings
+    /// (None: no crossings; the mesh orders are given when they can be).
+    pub campbell: Option<[f64; 2]>,
 }
 
 /// One mode of the undamped model.
@@ -65,6 +70,10 @@ pub struct NaturalModes {
     pub dof: usize,
     /// The modes: rigid-body modes first, then by rising frequency.
     pub modes: Vec<NaturalMode>,
+    /// Mesh orders per unit input speed and the Campbell crossings, with one
+    /// rigid-body mode, an input link and tooth counts (else None, unless
+    /// the crossings were asked for: then an error says what is missing).
+    pub meshing: Option<Meshing>,
 }
 
 impl Train {
@@ -155,11 +164,24 @@ impl Train {
             });
         }
         group_degenerate(&mut modes[dof..], dof);
+        let speed_of = |l: crate::LinkId| {
+            model
+                .coordinates
+                .iter()
+                .position(|c| c.link == l)
+                .map_or(0.0, |k| modes[0].shape[k])
+        };
+        let meshing = match self.meshing(&speed_of, dof, &modes, req.campbell) {
+            Ok(m) => Some(m),
+            Err(e) if req.campbell.is_some() => return Err(e),
+            Err(_) => None,
+        };
         Ok(NaturalModes {
             state: req.state.clone(),
             model,
             dof,
             modes,
+            meshing,
         })
     }
 }

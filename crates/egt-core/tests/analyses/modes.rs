@@ -27,6 +27,7 @@ fn modes(train: &Train, state: Option<&str>) -> NaturalModes {
     train
         .modes(&ModesRequest {
             state: state.map(String::from),
+            ..ModesRequest::default()
         })
         .unwrap_or_else(|e| panic!("{e}"))
 }
@@ -468,4 +469,61 @@ fn bad_compliance_fields_are_spec_errors_with_their_path() {
     assert_eq!(e.code(), "out_of_range");
     let e = bad("gear = \"P/planet-ring\"", "gear = \"P/sun-planet\"");
     assert_eq!(e.code(), "duplicate");
+}
+
+#[test]
+fn mesh_orders_are_the_textbook_tooth_pass_frequencies_and_cross_the_modes() {
+    let t = toml(&planetary(3, false, 1.0, STATES));
+    let ask = |state: &str, campbell: Option<[f64; 2]>| {
+        t.modes(&ModesRequest {
+            state: Some(state.into()),
+            campbell,
+        })
+    };
+    // Low (ring held, sun in): both meshes pass z_r w_c = z_s z_r / (z_s + z_r)
+    // teeth per sun revolution.
+    let low = ask("low", Some([0.0, 1.0e5])).unwrap();
+    let m = low.meshing.as_ref().unwrap();
+    let want = ZS * ZR / (ZS + ZR);
+    for o in &m.orders {
+        assert!(close(o.order, want, 1e-12), "{}: {}", o.gear, o.order);
+        assert!(close(o.hertz_per_rpm, want / 60.0, 1e-12));
+    }
+    // Each distinct elastic frequency is crossed once per mesh at 60 f / order.
+    let distinct: Vec<f64> = low
+        .modes
+        .iter()
+        .enumerate()
+        .filter(|(k, x)| !x.rigid && x.group == *k)
+        .map(|(_, x)| x.hertz)
+        .collect();
+    let inside: Vec<f64> = distinct
+        .iter()
+        .map(|f| 60.0 * f / want)
+        .filter(|&s| s <= 1.0e5)
+        .collect();
+    assert_eq!(m.crossings.len(), 2 * inside.len());
+    for c in &m.crossings {
+        assert!(close(c.speed, 60.0 * c.hertz / want, 1e-12));
+        assert!(c.speed <= 1.0e5);
+    }
+    assert!(m.crossings.windows(2).all(|w| w[0].speed <= w[1].speed));
+    // Direct: the set turns as one body, no tooth passes, no crossings.
+    let direct = ask("direct", Some([0.0, 1.0e5])).unwrap();
+    let m = direct.meshing.as_ref().unwrap();
+    assert!(m.orders.iter().all(|o| o.order.abs() < 1e-9));
+    assert!(m.crossings.is_empty());
+    // The bare train has two DOF: no mesh orders; asked for, a missing_data.
+    let bare = t.modes(&ModesRequest::default()).unwrap();
+    assert!(bare.meshing.is_none());
+    let e = t
+        .modes(&ModesRequest {
+            state: None,
+            campbell: Some([0.0, 7000.0]),
+        })
+        .unwrap_err();
+    assert_eq!(e.code(), "missing_data");
+    assert!(e.to_string().contains("one rigid-body mode"), "{e}");
+    let e = ask("low", Some([100.0, 10.0])).unwrap_err();
+    assert_eq!(e.code(), "invalid");
 }
