@@ -75,6 +75,7 @@ from ._transmission import (
     Spread,
     Step,
 )
+from ._vibration import Crossing, Modes, NaturalMode
 
 __all__ = [
     "__version__",
@@ -110,6 +111,9 @@ __all__ = [
     "Mode",
     "MasslessDirection",
     "StabilityReport",
+    "Modes",
+    "NaturalMode",
+    "Crossing",
     "Simulation",
     "ShiftSimulation",
     "GearState",
