@@ -220,3 +220,36 @@ fn group_degenerate(modes: &mut [NaturalMode], first: usize) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn mode(omega: f64) -> NaturalMode {
+        NaturalMode {
+            rigid: false,
+            omega,
+            hertz: omega / std::f64::consts::TAU,
+            multiplicity: 0,
+            group: 0,
+            shape: vec![],
+            strain_energy: vec![],
+            kinetic_energy: vec![],
+            damping_ratio: None,
+        }
+    }
+
+    #[test]
+    fn equal_frequencies_form_one_group() {
+        let mut m: Vec<NaturalMode> = [1.0, 2.0, 2.0 * (1.0 + 1e-9), 3.0].map(mode).into();
+        group_degenerate(&mut m, 1);
+        let got: Vec<(usize, usize)> = m.iter().map(|x| (x.multiplicity, x.group)).collect();
+        assert_eq!(got, [(1, 1), (2, 2), (2, 2), (1, 4)]);
+    }
+
+    #[test]
+    fn a_shape_is_signed_by_its_largest_component() {
+        assert_eq!(normalised(vec![0.5, -2.0, 1.0]), [-0.5, 2.0, -1.0]);
+        assert_eq!(normalised(vec![0.5, 2.0]), [0.5, 2.0]);
+    }
+}

@@ -119,3 +119,35 @@ pub(crate) fn solve(
         elastic: t * z_elastic,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn null_space_ignores_the_rows_scale() {
+        // x - y = 0 at 1e9 and y - z = 0 at 1e-3: the null space is (1, 1, 1).
+        let rows = DMatrix::from_row_slice(2, 3, &[1e9, -1e9, 0.0, 0.0, 1e-3, -1e-3]);
+        let (free, bound) = null_space(&rows, 3);
+        assert_eq!((free.ncols(), bound.ncols()), (1, 2));
+        let v = free.column(0);
+        assert!((v.abs().sum() - 3f64.sqrt()).abs() < 1e-12);
+        assert!((&rows * v).amax() < 1e-6);
+    }
+
+    #[test]
+    fn a_chain_of_three_has_one_rigid_mode_and_the_textbook_frequencies() {
+        // Unit inertias, unit springs 1-2 and 2-3: omega^2 = 0, 1, 3.
+        let springs = DMatrix::from_row_slice(2, 3, &[1.0, -1.0, 0.0, 0.0, 1.0, -1.0]);
+        let k = springs.transpose() * &springs;
+        let m = DMatrix::identity(3, 3);
+        let e = solve(&DMatrix::identity(3, 3), &springs, &k, &m).expect("a positive mass");
+        assert_eq!(e.rigid.ncols(), 1);
+        assert!((e.lambda[0] - 1.0).abs() < 1e-12 && (e.lambda[1] - 3.0).abs() < 1e-12);
+        // K phi = lambda M phi for each elastic mode.
+        for (c, &l) in e.lambda.iter().enumerate() {
+            let phi = e.elastic.column(c);
+            assert!((&k * phi - l * (&m * phi)).amax() < 1e-12);
+        }
+    }
+}

@@ -12,9 +12,11 @@
 use nalgebra::DMatrix;
 use serde::Serialize;
 
-use crate::analysis::transmission::element_constraint;
-use crate::error::{AnalysisError, Error, Result, TransmissionError, suggest};
-use crate::model::train::{Compliance, ElementId, LinkId, MeshStiffness, Train, missing_ratio};
+use crate::analysis::transmission::{element_constraint, state_index};
+use crate::error::{AnalysisError, Error, Result, TransmissionError};
+use crate::model::train::{
+    Compliance, ElementId, GearId, GearPair, LinkId, MeshStiffness, Train, missing_ratio,
+};
 use crate::solve::rows::Extra;
 
 const ANALYSIS: &str = "the torsional modes (egt modes)";
@@ -134,16 +136,7 @@ fn engaged(train: &Train, state: Option<&str>) -> Result<Vec<ElementId>> {
     if states.is_empty() {
         return Err(Error::Transmission(TransmissionError::NoStates));
     }
-    let s = states.iter().find(|s| s.name == state).ok_or_else(|| {
-        Error::Transmission(TransmissionError::UnknownState {
-            state: state.to_string(),
-            suggestion: states
-                .iter()
-                .find(|s| s.name.eq_ignore_ascii_case(state))
-                .map(|s| s.name.clone())
-                .or_else(|| suggest(state, states.iter().map(|s| s.name.as_str()))),
-        })
-    })?;
+    let s = &states[state_index(states, state)?];
     Ok(s.engaged.clone())
 }
 
@@ -163,11 +156,7 @@ impl Train {
             .gears()
             .iter()
             .enumerate()
-            .filter(|(g, _)| {
-                compliance
-                    .mesh(crate::model::train::GearId::from_index(*g))
-                    .is_none()
-            })
+            .filter(|(g, _)| compliance.mesh(GearId::from_index(*g)).is_none())
             .map(|(_, g)| format!("`{}`", g.name))
             .collect();
         if !unstiff.is_empty() {
@@ -338,7 +327,7 @@ impl Train {
 
     /// The base radius of gear i of `g`: given, else its pitch radius times
     /// the cosine of the pressure angle.
-    fn base_radius(&self, g: &crate::GearPair, m: &MeshStiffness) -> Result<f64> {
+    fn base_radius(&self, g: &GearPair, m: &MeshStiffness) -> Result<f64> {
         if let Some([rb, _]) = m.base_radii {
             return Ok(rb);
         }
