@@ -23,6 +23,7 @@ enum Base {
 
 const FIG3: Base = Base::Spec("examples/fig3_example61.toml");
 const FIG5: Base = Base::Spec("examples/fig5_stability.toml");
+const COMPLIANT: Base = Base::Spec("examples/simple_planetary_compliant.toml");
 const ZF: Base = Base::Spec("examples/zf_8hp70.toml");
 const C4_SEARCH: Base = Base::Spec("examples/synth/ford_c4_simpson.toml");
 const UP: Base = Base::Upshift {
@@ -67,6 +68,11 @@ const RUNS: &[(&str, &str, Base, &[&str])] = &[
     ("stability", "slope", FIG5, &["--slope", "2=0.01"]),
     ("stability", "coords", FIG5, &["--coords", "2,4"]),
     ("stability", "input", FIG5, &["--input", "2=300", "--input", "4=80"]),
+    ("modes", "spec-format", COMPLIANT, &["--spec-format", "toml"]),
+    ("modes", "format", COMPLIANT, &["--format", "json"]),
+    ("modes", "state", COMPLIANT, &["--state", "low"]),
+    ("modes", "campbell", COMPLIANT, &["--state", "low", "--campbell"]),
+    ("modes", "speed", COMPLIANT, &["--state", "low", "--campbell", "--speed", "0:7000"]),
     ("simulate", "spec-format", FIG5, &["--spec-format", "toml", "--t-end", "0.1"]),
     ("simulate", "format", FIG5, &["--format", "csv", "--t-end", "0.1"]),
     ("simulate", "slope", FIG5, &["--slope", "2=0.01", "--t-end", "0.1"]),

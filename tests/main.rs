@@ -18,6 +18,9 @@ mod transmission;
 // `egt stability` and `egt simulate`, and the output pasted in docs/stability.md.
 mod stability;
 
+// Issue 43: `egt modes`, torsional natural frequencies, on the compliant example.
+mod modes;
+
 // Issue 10: every bundled example through every analysis, against committed JSON snapshots.
 mod golden;
 

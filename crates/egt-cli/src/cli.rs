@@ -39,6 +39,8 @@ pub enum Command {
     Graph(commands::graph::Args),
     /// Stability of the linearised motion (eq. 19-27): [V], [M], [K], eigenvalues, modes, verdict.
     Stability(commands::stability::Args),
+    /// Torsional natural frequencies and mode shapes (a spring along each mesh, `[compliance]`), bare or in a gear state.
+    Modes(commands::modes::Args),
     /// Forward dynamics in time under the torque-speed curves (RK4 or implicit); CSV/JSON, SVG plot.
     Simulate(commands::simulate::Args),
     /// Many scenarios in parallel (parameter arrays, grids, rows, gear states, or a file of specs) as JSON Lines or CSV.
@@ -93,6 +95,7 @@ pub fn run(command: &Command, out: &mut dyn Write) -> anyhow::Result<()> {
         Command::ShiftSim(args) => commands::shift_sim::run(args, out),
         Command::Graph(args) => commands::graph::run(args, out),
         Command::Stability(args) => commands::stability::run(args, out),
+        Command::Modes(args) => commands::modes::run(args, out),
         Command::Simulate(args) => commands::simulate::run(args, out),
         Command::Batch(args) => commands::batch::run(args, out),
         Command::Schema(args) => commands::schema::run(args, out),

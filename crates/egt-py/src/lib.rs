@@ -14,6 +14,7 @@ mod motion;
 mod structure;
 mod train;
 mod transmission;
+mod vibration;
 
 use pyo3::prelude::*;
 
@@ -40,6 +41,7 @@ fn _egt(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(motion::shift_sim, m)?)?;
     m.add_function(wrap_pyfunction!(motion::shift_named, m)?)?;
     m.add_function(wrap_pyfunction!(motion::shift_names, m)?)?;
+    m.add_function(wrap_pyfunction!(vibration::modes, m)?)?;
     m.add_function(wrap_pyfunction!(transmission::gear, m)?)?;
     m.add_function(wrap_pyfunction!(transmission::shift_table, m)?)?;
     #[cfg(feature = "command")]

@@ -100,6 +100,16 @@ def test_explicit_arguments_give_the_same_documents() -> None:
     )
 
 
+def test_modes_are_the_cli_documents() -> None:
+    t = train("simple_planetary_compliant.toml")
+    spec = f"{EX}/simple_planetary_compliant.toml"
+    same(t.modes().to_dict(), cli("modes", spec))
+    same(
+        t.modes("low", campbell=(0, 55000)).to_dict(),
+        cli("modes", spec, "--state", "low", "--campbell", "--speed", "0:55000"),
+    )
+
+
 def test_stability_and_simulation_are_the_cli_documents() -> None:
     t = train("fig5_stability.toml")
     same(t.stability().to_dict(), cli("stability", f"{EX}/fig5_stability.toml"))

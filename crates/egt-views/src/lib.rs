@@ -15,6 +15,7 @@ pub mod circuits;
 pub mod dynamics;
 pub mod format;
 pub mod kinematics;
+pub mod modes;
 pub mod power;
 pub mod shift;
 pub mod simulation;
@@ -77,6 +78,14 @@ pub fn power(
 /// None in practice.
 pub fn stability(train: &Train, source: &str, rep: &StabilityReport) -> serde_json::Result<Value> {
     format::value_of(&stability::build(train, source, rep))
+}
+
+/// `egt modes --format json`.
+///
+/// # Errors
+/// None in practice.
+pub fn modes(train: &Train, source: &str, m: &egt_core::NaturalModes) -> serde_json::Result<Value> {
+    format::value_of(&modes::build(train, source, m))
 }
 
 /// `egt shift --format json`.

@@ -10,6 +10,7 @@ pub mod dynamics;
 pub mod enumerate;
 pub mod graph;
 pub mod kinematics;
+pub mod modes;
 pub mod power;
 pub mod schema;
 pub mod shift;

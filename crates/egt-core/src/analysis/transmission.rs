@@ -35,7 +35,9 @@ use serde::Serialize;
 use crate::analysis::dynamics::{DynamicsRequest, MeshLoad};
 use crate::analysis::power::{MeshPower, PowerRequest};
 use crate::error::{AnalysisError, Error, Result, TransmissionError, suggest};
-use crate::model::train::{ElementId, GearId, LinkId, ShiftElement, Train, Transmission};
+use crate::model::train::{
+    ElementId, GearId, GearState, LinkId, ShiftElement, Train, Transmission,
+};
 use crate::numerics::exact::{self, Q, QMatrix};
 use crate::solve::kinematics::{RelativeSpeed, SpeedInput};
 use crate::solve::rows::Extra;
@@ -188,6 +190,23 @@ pub fn is_one_way(kind: ElementKind) -> bool {
     matches!(kind, ElementKind::OneWayBrake | ElementKind::OneWayClutch)
 }
 
+/// The index of gear state `state` among `states`.
+///
+/// # Errors
+/// [`TransmissionError::UnknownState`], with the name it may have meant.
+pub(crate) fn state_index(states: &[GearState], state: &str) -> Result<usize> {
+    states.iter().position(|s| s.name == state).ok_or_else(|| {
+        Error::Transmission(TransmissionError::UnknownState {
+            state: state.to_string(),
+            suggestion: states
+                .iter()
+                .find(|s| s.name.eq_ignore_ascii_case(state))
+                .map(|s| s.name.clone())
+                .or_else(|| suggest(state, states.iter().map(|s| s.name.as_str()))),
+        })
+    })
+}
+
 impl Train {
     /// The transmission data, checked for analysis: states present, input and
     /// output distinct moving links with known speeds, elements on sized links.
@@ -258,21 +277,7 @@ impl Train {
     /// [`TransmissionError::UnknownState`], and as [`Train::shift_table`].
     pub fn analyse_gear(&self, state: &str) -> Result<GearAnalysis> {
         let t = self.checked_transmission()?;
-        let k = t
-            .states
-            .iter()
-            .position(|s| s.name == state)
-            .ok_or_else(|| {
-                Error::Transmission(TransmissionError::UnknownState {
-                    state: state.to_string(),
-                    suggestion: t
-                        .states
-                        .iter()
-                        .find(|s| s.name.eq_ignore_ascii_case(state))
-                        .map(|s| s.name.clone())
-                        .or_else(|| suggest(state, t.states.iter().map(|s| s.name.as_str()))),
-                })
-            })?;
+        let k = state_index(&t.states, state)?;
         GearSolver::new(self, t)?.analyse(k)
     }
 

@@ -20,6 +20,7 @@ use crate::spec::parse::{self, Format};
 use crate::spec::{ElementKind, MeshKind, RatioSpec, ShiftSpec, Spec};
 
 mod build;
+mod compliance;
 mod extras;
 mod ids;
 mod size;
@@ -27,6 +28,9 @@ mod teeth;
 
 use build::build;
 
+pub use compliance::{
+    Compliance, DEFAULT_PRESSURE_ANGLE_DEG, ElementStiffness, MeshStiffness, TorsionSpring,
+};
 pub use ids::{ElementId, GearId, LevelId, LinkId, RevoluteId};
 pub(crate) use size::require_dense_links;
 pub use size::{MAX_DENSE_BYTES, MAX_TRAIN_LINKS, dense_bytes, most_dense_links};
@@ -197,6 +201,7 @@ pub struct Train {
     pub(crate) elements: Vec<ShiftElement>,
     pub(crate) transmission: Option<Transmission>,
     pub(crate) analysis: Analysis,
+    pub(crate) compliance: Option<Compliance>,
     pub(crate) checks: Vec<String>,
     pub(crate) design_warnings: Vec<String>,
 }
@@ -353,7 +358,12 @@ impl Train {
     pub fn transmission(&self) -> Option<&Transmission> {
         self.transmission.as_ref()
     }
-    /// Operating data from the spec.
+    /// The `[compliance]` data (mesh stiffnesses, springs), when given.
+    pub fn compliance(&self) -> Option<&Compliance> {
+        self.compliance.as_ref()
+    }
+
+    /// Operating data from the spec's `[analysis]` section.
     pub fn analysis(&self) -> &Analysis {
         &self.analysis
     }

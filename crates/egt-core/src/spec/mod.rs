@@ -59,6 +59,10 @@ pub struct Spec {
     /// Operating data for the analyses (speeds, loads, accelerations, curves).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub analysis: Option<AnalysisSpec>,
+    /// Mesh stiffnesses, torsional springs and compliant shift elements: the
+    /// data of the lumped torsional model (`egt modes`, docs/vibration.md).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub compliance: Option<ComplianceSpec>,
     /// Named gear changes in time (`[[shift]]`), run by `egt shift-sim
     /// --shift NAME`: the spec's alternative to the command's shift flags.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -433,6 +437,77 @@ pub struct AnalysisSpec {
     /// Time-simulation settings.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub simulate: Option<SimulateSpec>,
+}
+
+/// The compliance of the train for its lumped torsional model (Kahraman 1994;
+/// Lin & Parker 1999): a spring along the line of action of each gear pair,
+/// torsional springs between links, and engaged shift elements as springs.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ComplianceSpec {
+    /// Pressure angle \[degrees\] of every mesh without its own; default 20.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pressure_angle: Option<f64>,
+    /// One entry per gear pair: its mesh stiffness along the line of action.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub meshes: Vec<MeshStiffnessSpec>,
+    /// Torsional springs between two links, or from one link to the frame.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub springs: Vec<TorsionSpringSpec>,
+    /// Shift elements that are springs, not rigid constraints, when engaged.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub elements: Vec<ElementStiffnessSpec>,
+}
+
+/// The mesh stiffness of one gear pair (of each planet's mesh, for planets
+/// with copies), along its line of action.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct MeshStiffnessSpec {
+    /// The gear pair's name (`G1`, `P/sun-planet`, ...).
+    pub gear: String,
+    /// Mesh stiffness along the line of action \[N/m\].
+    pub stiffness: f64,
+    /// Mesh damping along the line of action \[N s/m\]. Default 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub damping: Option<f64>,
+    /// Pressure angle \[degrees\]; default `compliance.pressure_angle`, else 20.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pressure_angle: Option<f64>,
+    /// Base radii [r_bi, r_bj] \[m\]; default: the pitch radii times the
+    /// cosine of the pressure angle.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(deserialize_with = "optional_two")]
+    pub base_radii: Option<[f64; 2]>,
+}
+
+/// A torsional spring (a shaft, a coupling, a compliant output).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct TorsionSpringSpec {
+    /// Optional name; default `S<n>`, n counting from 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Two links, or one: a spring from that link to the frame.
+    pub links: Vec<String>,
+    /// Torsional stiffness \[N m/rad\].
+    pub stiffness: f64,
+    /// Torsional damping \[N m s/rad\]. Default 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub damping: Option<f64>,
+}
+
+/// An engaged shift element as a torsional spring.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ElementStiffnessSpec {
+    /// The element's name.
+    pub element: String,
+    /// Torsional stiffness \[N m/rad\] when engaged.
+    pub stiffness: f64,
+    /// Torsional damping \[N m s/rad\]. Default 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub damping: Option<f64>,
 }
 
 /// A pair written as an array of exactly two elements. (TOML's reader would

@@ -31,3 +31,6 @@ mod stability;
 
 // Issue 11: round-off never decides the direction of power (random teeth, exact reference).
 mod efficiency;
+
+// Issue 43: torsional natural frequencies and modes against hand-written models and closed forms.
+mod modes;

@@ -76,6 +76,7 @@ from ._transmission import (
     Spread,
     Step,
 )
+from ._vibration import Crossing, Modes, NaturalMode
 
 __all__ = [
     "__version__",
@@ -111,6 +112,9 @@ __all__ = [
     "Mode",
     "MasslessDirection",
     "StabilityReport",
+    "Modes",
+    "NaturalMode",
+    "Crossing",
     "Simulation",
     "ShiftSimulation",
     "ShiftQuality",

@@ -110,6 +110,11 @@ def stability(
     curves: Optional[List[_Curve]] = None,
     speeds: Optional[List[_Pair]] = None,
 ) -> _Documented: ...
+def modes(
+    core: TrainCore,
+    state: Optional[str] = None,
+    campbell: Optional[Tuple[float, float]] = None,
+) -> _Documented: ...
 def simulate(
     core: TrainCore,
     t_end: Optional[float] = None,

@@ -35,6 +35,7 @@ from ._args import ArgumentError, ArgumentKeyError, ArgumentTypeError, count, ma
 from ._egt import TrainCore, batch_plan
 from ._egt import atlas_member as _atlas_member
 from ._egt import gear as _gear
+from ._egt import modes as _modes
 from ._egt import shift_table as _shift_table
 from ._egt import shift_named as _shift_named
 from ._egt import shift_names as _shift_names
@@ -43,6 +44,7 @@ from ._egt import simulate as _simulate
 from ._egt import stability as _stability
 from ._motion import Curve, ShiftSimulation, Simulation, StabilityReport
 from ._transmission import GearState, ShiftTable
+from ._vibration import Modes
 from . import _units
 from ._results import (
     Circuit,
@@ -775,6 +777,24 @@ class Train:
         return ShiftSimulation._from_core(self._links, raw)
 
     # -- transmissions -----------------------------------------------------
+
+    def modes(
+        self,
+        state: Optional[str] = None,
+        *,
+        campbell: Optional[Tuple[float, float]] = None,
+    ) -> Modes:
+        """Natural frequencies and mass-normalised modes of the lumped
+        torsional model (a spring along each mesh's line of action, from the
+        spec's ``[compliance]``; docs/vibration.md), bare or in gear state
+        ``state``. ``campbell``: an input speed range (MIN, MAX) [rpm] for
+        the Campbell crossings, as ``egt modes --campbell --speed MIN:MAX``."""
+        rng = None
+        if campbell is not None:
+            if isinstance(campbell, (str, bytes)) or not isinstance(campbell, Sequence) or len(campbell) != 2:
+                raise ArgumentTypeError("campbell must be a (min, max) pair of speeds [rpm]")
+            rng = (number(campbell[0], "campbell[0]"), number(campbell[1], "campbell[1]"))
+        return Modes._from_core(_modes(self._core, None if state is None else str(state), rng))
 
     def gear(self, state: str) -> GearState:
         """One gear state of the transmission, per unit input speed and torque."""

@@ -422,10 +422,14 @@ pub(super) fn build(spec: &Spec, draft: &Draft) -> Result<Train> {
         elements: Vec::new(),
         transmission: None,
         analysis: Analysis::default(),
+        compliance: None,
         checks: topo.checks,
         design_warnings: Vec::new(),
     };
     resolve_extras(spec, &mut train)?;
+    if let Some(c) = &spec.compliance {
+        train.compliance = Some(super::compliance::resolve_compliance(c, &train)?);
+    }
     train.design_warnings = planetary_warnings(spec, &train);
     Ok(train)
 }

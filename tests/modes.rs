@@ -1,0 +1,167 @@
+//! `egt modes` as a user runs it (issue 43): the JSON is what the library
+//! computes, the text table, `--state`, and a spec without compliance data
+//! refused with `missing_data` naming the gear pairs. The physics is tested
+//! in egt-core's tests (`crates/egt-core/tests/analyses/modes.rs`).
+
+// A failed unwrap is a failed test that prints the error: what a test wants.
+#![allow(clippy::unwrap_used)]
+
+use egt_core::ModesRequest;
+
+use crate::util::{Run, close, example};
+
+const SPEC: &str = "examples/simple_planetary_compliant.toml";
+
+fn egt(args: &[&str]) -> Run {
+    crate::util::egt(args, None)
+}
+
+#[test]
+fn cli_modes_json_is_the_librarys_modes() {
+    let t = example("simple_planetary_compliant.toml");
+    for state in [None, Some("low"), Some("direct")] {
+        let mut args = vec!["modes", SPEC, "--format", "json"];
+        if let Some(s) = state {
+            args.extend(["--state", s]);
+        }
+        let out = egt(&args);
+        assert_eq!(out.code, 0, "{}", out.stderr);
+        let v: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
+        let m = t
+            .modes(&ModesRequest {
+                state: state.map(String::from),
+                ..ModesRequest::default()
+            })
+            .unwrap();
+        assert_eq!(v["dof"], m.dof);
+        assert_eq!(v["state"], serde_json::json!(state));
+        assert_eq!(v["coordinates"][2]["name"], m.model.coordinates[2].name);
+        let modes = v["modes"].as_array().unwrap();
+        assert_eq!(modes.len(), m.modes.len());
+        for (j, x) in modes.iter().zip(&m.modes) {
+            assert!(close(j["hertz"].as_f64().unwrap(), x.hertz, 1e-15));
+            assert!(close(j["omega"].as_f64().unwrap(), x.omega, 1e-15));
+            assert_eq!(j["multiplicity"], x.multiplicity);
+            assert_eq!(j["rigid"], x.rigid);
+        }
+        // Three planets: one planet mode of multiplicity 2 in every state.
+        assert_eq!(
+            modes
+                .iter()
+                .filter(|x| x["rigid"] == false && x["multiplicity"] == 2)
+                .count(),
+            2,
+            "{state:?}"
+        );
+    }
+}
+
+#[test]
+fn cli_modes_table_names_the_modes() {
+    let out = egt(&["modes", SPEC, "--state", "low"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let s = &out.stdout;
+    assert!(s.contains("torsional modes in gear state low"), "{s}");
+    assert!(
+        s.contains("held rigidly: B; rigid-body modes (DOF): 1"),
+        "{s}"
+    );
+    assert!(s.contains("2 (degenerate)"), "{s}");
+    assert!(s.contains("P.planet#3"), "{s}");
+    assert!(s.contains("strain energy per spring"), "{s}");
+}
+
+#[test]
+fn cli_modes_without_stiffness_is_missing_data_naming_the_gear_pairs() {
+    let out = egt(&[
+        "modes",
+        "examples/simple_planetary.toml",
+        "--format",
+        "json",
+    ]);
+    assert_eq!(out.code, 1);
+    let v: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
+    assert_eq!(v["error"]["code"], "missing_data");
+    let msg = v["error"]["message"].as_str().unwrap();
+    assert!(
+        msg.contains("`P/sun-planet`") && msg.contains("`P/planet-ring`"),
+        "{msg}"
+    );
+    assert!(out.stderr.contains("compliance.meshes"), "{}", out.stderr);
+
+    let out = egt(&["modes", SPEC, "--state", "lo"]);
+    assert_eq!(out.code, 2);
+    assert!(out.stderr.contains("low"), "{}", out.stderr);
+}
+
+/// The frequency table pasted in docs/vibration.md is what `egt modes` prints.
+#[test]
+fn docs_vibration_md_shows_the_real_output() {
+    let out = egt(&["modes", SPEC, "--state", "low"]);
+    let doc = std::fs::read_to_string(crate::util::root().join("docs/vibration.md")).unwrap();
+    for line in out.stdout.lines().take(10) {
+        assert!(
+            doc.contains(line),
+            "docs/vibration.md lacks the line\n{line}"
+        );
+    }
+}
+
+/// `--campbell --speed MIN:MAX`: the crossings of the JSON are the
+/// library's, within the range; `--speed` alone is a usage error.
+#[test]
+fn cli_modes_campbell_crossings() {
+    let out = egt(&[
+        "modes",
+        SPEC,
+        "--state",
+        "low",
+        "--campbell",
+        "--speed",
+        "0:55000",
+        "--format",
+        "json",
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let v: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
+    let m = &v["meshing"];
+    assert_eq!(m["input"], "sun");
+    assert_eq!(m["range"], serde_json::json!([0.0, 55000.0]));
+    let crossings = m["crossings"].as_array().unwrap();
+    // Two meshes of order 30 x 72 / 102 cross the two lowest distinct
+    // elastic frequencies (7928 Hz, 19233 Hz) below 55 000 rpm.
+    assert_eq!(crossings.len(), 4);
+    for c in crossings {
+        let speed = c["speed"].as_f64().unwrap();
+        let f = c["hertz"].as_f64().unwrap();
+        assert!(close(speed, 60.0 * f / (30.0 * 72.0 / 102.0), 1e-12));
+        assert!(speed <= 55000.0);
+    }
+    let out = egt(&["modes", SPEC, "--speed", "0:10"]);
+    assert_eq!(out.code, 2);
+    let out = egt(&["modes", SPEC, "--campbell"]);
+    assert_eq!(out.code, 1);
+    assert!(out.stderr.contains("one rigid-body mode"), "{}", out.stderr);
+}
+
+/// The Campbell table pasted in docs/vibration.md is what `egt modes` prints.
+#[test]
+fn docs_vibration_md_shows_the_real_campbell_table() {
+    let out = egt(&[
+        "modes",
+        SPEC,
+        "--state",
+        "low",
+        "--campbell",
+        "--speed",
+        "0:55000",
+    ]);
+    let doc = std::fs::read_to_string(crate::util::root().join("docs/vibration.md")).unwrap();
+    let start = out.stdout.find("mesh (tooth-pass)").unwrap();
+    for line in out.stdout[start..].lines() {
+        assert!(
+            doc.contains(line),
+            "docs/vibration.md lacks the line\n{line}"
+        );
+    }
+}
