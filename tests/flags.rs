@@ -73,6 +73,8 @@ const RUNS: &[(&str, &str, Base, &[&str])] = &[
     ("modes", "state", COMPLIANT, &["--state", "low"]),
     ("modes", "campbell", COMPLIANT, &["--state", "low", "--campbell"]),
     ("modes", "speed", COMPLIANT, &["--state", "low", "--campbell", "--speed", "0:7000"]),
+    ("modes", "plot", COMPLIANT, &["--state", "low", "--campbell", "--plot", "{tmp}/campbell.svg"]),
+    ("modes", "static", COMPLIANT, &["--state", "low", "--static", "10"]),
     ("simulate", "spec-format", FIG5, &["--spec-format", "toml", "--t-end", "0.1"]),
     ("simulate", "format", FIG5, &["--format", "csv", "--t-end", "0.1"]),
     ("simulate", "slope", FIG5, &["--slope", "2=0.01", "--t-end", "0.1"]),

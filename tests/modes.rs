@@ -165,3 +165,98 @@ fn docs_vibration_md_shows_the_real_campbell_table() {
         );
     }
 }
+
+/// `--static TORQUE`: the springs' mesh torques agree with eq. (11)'s, and
+/// the output reacts the input by the gear's published ratio; `--static` without `--state` is a usage error
+/// and a non-finite torque is refused naming the flag.
+#[test]
+fn cli_modes_static_deflection_carries_eq_11s_mesh_torques() {
+    const HP: &str = "examples/zf_8hp70_compliant.toml";
+    let out = egt(&[
+        "modes", HP, "--state", "2", "--static", "300", "--format", "json",
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let v: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
+    let s = &v["static_load"];
+    assert_eq!(s["input_torque"], 300.0);
+    // Second gear's ratio is 3.130 (published, three decimals): the output
+    // reacts -300 x 3.130 N m.
+    let ratio = -s["output_torque"].as_f64().unwrap() / 300.0;
+    assert!((ratio - 3.130).abs() < 5e-4, "ratio {ratio}");
+    let meshes = s["meshes"].as_array().unwrap();
+    assert_eq!(meshes.len(), 8);
+    let top = meshes
+        .iter()
+        .map(|m| m["rigid_torque"].as_f64().unwrap().abs())
+        .fold(0.0, f64::max);
+    assert!(top > 10.0);
+    for m in meshes {
+        let (a, b) = (
+            m["rigid_torque"].as_f64().unwrap(),
+            m["compliant_torque"].as_f64().unwrap(),
+        );
+        assert!(
+            (a - b).abs() < 1e-10 * top,
+            "{}: {a} against {b}",
+            m["gear"]
+        );
+    }
+    assert_eq!(s["elements"].as_array().unwrap().len(), 3);
+    let table = egt(&["modes", HP, "--state", "2", "--static", "300"]);
+    assert_eq!(table.code, 0, "{}", table.stderr);
+    assert!(
+        table
+            .stdout
+            .contains("static deflection: 300 N m on the input"),
+        "{}",
+        table.stdout
+    );
+    assert!(
+        table.stdout.contains("held elements' torques: A "),
+        "{}",
+        table.stdout
+    );
+    let out = egt(&["modes", HP, "--static", "300"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    let out = egt(&["modes", HP, "--state", "2", "--static", "NaN"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("--static"), "{}", out.stderr);
+}
+
+/// `--plot FILE` writes a Campbell diagram: an SVG with a ray per mesh, a
+/// line per drawn frequency group and a circle per crossing; without
+/// `--campbell` it is a usage error.
+#[test]
+fn cli_modes_campbell_plot_draws_every_crossing() {
+    let dir = std::env::temp_dir().join(format!("egt-campbell-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("campbell.svg");
+    let p = path.to_str().unwrap();
+    let out = egt(&[
+        "modes",
+        SPEC,
+        "--state",
+        "low",
+        "--campbell",
+        "--speed",
+        "0:55000",
+        "--plot",
+        p,
+        "--format",
+        "json",
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let v: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
+    let svg = std::fs::read_to_string(&path).unwrap();
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    let crossings = v["meshing"]["crossings"].as_array().unwrap().len();
+    assert_eq!(svg.matches("<circle").count(), crossings);
+    assert_eq!(
+        svg.matches("<polyline").count(),
+        v["meshing"]["orders"].as_array().unwrap().len()
+    );
+    assert!(svg.contains("input speed [rpm]"));
+    std::fs::remove_dir_all(&dir).unwrap();
+    let out = egt(&["modes", SPEC, "--plot", p]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+}

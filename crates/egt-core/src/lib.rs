@@ -111,7 +111,9 @@ pub mod design;
 pub mod synthesis;
 
 pub use analysis::dynamics::{DynamicsRequest, InverseDynamics, LoadOverrides, MeshLoad};
-pub use analysis::modes::{ModesRequest, NaturalMode, NaturalModes};
+pub use analysis::modes::{
+    MeshCheck, ModesRequest, NaturalMode, NaturalModes, SpringLoad, StaticCheck, StaticDeflection,
+};
 pub use analysis::power::{Driver, LinkPower, MeshPower, PowerFlow, PowerRequest};
 pub use analysis::stability::{
     CoordinateSource, Mode, OperatingPoint, ReducedModel, Stability, StabilityReport,

@@ -43,6 +43,60 @@ pub struct Report {
     pub modes: Vec<egt_core::analysis::modes::NaturalMode>,
     /// Mesh orders and Campbell crossings (one rigid-body mode only).
     pub meshing: Option<MeshingOut>,
+    /// The static deflection under a steady input torque (`--static`),
+    /// beside the rigid model's eq. (11); absent unless asked for.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub static_load: Option<StaticOut>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct ElementTorqueOut {
+    pub name: String,
+    /// The torque its first link spends on it \[N m\] (as `egt dynamics`).
+    pub torque: f64,
+}
+
+#[derive(Debug, Serialize)]
+pub struct StaticOut {
+    /// The torque on the transmission input \[N m\].
+    pub input_torque: f64,
+    /// The output's reaction that balances it \[N m\].
+    pub output_torque: f64,
+    /// Per gear pair: eq. (11)'s mesh torque on gear i, the springs' (force
+    /// times base radius, over the copies), one copy's force along the line
+    /// of action \[N\] and deflection \[m\].
+    pub meshes: Vec<egt_core::MeshCheck>,
+    /// Every spring's deflection and force.
+    pub springs: Vec<egt_core::SpringLoad>,
+    /// The torques of the elements held rigidly.
+    pub elements: Vec<ElementTorqueOut>,
+}
+
+/// The static part of the document: `check` under `input_torque` on the
+/// transmission input, the output reacting.
+pub fn statics(
+    train: &Train,
+    m: &NaturalModes,
+    check: &egt_core::StaticCheck,
+    input_torque: f64,
+) -> StaticOut {
+    let output = train.transmission().map(|t| t.output);
+    StaticOut {
+        input_torque,
+        output_torque: output.map_or(0.0, |o| check.torque[o.index()]),
+        meshes: check.meshes.clone(),
+        springs: check.deflection.springs.clone(),
+        elements: m
+            .model
+            .constraint_names
+            .iter()
+            .zip(&check.deflection.element_torques)
+            .map(|(name, &torque)| ElementTorqueOut {
+                name: name.clone(),
+                torque,
+            })
+            .collect(),
+    }
 }
 
 #[derive(Debug, Serialize)]
@@ -94,5 +148,6 @@ pub fn build(train: &Train, source: &str, m: &NaturalModes) -> Report {
             range: x.range,
             crossings: x.crossings.clone(),
         }),
+        static_load: None,
     }
 }

@@ -5,14 +5,17 @@
 //! shares of strain energy per spring and of kinetic energy per coordinate.
 
 use std::io::Write;
+use std::path::PathBuf;
 
 use anyhow::Context;
-use egt_core::{ModesRequest, Train};
-use egt_views::modes::{Report, build};
+use egt_core::{DynamicsRequest, ModesRequest, Train};
+use egt_views::modes::{Report, build, statics};
 
 use crate::args::{OutputFormat, SpecArgs};
 use crate::input;
 use crate::report::{self, Table};
+
+mod campbell;
 
 /// Arguments of `egt modes`.
 #[derive(Debug, Clone, clap::Args)]
@@ -32,6 +35,20 @@ pub struct Args {
     /// The input speed range of `--campbell`, `MIN:MAX` [rpm].
     #[arg(long = "speed", value_name = "MIN:MAX", default_value = "0:7000", value_parser = parse_range, requires = "campbell")]
     pub speed: [f64; 2],
+    /// Write the Campbell diagram (SVG) to FILE: natural frequencies against
+    /// the tooth-pass frequencies over the input speed, crossings circled.
+    #[arg(long = "plot", value_name = "FILE", requires = "campbell")]
+    pub plot: Option<PathBuf>,
+    /// Also the static deflection under TORQUE [N m] on the transmission
+    /// input, the output reacting it: each mesh's force and deflection beside
+    /// the rigid model's eq. (11) mesh torque, and the held elements' torques.
+    #[arg(
+        long = "static",
+        value_name = "TORQUE",
+        requires = "state",
+        allow_hyphen_values = true
+    )]
+    pub static_torque: Option<f64>,
 }
 
 /// `MIN:MAX` as two numbers.
@@ -63,7 +80,32 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
     let modes = train
         .modes(&req)
         .with_context(|| format!("{}: modes", loaded.source))?;
-    let report = build(train, &loaded.source, &modes);
+    let mut report = build(train, &loaded.source, &modes);
+    if let Some(torque) = args.static_torque {
+        if !torque.is_finite() {
+            anyhow::bail!(egt_core::Error::invalid(
+                "--static",
+                format!("the input torque must be finite, not {torque}")
+            ));
+        }
+        let t = train
+            .transmission()
+            .ok_or(egt_core::TransmissionError::NoStates)?;
+        let req = DynamicsRequest {
+            torques: vec![(t.input, torque)],
+            driving: vec![t.output],
+            ..DynamicsRequest::default()
+        };
+        let check = train
+            .static_check(args.state.as_deref(), &req)
+            .with_context(|| format!("{}: static deflection", loaded.source))?;
+        report.static_load = Some(statics(train, &modes, &check, torque));
+    }
+    if let Some(path) = &args.plot {
+        let title = format!("{}: Campbell diagram", report::title(train, &loaded.source));
+        std::fs::write(path, campbell::svg(&title, &report))
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
     match args.spec.format {
         OutputFormat::Json => report::json(out, &report),
         OutputFormat::Table => write_table(out, train, &loaded.source, &report),
@@ -179,6 +221,9 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
         t.row(cells);
     }
     t.write(out, 2)?;
+    if let Some(st) = &r.static_load {
+        write_static(out, st)?;
+    }
     if let Some(m) = &r.meshing {
         writeln!(
             out,
@@ -227,4 +272,41 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
 fn clean(v: f64, shape: &[f64]) -> f64 {
     let big = shape.iter().fold(0.0_f64, |a, x| a.max(x.abs()));
     if v.abs() <= 1e-12 * big { 0.0 } else { v }
+}
+
+/// The static deflection under `--static`: mesh by mesh beside eq. (11).
+fn write_static(out: &mut dyn Write, st: &egt_views::modes::StaticOut) -> anyhow::Result<()> {
+    writeln!(
+        out,
+        "static deflection: {} N m on the input, {} N m on the output; mesh torques on gear i against the rigid model (eq. 11):",
+        report::float(st.input_torque),
+        report::float(st.output_torque)
+    )?;
+    let mut t = Table::new(&[
+        "gear pair",
+        "eq. (11) [N m]",
+        "springs [N m]",
+        "force per mesh [N]",
+        "deflection [um]",
+    ])
+    .right(&[1, 2, 3, 4]);
+    for m in &st.meshes {
+        t.row(vec![
+            m.gear.clone(),
+            report::sci(m.rigid_torque),
+            report::sci(m.compliant_torque),
+            report::sci(m.force),
+            report::sci(1e6 * m.deflection),
+        ]);
+    }
+    t.write(out, 2)?;
+    if !st.elements.is_empty() {
+        let held: Vec<String> = st
+            .elements
+            .iter()
+            .map(|e| format!("{} {} N m", e.name, report::sci(e.torque)))
+            .collect();
+        writeln!(out, "held elements' torques: {}", held.join(", "))?;
+    }
+    Ok(())
 }

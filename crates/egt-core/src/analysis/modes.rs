@@ -3,11 +3,13 @@
 //! state: the rigid-body modes (as many as the DOF the springs leave, each a
 //! solution of the kinematics), the elastic modes with their frequencies,
 //! multiplicities, and the shares of strain energy per spring and of kinetic
-//! energy per coordinate.
+//! energy per coordinate; and the static deflection under a steady load,
+//! mesh by mesh beside the rigid model's eq. (11) (`statics`).
 
 mod eigen;
 mod meshing;
 mod model;
+mod statics;
 
 use nalgebra::DMatrix;
 use serde::Serialize;
@@ -15,6 +17,7 @@ use serde::Serialize;
 pub use eigen::NULL_TOLERANCE;
 pub use meshing::{Crossing, MeshOrder, Meshing};
 pub use model::{ElasticElement, ElasticKind, ModeCoordinate, TorsionalModel};
+pub use statics::{BALANCE_TOLERANCE, MeshCheck, SpringLoad, StaticCheck, StaticDeflection};
 
 use crate::error::Result;
 use crate::model::train::Train;

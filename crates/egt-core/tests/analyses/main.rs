@@ -34,3 +34,6 @@ mod efficiency;
 
 // Issue 43: torsional natural frequencies and modes against hand-written models and closed forms.
 mod modes;
+
+// Issue 43: the compliant model's static mesh forces against eq. (11).
+mod statics;

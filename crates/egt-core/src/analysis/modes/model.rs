@@ -61,6 +61,10 @@ pub struct ElasticElement {
     pub damping: f64,
     /// Its deflection per unit coordinate (m/rad for a mesh, rad/rad otherwise).
     pub row: Vec<f64>,
+    /// For a mesh: its gear pair and the base radius of gear i (m), the
+    /// lever of the mesh force about gear i's axis.
+    #[serde(skip)]
+    pub mesh: Option<(GearId, f64)>,
 }
 
 /// The model: coordinates, the diagonal mass matrix, springs, constraints.
@@ -218,6 +222,7 @@ impl Train {
                     stiffness: m.stiffness,
                     damping: m.damping,
                     row,
+                    mesh: Some((c.gear, rb)),
                 });
             }
         }
@@ -229,6 +234,7 @@ impl Train {
                 stiffness: s.stiffness,
                 damping: s.damping,
                 row,
+                mesh: None,
             });
         }
         let mut rows: Vec<Vec<f64>> = Vec::new();
@@ -247,6 +253,7 @@ impl Train {
                     stiffness: k.stiffness,
                     damping: k.damping,
                     row,
+                    mesh: None,
                 }),
                 None => {
                     rows.push(row);
