@@ -260,3 +260,50 @@ fn cli_modes_campbell_plot_draws_every_crossing() {
     let out = egt(&["modes", SPEC, "--plot", p]);
     assert_eq!(out.code, 2, "{}", out.stderr);
 }
+
+/// The 8HP70 table of docs/vibration.md is what `egt modes` gives in each
+/// gear: the three lowest distinct elastic frequencies (rounded to Hz) and
+/// the number of Campbell crossings from 0 to 7000 rpm.
+#[test]
+fn docs_vibration_md_8hp_table_is_the_real_output() {
+    let doc = std::fs::read_to_string(crate::util::root().join("docs/vibration.md")).unwrap();
+    let mut seen = 0;
+    for gear in ["1", "2", "3", "4", "5", "6", "7", "8", "R"] {
+        let row = doc
+            .lines()
+            .find(|l| {
+                l.starts_with(&format!("| {gear} | ")) && l.contains("Hz)")
+                    || l.starts_with(&format!("| {gear} | ")) && l.ends_with("| 0 | - |")
+            })
+            .unwrap_or_else(|| panic!("no row for gear {gear}"));
+        let out = egt(&[
+            "modes",
+            "examples/zf_8hp70_compliant.toml",
+            "--state",
+            gear,
+            "--campbell",
+            "--format",
+            "json",
+        ]);
+        assert_eq!(out.code, 0, "{}", out.stderr);
+        let v: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
+        let modes = v["modes"].as_array().unwrap();
+        let lowest: Vec<String> = modes
+            .iter()
+            .enumerate()
+            .filter(|(k, m)| !m["rigid"].as_bool().unwrap() && m["group"] == *k)
+            .take(3)
+            .map(|(_, m)| format!("{:.0} (", m["hertz"].as_f64().unwrap()))
+            .collect();
+        for f in &lowest {
+            assert!(row.contains(f.as_str()), "gear {gear}: {f} not in\n{row}");
+        }
+        let crossings = v["meshing"]["crossings"].as_array().unwrap().len();
+        assert!(
+            row.contains(&format!(" | {crossings} | ")),
+            "gear {gear}: {crossings} crossings, doc row\n{row}"
+        );
+        seen += 1;
+    }
+    assert_eq!(seen, 9);
+}

@@ -43,6 +43,9 @@ pub struct Report {
     pub modes: Vec<egt_core::analysis::modes::NaturalMode>,
     /// Mesh orders and Campbell crossings (one rigid-body mode only).
     pub meshing: Option<MeshingOut>,
+    /// The damped modes (complex eigenvalues), by rising |lambda|; empty
+    /// without damping.
+    pub damped: Vec<egt_core::analysis::modes::DampedMode>,
     /// The static deflection under a steady input torque (`--static`),
     /// beside the rigid model's eq. (11); absent unless asked for.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -148,6 +151,7 @@ pub fn build(train: &Train, source: &str, m: &NaturalModes) -> Report {
             range: x.range,
             crossings: x.crossings.clone(),
         }),
+        damped: m.damped.clone(),
         static_load: None,
     }
 }

@@ -8,7 +8,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use egt_core::{DynamicsRequest, ModesRequest, Train};
+use egt_core::{ModesRequest, Train};
 use egt_views::modes::{Report, build, statics};
 
 use crate::args::{OutputFormat, SpecArgs};
@@ -81,23 +81,15 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         .modes(&req)
         .with_context(|| format!("{}: modes", loaded.source))?;
     let mut report = build(train, &loaded.source, &modes);
-    if let Some(torque) = args.static_torque {
+    if let (Some(torque), Some(state)) = (args.static_torque, args.state.as_deref()) {
         if !torque.is_finite() {
             anyhow::bail!(egt_core::Error::invalid(
                 "--static",
                 format!("the input torque must be finite, not {torque}")
             ));
         }
-        let t = train
-            .transmission()
-            .ok_or(egt_core::TransmissionError::NoStates)?;
-        let req = DynamicsRequest {
-            torques: vec![(t.input, torque)],
-            driving: vec![t.output],
-            ..DynamicsRequest::default()
-        };
         let check = train
-            .static_check(args.state.as_deref(), &req)
+            .static_check_in_gear(state, torque)
             .with_context(|| format!("{}: static deflection", loaded.source))?;
         report.static_load = Some(statics(train, &modes, &check, torque));
     }
@@ -221,6 +213,30 @@ fn write_table(out: &mut dyn Write, train: &Train, source: &str, r: &Report) -> 
         t.row(cells);
     }
     t.write(out, 2)?;
+    if !r.damped.is_empty() {
+        writeln!(
+            out,
+            "damped modes (eigenvalues sigma + i omega_d of the model with its damping):"
+        )?;
+        let mut t = Table::new(&[
+            "",
+            "sigma [1/s]",
+            "omega_d [rad/s]",
+            "f_d [Hz]",
+            "damping ratio",
+        ])
+        .right(&[0, 1, 2, 3, 4]);
+        for (k, d) in r.damped.iter().enumerate() {
+            t.row(vec![
+                (k + 1).to_string(),
+                report::sci(d.sigma),
+                report::sci(d.omega_d),
+                report::sci(d.hertz_d),
+                report::sci(d.damping_ratio),
+            ]);
+        }
+        t.write(out, 2)?;
+    }
     if let Some(st) = &r.static_load {
         write_static(out, st)?;
     }

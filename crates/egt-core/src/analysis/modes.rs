@@ -3,9 +3,11 @@
 //! state: the rigid-body modes (as many as the DOF the springs leave, each a
 //! solution of the kinematics), the elastic modes with their frequencies,
 //! multiplicities, and the shares of strain energy per spring and of kinetic
-//! energy per coordinate; and the static deflection under a steady load,
+//! energy per coordinate; the damped modes' complex eigenvalues when damping
+//! is given (`damped`); and the static deflection under a steady load,
 //! mesh by mesh beside the rigid model's eq. (11) (`statics`).
 
+mod damped;
 mod eigen;
 mod meshing;
 mod model;
@@ -14,6 +16,7 @@ mod statics;
 use nalgebra::DMatrix;
 use serde::Serialize;
 
+pub use damped::DampedMode;
 pub use eigen::NULL_TOLERANCE;
 pub use meshing::{Crossing, MeshOrder, Meshing};
 pub use model::{ElasticElement, ElasticKind, ModeCoordinate, TorsionalModel};
@@ -77,6 +80,9 @@ pub struct NaturalModes {
     /// rigid-body mode, an input link and tooth counts (else None, unless
     /// the crossings were asked for: then an error says what is missing).
     pub meshing: Option<Meshing>,
+    /// The damped modes (complex eigenvalues of the model with its damping),
+    /// by rising |lambda|; empty when no damping is given.
+    pub damped: Vec<DampedMode>,
 }
 
 impl Train {
@@ -110,7 +116,7 @@ impl Train {
         let (t, _) = if model.constraints.nrows() == 0 {
             (DMatrix::identity(n, n), DMatrix::zeros(n, 0))
         } else {
-            eigen::null_space(&model.constraints, n)
+            eigen::null_space(&model.constraints, n)?
         };
         let springs = DMatrix::from_fn(model.elastic.len(), n, |r, c| model.elastic[r].row[c]);
         let k = model.stiffness();
@@ -133,25 +139,25 @@ impl Train {
                 shape,
             });
         }
+        // Every spring's deflection in every elastic mode, one product (the
+        // sign a shape takes below does not matter: energies are squares).
+        let deflections = &springs * &e.elastic;
+        let damped_modes = damped::damped_modes(&model, &deflections, &e.lambda)?;
         for (c, &lambda) in e.lambda.iter().enumerate() {
             let shape = normalised(e.elastic.column(c).iter().copied().collect());
             let omega = lambda.sqrt();
-            let deflection: Vec<f64> = model
-                .elastic
-                .iter()
-                .map(|s| s.row.iter().zip(&shape).map(|(a, b)| a * b).sum::<f64>())
-                .collect();
+            let deflection = deflections.column(c);
             let strain: Vec<f64> = model
                 .elastic
                 .iter()
-                .zip(&deflection)
+                .zip(deflection.iter())
                 .map(|(s, d)| s.stiffness * d * d)
                 .collect();
             let total: f64 = strain.iter().sum();
             let damping = model
                 .elastic
                 .iter()
-                .zip(&deflection)
+                .zip(deflection.iter())
                 .map(|(s, d)| s.damping * d * d)
                 .sum::<f64>();
             modes.push(NaturalMode {
@@ -185,6 +191,7 @@ impl Train {
             dof,
             modes,
             meshing,
+            damped: damped_modes,
         })
     }
 }

@@ -37,3 +37,6 @@ mod modes;
 
 // Issue 43: the compliant model's static mesh forces against eq. (11).
 mod statics;
+
+// Issue 43: the damped modes' complex eigenvalues against the closed form.
+mod damped;

@@ -76,7 +76,7 @@ from ._transmission import (
     Spread,
     Step,
 )
-from ._vibration import Crossing, Modes, NaturalMode
+from ._vibration import Crossing, DampedMode, MeshCheck, Modes, NaturalMode, StaticLoad
 
 __all__ = [
     "__version__",
@@ -115,6 +115,9 @@ __all__ = [
     "Modes",
     "NaturalMode",
     "Crossing",
+    "StaticLoad",
+    "MeshCheck",
+    "DampedMode",
     "Simulation",
     "ShiftSimulation",
     "ShiftQuality",

@@ -114,6 +114,7 @@ def modes(
     core: TrainCore,
     state: Optional[str] = None,
     campbell: Optional[Tuple[float, float]] = None,
+    static_torque: Optional[float] = None,
 ) -> _Documented: ...
 def simulate(
     core: TrainCore,

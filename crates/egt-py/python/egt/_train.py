@@ -659,18 +659,29 @@ class Train(ShiftMethods):
         state: Optional[str] = None,
         *,
         campbell: Optional[Tuple[float, float]] = None,
+        static_torque: Optional[float] = None,
     ) -> Modes:
         """Natural frequencies and mass-normalised modes of the lumped
         torsional model (a spring along each mesh's line of action, from the
         spec's ``[compliance]``; docs/vibration.md), bare or in gear state
         ``state``. ``campbell``: an input speed range (MIN, MAX) [rpm] for
-        the Campbell crossings, as ``egt modes --campbell --speed MIN:MAX``."""
+        the Campbell crossings, as ``egt modes --campbell --speed MIN:MAX``.
+        ``static_torque``: the static deflection under this torque [N m] on
+        the transmission input in ``state`` (``Modes.static_load``), as
+        ``egt modes --state G --static TORQUE``."""
         rng = None
         if campbell is not None:
             if isinstance(campbell, (str, bytes)) or not isinstance(campbell, Sequence) or len(campbell) != 2:
                 raise ArgumentTypeError("campbell must be a (min, max) pair of speeds [rpm]")
             rng = (number(campbell[0], "campbell[0]"), number(campbell[1], "campbell[1]"))
-        return Modes._from_core(_modes(self._core, None if state is None else str(state), rng))
+        torque = None
+        if static_torque is not None:
+            torque = number(static_torque, "static_torque")
+            if not math.isfinite(torque):
+                raise ArgumentError(f"static_torque must be finite, got {torque}")
+            if state is None:
+                raise ArgumentError("static_torque needs a gear state: the elements that hold the load")
+        return Modes._from_core(_modes(self._core, None if state is None else str(state), rng, torque))
 
     def gear(self, state: str) -> GearState:
         """One gear state of the transmission, per unit input speed and torque."""

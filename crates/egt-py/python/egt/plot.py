@@ -9,6 +9,8 @@ render inline in notebooks; the result classes' ``plot()`` methods call these.
 - :func:`simulation`: link speeds against time.
 - :func:`power_flow`: per mesh, the rolling power and the loss.
 - :func:`eigenvalues`: a stability report's eigenvalues and verdict.
+- :func:`campbell`: natural frequencies against tooth-pass frequencies over
+  the input speed, crossings circled (``egt modes --campbell --plot``).
 """
 
 from __future__ import annotations
@@ -22,8 +24,9 @@ if TYPE_CHECKING:  # pragma: no cover
     from ._results import PowerFlow
     from ._train import Train
     from ._transmission import ShiftTable
+    from ._vibration import Modes
 
-__all__ = ["speed_ladder", "ratios", "simulation", "power_flow", "eigenvalues"]
+__all__ = ["speed_ladder", "ratios", "simulation", "power_flow", "eigenvalues", "campbell"]
 
 
 def _axes(ax: Optional["Axes"]) -> "Axes":
@@ -161,3 +164,35 @@ def eigenvalues(report: "StabilityReport", ax: Optional["Axes"] = None) -> "Axes
     ax.set_xlabel("eigenvalue [1/s]")
     ax.set_title(f"stability: {report.verdict}")
     return ax
+
+
+def campbell(modes: "Modes", ax: Optional["Axes"] = None) -> "Axes":
+    """The Campbell diagram of :meth:`egt.Train.modes` with ``campbell=``:
+    each distinct elastic frequency up to a little above the highest mesh
+    frequency as a grey line, each mesh's tooth-pass frequency as a ray from
+    the origin over the input speed, the crossings circled."""
+    if modes.mesh_orders is None or modes.speed_range is None:
+        raise ValueError("a Campbell diagram needs Train.modes(state, campbell=(min, max))")
+    ax = _axes(ax)
+    lo, hi = modes.speed_range
+    top = max((o * hi / 60.0 for o in modes.mesh_orders.values()), default=0.0)
+    ceiling = 1.15 * top if top > 0 else 1.0
+    for k, m in enumerate(modes.modes):
+        if not m.rigid and m.group == k and m.hertz <= ceiling:
+            ax.axhline(m.hertz, color="0.6", lw=1.0)
+            ax.annotate(f"mode {k + 1}", (lo, m.hertz), fontsize="x-small", color="0.4", va="bottom")
+    colours = {}
+    for gear, order in modes.mesh_orders.items():
+        (line,) = ax.plot([lo, hi], [order * lo / 60.0, order * hi / 60.0], label=f"{gear} (order {order:.4g})")
+        colours[gear] = line.get_color()
+    for c in modes.crossings:
+        ax.plot([c.speed], [c.hertz], "o", mfc="none", color=colours.get(c.gear, "k"))
+    ax.set_xlim(lo, hi)
+    ax.set_ylim(0.0, ceiling)
+    ax.set_xlabel("input speed [rpm]")
+    ax.set_ylabel("frequency [Hz]")
+    state = "" if modes.state is None else f" in gear state {modes.state}"
+    ax.set_title(f"Campbell diagram{state}: {len(modes.crossings)} crossing(s)")
+    ax.legend(fontsize="x-small")
+    return ax
+

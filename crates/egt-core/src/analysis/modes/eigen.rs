@@ -2,9 +2,10 @@
 //! torsional model, on the coordinates its rigid constraints leave: the
 //! rigid-body modes (the null space of the springs' rows, which is the
 //! kinematics) apart, the elastic modes on the rest by a Cholesky reduction
-//! of M and nalgebra's symmetric eigensolver.
+//! of M and faer's symmetric eigensolver (blocked, a divide-and-conquer
+//! tridiagonal stage: at 1000 coordinates several times nalgebra's).
 
-use nalgebra::{DMatrix, SymmetricEigen};
+use nalgebra::{DMatrix, DVector};
 
 use crate::error::{AnalysisError, Result};
 
@@ -23,10 +24,31 @@ pub(crate) struct Eigen {
     pub elastic: DMatrix<f64>,
 }
 
+/// Eigenvalues (ascending) and orthonormal eigenvectors of the symmetric
+/// matrix `a`, by faer.
+///
+/// # Errors
+/// [`AnalysisError::NotConverged`] when faer's iteration does not settle.
+fn sym_eigen(a: &DMatrix<f64>) -> Result<(DVector<f64>, DMatrix<f64>)> {
+    let n = a.nrows();
+    let m = faer::Mat::<f64>::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
+    let e = m
+        .self_adjoint_eigen(faer::Side::Lower)
+        .map_err(|_| AnalysisError::NotConverged {
+            what: "the symmetric eigensolver of the torsional modes".into(),
+            t: 0.0,
+        })?;
+    let (s, u) = (e.S(), e.U());
+    Ok((
+        DVector::from_fn(n, |i, _| s[i]),
+        DMatrix::from_fn(n, n, |i, j| u[(i, j)]),
+    ))
+}
+
 /// An orthonormal basis of the null space of `rows` (n columns): each row
 /// scaled to unit length first, so that the springs' sizes do not matter.
 /// The second matrix spans the row space (the orthogonal complement).
-pub(crate) fn null_space(rows: &DMatrix<f64>, n: usize) -> (DMatrix<f64>, DMatrix<f64>) {
+pub(crate) fn null_space(rows: &DMatrix<f64>, n: usize) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
     let mut a = rows.clone();
     for mut r in a.row_iter_mut() {
         let norm = r.norm();
@@ -34,18 +56,34 @@ pub(crate) fn null_space(rows: &DMatrix<f64>, n: usize) -> (DMatrix<f64>, DMatri
             r /= norm;
         }
     }
-    let eig = SymmetricEigen::new(a.transpose() * &a);
-    let top = eig.eigenvalues.amax().max(1.0);
+    // A^T A row by row over each row's non-zeros (a spring's row has two or
+    // three): about linear in the rows, where a dense product is cubic.
+    let mut ata = DMatrix::zeros(n, n);
+    for row in a.row_iter() {
+        let nz: Vec<(usize, f64)> = row
+            .iter()
+            .enumerate()
+            .filter(|x| *x.1 != 0.0)
+            .map(|(c, v)| (c, *v))
+            .collect();
+        for &(i, x) in &nz {
+            for &(j, y) in &nz {
+                ata[(i, j)] += x * y;
+            }
+        }
+    }
+    let (values, vectors) = sym_eigen(&ata)?;
+    let top = values.amax().max(1.0);
     let (free, bound): (Vec<usize>, Vec<usize>) =
-        (0..n).partition(|&k| eig.eigenvalues[k] <= NULL_TOLERANCE * top);
+        (0..n).partition(|&k| values[k] <= NULL_TOLERANCE * top);
     let pick = |ks: &[usize]| {
         let mut m = DMatrix::zeros(n, ks.len());
         for (c, &k) in ks.iter().enumerate() {
-            m.set_column(c, &eig.eigenvectors.column(k));
+            m.set_column(c, &vectors.column(k));
         }
         m
     };
-    (pick(&free), pick(&bound))
+    Ok((pick(&free), pick(&bound)))
 }
 
 fn singular_mass() -> crate::Error {
@@ -63,7 +101,14 @@ fn cholesky_l(m: DMatrix<f64>) -> Result<DMatrix<f64>> {
 
 /// Solve the model: `t` is a basis of the coordinates the constraints leave
 /// (n x r), `springs` the springs' rows (m x n), `k` and `m` the n x n
-/// stiffness and mass matrices.
+/// stiffness and (diagonal) mass matrices.
+///
+/// With M_z = L L^T (L = sqrt(M) when no element is held), the elastic modes
+/// are the eigenvectors v of A = L^-1 K_z L^-T off the rigid directions
+/// Q = orth(L^T R) (R: the springs' null space, the rigid-body motion), and
+/// phi = L^-T v. The rigid directions are deflated exactly, A' = P A P - s Q
+/// Q^T (P = I - Q Q^T, s above every eigenvalue of A), so that they sort
+/// first with eigenvalue -s and one symmetric eigenproblem gives the rest.
 pub(crate) fn solve(
     t: &DMatrix<f64>,
     springs: &DMatrix<f64>,
@@ -71,52 +116,73 @@ pub(crate) fn solve(
     m: &DMatrix<f64>,
 ) -> Result<Eigen> {
     let r = t.ncols();
-    let kz = t.transpose() * k * t;
-    let mz = t.transpose() * m * t;
-    // z = R a + E b: R spans the springs' null space (rigid motion), E its
-    // complement; K R = 0, so the elastic modes solve E^T K E b = lambda S b
-    // with S the Schur complement of R^T M R in M (the rigid coordinates
-    // condensed out, exactly).
-    let (rb, eb) = null_space(&(springs * t), r);
-    let mrr = rb.transpose() * &mz * &rb;
-    let mre = rb.transpose() * &mz * &eb;
-    let mee = eb.transpose() * &mz * &eb;
-    let kee = eb.transpose() * &kz * &eb;
-    let (schur, a_of_b) = if rb.ncols() == 0 {
-        (mee, DMatrix::zeros(0, eb.ncols()))
+    // No rigid element: t is the identity, the projections are copies and
+    // M_z is diagonal.
+    let whole = t.is_square() && t.is_identity(0.0);
+    let (kz, mz, sz) = if whole {
+        (k.clone(), m.clone(), springs.clone())
     } else {
-        let lr = cholesky_l(mrr)?;
-        let y = lr.solve_lower_triangular(&mre).ok_or_else(singular_mass)?;
-        let a_of_b = -lr
-            .transpose()
-            .solve_upper_triangular(&y)
-            .ok_or_else(singular_mass)?;
-        (&mee + mre.transpose() * &a_of_b, a_of_b)
+        (t.transpose() * k * t, t.transpose() * m * t, springs * t)
     };
-    let l = cholesky_l(schur)?;
-    let linv = l.try_inverse().ok_or_else(singular_mass)?;
-    let a = &linv * &kee * linv.transpose();
-    let eig = SymmetricEigen::new((&a + a.transpose()) * 0.5);
-    let mut order: Vec<usize> = (0..eig.eigenvalues.len()).collect();
-    order.sort_by(|&x, &y| eig.eigenvalues[x].total_cmp(&eig.eigenvalues[y]));
-    let lambda = order.iter().map(|&i| eig.eigenvalues[i].max(0.0)).collect();
-    let mut b = DMatrix::zeros(eb.ncols(), order.len());
-    for (c, &i) in order.iter().enumerate() {
-        b.set_column(c, &(linv.transpose() * eig.eigenvectors.column(i)));
-    }
-    let z_elastic = &eb * &b + &rb * (&a_of_b * &b);
+    let (rb, _) = null_space(&sz, r)?;
+    let dof = rb.ncols();
+    // A = L^-1 K_z L^-T, and the rigid directions L^T R.
+    let (a, lt_r, l) = if whole {
+        let root: Vec<f64> = (0..r).map(|i| mz[(i, i)].sqrt()).collect();
+        if let Some(low) = root.iter().copied().find(|v| !(*v > 0.0)) {
+            return Err(AnalysisError::IndefiniteMass {
+                low: low * low,
+                top: mz.diagonal().max(),
+            }
+            .into());
+        }
+        let a = DMatrix::from_fn(r, r, |i, j| kz[(i, j)] / (root[i] * root[j]));
+        let lt_r = DMatrix::from_fn(r, dof, |i, j| root[i] * rb[(i, j)]);
+        (a, lt_r, None)
+    } else {
+        let l = cholesky_l(mz.clone())?;
+        let y = l.solve_lower_triangular(&kz).ok_or_else(singular_mass)?;
+        let a = l
+            .solve_lower_triangular(&y.transpose())
+            .ok_or_else(singular_mass)?;
+        let lt_r = l.transpose() * &rb;
+        (a, lt_r, Some(l))
+    };
+    let a = (&a + a.transpose()) * 0.5;
+    let deflated = if dof == 0 {
+        a
+    } else {
+        let q = lt_r.qr().q();
+        let shift = 1.0 + a.norm();
+        let aq = &a * &q;
+        let qaq = q.transpose() * &aq;
+        &a - &aq * q.transpose() - &q * aq.transpose()
+            + &q * (qaq - DMatrix::identity(dof, dof) * shift) * q.transpose()
+    };
+    let (values, vectors) = sym_eigen(&deflated)?;
+    let lambda: Vec<f64> = values.iter().skip(dof).map(|v| v.max(0.0)).collect();
+    let v = vectors.columns(dof, r - dof).into_owned();
+    // phi_z = L^-T v.
+    let z_elastic = match &l {
+        None => DMatrix::from_fn(r, r - dof, |i, j| v[(i, j)] / mz[(i, i)].sqrt()),
+        Some(l) => l
+            .transpose()
+            .solve_upper_triangular(&v)
+            .ok_or_else(singular_mass)?,
+    };
     // The rigid shapes, M-orthonormal: R (R^T M R)^(-1/2) by Cholesky.
-    let rigid = if rb.ncols() == 0 {
+    let rigid = if dof == 0 {
         DMatrix::zeros(t.nrows(), 0)
     } else {
         let lr = cholesky_l(rb.transpose() * &mz * &rb)?;
         let inv = lr.try_inverse().ok_or_else(singular_mass)?;
-        t * (&rb * inv.transpose())
+        let z = &rb * inv.transpose();
+        if whole { z } else { t * z }
     };
     Ok(Eigen {
         rigid,
         lambda,
-        elastic: t * z_elastic,
+        elastic: if whole { z_elastic } else { t * z_elastic },
     })
 }
 
@@ -128,7 +194,9 @@ mod tests {
     fn null_space_ignores_the_rows_scale() {
         // x - y = 0 at 1e9 and y - z = 0 at 1e-3: the null space is (1, 1, 1).
         let rows = DMatrix::from_row_slice(2, 3, &[1e9, -1e9, 0.0, 0.0, 1e-3, -1e-3]);
-        let (free, bound) = null_space(&rows, 3);
+        let Ok((free, bound)) = null_space(&rows, 3) else {
+            panic!("the eigensolver converges on a 3 x 3 matrix");
+        };
         assert_eq!((free.ncols(), bound.ncols()), (1, 2));
         let v = free.column(0);
         assert!((v.abs().sum() - 3f64.sqrt()).abs() < 1e-12);

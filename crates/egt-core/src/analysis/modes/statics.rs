@@ -95,7 +95,7 @@ impl TorsionalModel {
         stacked
             .view_mut((self.elastic.len(), 0), (c, n))
             .copy_from(&self.constraints);
-        let (rigid, _) = null_space(&stacked, n);
+        let (rigid, _) = null_space(&stacked, n)?;
         let f = DVector::from_column_slice(f);
         let scale = f.amax().max(f64::MIN_POSITIVE);
         let drive = (rigid.transpose() * &f).amax();
@@ -222,5 +222,30 @@ impl Train {
             meshes,
             torque: rigid.torque,
         })
+    }
+
+    /// [`Train::static_check`] in gear state `state` under `input_torque`
+    /// (N m) on the transmission input, the output reacting it: what
+    /// `egt modes --static` and Python's `Train.modes(static_torque=)` ask.
+    ///
+    /// # Errors
+    /// A non-finite torque (`input_torque`); no `[transmission]`; as
+    /// [`Train::static_check`].
+    pub fn static_check_in_gear(&self, state: &str, input_torque: f64) -> Result<StaticCheck> {
+        if !input_torque.is_finite() {
+            return Err(Error::invalid(
+                "input_torque",
+                format!("the input torque must be finite, not {input_torque}"),
+            ));
+        }
+        let t = self
+            .transmission()
+            .ok_or(Error::Transmission(TransmissionError::NoStates))?;
+        let req = DynamicsRequest {
+            torques: vec![(t.input, input_torque)],
+            driving: vec![t.output],
+            ..DynamicsRequest::default()
+        };
+        self.static_check(Some(state), &req)
     }
 }
