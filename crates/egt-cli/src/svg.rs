@@ -94,44 +94,18 @@ pub fn plain_lines<'a>(series: &'a [Box<dyn Fn(usize) -> f64 + 'a>]) -> Vec<Line
         .collect()
 }
 
-/// One panel: axes, ticks against time, a coloured line per `lines` entry
-/// (colours in order of `PALETTE`), dashed levels.
-pub fn panel(
+/// A panel's frame at `top`: the grid at the round ticks of x and y (as
+/// [`ticks`] gives them), tick labels, the axes box and the axis labels
+/// `[x, y]`; returns the maps from values to the panel's x and y.
+pub fn axes(
     svg: &mut String,
-    p: &Panel<'_>,
-    samples: usize,
-    time: &dyn Fn(usize) -> f64,
-    lines: &[Line<'_>],
-    t_end: f64,
-) {
-    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for line in lines {
-        for i in 0..samples {
-            let v = (line.value)(i);
-            if v.is_finite() {
-                lo = lo.min(v);
-                hi = hi.max(v);
-            }
-        }
-        if let Some(l) = line.level {
-            lo = lo.min(l);
-            hi = hi.max(l);
-        }
-    }
-    if !lo.is_finite() || !hi.is_finite() {
-        (lo, hi) = (-1.0, 1.0);
-    }
-    let (ya, yb, yt) = ticks(lo, hi);
-    let (xa, xb, xt) = ticks(0.0, t_end);
-    let top = p.top;
-    let x = |t: f64| LEFT + (t - xa) / (xb - xa) * PLOT_W;
-    let y = |v: f64| top + PLOT_H - (v - ya) / (yb - ya) * PLOT_H;
-    let _ = writeln!(
-        svg,
-        r#"<text x="{LEFT}" y="{:.1}" class="head">{}</text>"#,
-        top - 10.0,
-        esc(p.title)
-    );
+    top: f64,
+    (xa, xb, xt): (f64, f64, Vec<f64>),
+    (ya, yb, yt): (f64, f64, Vec<f64>),
+    [xlabel, ylabel]: [&str; 2],
+) -> (impl Fn(f64) -> f64 + use<>, impl Fn(f64) -> f64 + use<>) {
+    let x = move |t: f64| LEFT + (t - xa) / (xb - xa) * PLOT_W;
+    let y = move |v: f64| top + PLOT_H - (v - ya) / (yb - ya) * PLOT_H;
     for &v in &yt {
         let class = if v.abs() < 1e-12 * (yb - ya) {
             "zero"
@@ -164,15 +138,60 @@ pub fn panel(
     );
     let _ = writeln!(
         svg,
-        r#"<text x="{:.1}" y="{:.1}" class="label" text-anchor="middle">t [s]</text>"#,
+        r#"<text x="{:.1}" y="{:.1}" class="label" text-anchor="middle">{}</text>"#,
         LEFT + PLOT_W / 2.0,
-        top + PLOT_H + 38.0
+        top + PLOT_H + 38.0,
+        esc(xlabel)
     );
     let _ = writeln!(
         svg,
         r#"<text x="20" y="{0:.1}" class="label" text-anchor="middle" transform="rotate(-90 20 {0:.1})">{1}</text>"#,
         top + PLOT_H / 2.0,
-        esc(p.ylabel)
+        esc(ylabel)
+    );
+    (x, y)
+}
+
+/// One panel: axes, ticks against time, a coloured line per `lines` entry
+/// (colours in order of `PALETTE`), dashed levels.
+pub fn panel(
+    svg: &mut String,
+    p: &Panel<'_>,
+    samples: usize,
+    time: &dyn Fn(usize) -> f64,
+    lines: &[Line<'_>],
+    t_end: f64,
+) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for line in lines {
+        for i in 0..samples {
+            let v = (line.value)(i);
+            if v.is_finite() {
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+        }
+        if let Some(l) = line.level {
+            lo = lo.min(l);
+            hi = hi.max(l);
+        }
+    }
+    if !lo.is_finite() || !hi.is_finite() {
+        (lo, hi) = (-1.0, 1.0);
+    }
+    let top = p.top;
+    let (x, y) = axes(
+        svg,
+        top,
+        ticks(0.0, t_end),
+        ticks(lo, hi),
+        ["t [s]", p.ylabel],
+    );
+    let _ = writeln!(
+        svg,
+        r#"<text x="{LEFT}" y="{:.1}" class="head">{}</text>"#,
+        top - 10.0,
+        esc(p.title)
     );
     let stride = samples.div_ceil(MAX_POINTS).max(1);
     for (k, line) in lines.iter().enumerate() {

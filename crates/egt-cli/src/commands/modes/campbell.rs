@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 
 use egt_views::modes::Report;
 
-use crate::svg::{LEFT, PALETTE, PLOT_H, PLOT_W, TOP, esc, fmt_tick, open_plot, ticks};
+use crate::svg::{LEFT, PALETTE, PLOT_H, PLOT_W, TOP, axes, esc, fmt_tick, open_plot, ticks};
 
 /// The diagram as an SVG document (`meshing` present with a range: the
 /// caller asked for `--campbell`).
@@ -35,10 +35,6 @@ pub fn svg(title: &str, r: &Report) -> String {
             above += 1;
         }
     }
-    let (ya, yb, yt) = ticks(0.0, ceiling);
-    let (xa, xb, xt) = ticks(lo, hi);
-    let x = |v: f64| LEFT + (v - xa) / (xb - xa) * PLOT_W;
-    let y = |v: f64| TOP + PLOT_H - (v - ya) / (yb - ya) * PLOT_H;
     let rows = m.orders.len().div_ceil(2) as f64;
     let height = TOP + PLOT_H + 70.0 + 20.0 * rows;
     let mut out = String::new();
@@ -56,33 +52,12 @@ pub fn svg(title: &str, r: &Report) -> String {
         TOP - 10.0,
         esc(&m.input)
     );
-    for &v in &yt {
-        let _ = writeln!(
-            out,
-            r#"<line x1="{LEFT}" y1="{0:.1}" x2="{1:.1}" y2="{0:.1}" class="grid"/><text x="{2:.1}" y="{3:.1}" class="tick" text-anchor="end">{4}</text>"#,
-            y(v),
-            LEFT + PLOT_W,
-            LEFT - 6.0,
-            y(v) + 4.0,
-            fmt_tick(v)
-        );
-    }
-    for &v in &xt {
-        let _ = writeln!(
-            out,
-            r#"<line x1="{0:.1}" y1="{TOP}" x2="{0:.1}" y2="{1:.1}" class="grid"/><text x="{0:.1}" y="{2:.1}" class="tick" text-anchor="middle">{3}</text>"#,
-            x(v),
-            TOP + PLOT_H,
-            TOP + PLOT_H + 18.0,
-            fmt_tick(v)
-        );
-    }
-    let _ = writeln!(
-        out,
-        r#"<rect x="{LEFT}" y="{TOP}" width="{PLOT_W}" height="{PLOT_H}" class="axis"/><text x="{:.1}" y="{:.1}" class="label" text-anchor="middle">input speed [rpm]</text><text x="20" y="{2:.1}" class="label" text-anchor="middle" transform="rotate(-90 20 {2:.1})">frequency [Hz]</text>"#,
-        LEFT + PLOT_W / 2.0,
-        TOP + PLOT_H + 38.0,
-        TOP + PLOT_H / 2.0
+    let (x, y) = axes(
+        &mut out,
+        TOP,
+        ticks(lo, hi),
+        ticks(0.0, ceiling),
+        ["input speed [rpm]", "frequency [Hz]"],
     );
     for &(k, f, mult) in &seen {
         let label = if mult > 1 {
