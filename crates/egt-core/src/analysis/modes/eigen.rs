@@ -128,14 +128,19 @@ pub(crate) fn solve(
     let dof = rb.ncols();
     // A = L^-1 K_z L^-T, and the rigid directions L^T R.
     let (a, lt_r, l) = if whole {
-        let root: Vec<f64> = (0..r).map(|i| mz[(i, i)].sqrt()).collect();
-        if let Some(low) = root.iter().copied().find(|v| !(*v > 0.0)) {
+        if let Some(low) = mz
+            .diagonal()
+            .iter()
+            .copied()
+            .find(|v| v.is_nan() || *v <= 0.0)
+        {
             return Err(AnalysisError::IndefiniteMass {
-                low: low * low,
+                low,
                 top: mz.diagonal().max(),
             }
             .into());
         }
+        let root: Vec<f64> = (0..r).map(|i| mz[(i, i)].sqrt()).collect();
         let a = DMatrix::from_fn(r, r, |i, j| kz[(i, j)] / (root[i] * root[j]));
         let lt_r = DMatrix::from_fn(r, dof, |i, j| root[i] * rb[(i, j)]);
         (a, lt_r, None)
