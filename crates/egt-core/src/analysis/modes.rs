@@ -139,9 +139,17 @@ impl Train {
                 shape,
             });
         }
-        // Every spring's deflection in every elastic mode, one product (the
-        // sign a shape takes below does not matter: energies are squares).
-        let deflections = &springs * &e.elastic;
+        // Every spring's deflection in every elastic mode, over each row's
+        // two or three non-zeros (the sign a shape takes below does not
+        // matter: energies are squares).
+        let mut deflections = DMatrix::zeros(model.elastic.len(), e.lambda.len());
+        for (s, spring) in model.elastic.iter().enumerate() {
+            for (c, &v) in spring.row.iter().enumerate().filter(|x| *x.1 != 0.0) {
+                for j in 0..e.lambda.len() {
+                    deflections[(s, j)] += v * e.elastic[(c, j)];
+                }
+            }
+        }
         let damped_modes = damped::damped_modes(&model, &deflections, &e.lambda)?;
         for (c, &lambda) in e.lambda.iter().enumerate() {
             let shape = normalised(e.elastic.column(c).iter().copied().collect());
