@@ -394,3 +394,42 @@ fn search_specs_are_checked_like_train_specs_and_bounded() {
     assert!(run(&c4, &search).code == 0);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A `[layout]` that leaves no layout to search exits 2 naming `layout`
+/// and why (here the intermediate band moved onto the rear carrier beside
+/// the low-reverse band: two friction brakes on one member), instead of
+/// reporting "no tooth counts" with exit 0; a brake beside the one-way
+/// brake on the rear carrier, the C4's own layout, is searched and found.
+#[test]
+fn a_layout_that_leaves_nothing_exits_2_and_a_brake_beside_a_one_way_is_found() {
+    let search = std::fs::read_to_string(root().join("examples/synth/ford_c4_simpson.toml"))
+        .expect("the C4 search")
+        .replace(
+            "../ford_c4_simpson.toml",
+            &root()
+                .join("examples/ford_c4_simpson.toml")
+                .to_string_lossy(),
+        );
+    let with =
+        |layout: &str| search.replace("[targets]", &format!("[layout]\n{layout}\n\n[targets]"));
+    let r = egt(
+        &["synth", "-", "--spec-format", "toml", "--format", "json"],
+        Some(&with("intermediate_band = [[\"rear_carrier\"]]")),
+    );
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    let e: Value = serde_json::from_str(&r.stdout).expect("a JSON error");
+    assert_eq!(e["error"]["path"], "layout", "{}", r.stdout);
+    let r = egt(
+        &["synth", "-", "--spec-format", "toml", "--format", "json"],
+        Some(&with("low_reverse_band = \"any\"\nlow_one_way = \"any\"")),
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let v: Value = serde_json::from_str(&r.stdout).unwrap();
+    let found = v["candidates"].as_array().unwrap().iter().any(|c| {
+        teeth(c) == [(33, 72), (33, 72)]
+            && c["layout"]
+                .as_array()
+                .is_some_and(|l| l.iter().all(|x| x.to_string().contains("rear_carrier")))
+    });
+    assert!(found, "{}", r.stdout);
+}

@@ -3,7 +3,7 @@
 
 use crate::design::spec::SynthSpec;
 use crate::error::DesignError;
-use crate::spec::Spec;
+use crate::spec::{ElementKind, Spec};
 
 use super::Search;
 
@@ -171,23 +171,39 @@ pub(super) fn place(base: &Spec, layout: &[(String, Vec<String>)]) -> Spec {
     spec
 }
 
-/// Two elements on the same links (a layout that wastes one).
-pub(super) fn doubled(elements: &[(&str, &[String])]) -> bool {
-    let mut seen: Vec<Vec<&String>> = Vec::new();
-    for (_, links) in elements {
-        let mut k: Vec<&String> = links.iter().collect();
+/// Two elements of one way-ness on the same links (a layout that wastes
+/// one). A one-way element beside a friction element on the same member is
+/// not doubled: that is how automatics hold a member for drive (the one-way
+/// brake) and for coast (the brake), e.g. the NAG1's reverse-and-first
+/// brake beside its freewheel.
+pub(super) fn doubled(elements: &[Placed<'_>]) -> bool {
+    let mut seen: Vec<(Vec<&String>, bool)> = Vec::new();
+    for e in elements {
+        let mut k: Vec<&String> = e.links.iter().collect();
         k.sort();
-        if seen.contains(&k) {
+        let key = (k, e.one_way);
+        if seen.contains(&key) {
             return true;
         }
-        seen.push(k);
+        seen.push(key);
     }
     false
 }
 
+/// An element as a layout places it.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Placed<'a> {
+    /// Its name.
+    pub name: &'a str,
+    /// The links it acts on in this layout.
+    pub links: &'a [String],
+    /// A one-way brake or clutch.
+    pub one_way: bool,
+}
+
 impl Search {
-    /// Every element's name and links in a layout.
-    pub(super) fn elements(&self, pick: &[u32]) -> Vec<(&str, &[String])> {
+    /// Every element's name, links and way-ness in a layout.
+    pub(super) fn elements(&self, pick: &[u32]) -> Vec<Placed<'_>> {
         self.base
             .elements
             .iter()
@@ -201,7 +217,11 @@ impl Search {
                         pick.get(f)
                             .map(|&k| self.layouts.choices[f][k as usize].as_slice())
                     });
-                (e.name.as_str(), placed.unwrap_or(e.links.as_slice()))
+                Placed {
+                    name: e.name.as_str(),
+                    links: placed.unwrap_or(e.links.as_slice()),
+                    one_way: matches!(e.kind, ElementKind::OneWayBrake | ElementKind::OneWayClutch),
+                }
             })
             .collect()
     }

@@ -205,26 +205,47 @@ impl Search {
             // Every layout checked in parallel; only the picks that pass are kept.
             use rayon::prelude::*;
             let total = search.layouts.count();
-            let kept: Vec<Vec<u32>> = (0..total)
+            // Each layout kept, or why not: 0 an element doubled, 1 a gear
+            // state that is not one DOF, 2 singular for any teeth.
+            let judged: Vec<Result<Vec<u32>, usize>> = (0..total)
                 .into_par_iter()
-                .filter_map(|i| {
+                .map(|i| {
                     let pick = search.layouts.pick(i);
                     let elements = search.elements(&pick);
                     if doubled(&elements) {
-                        return None;
+                        return Err(0);
                     }
                     let states = states(
                         &elements,
                         &search.base.frame,
                         &search.rows,
                         &search.spec.targets,
-                    );
-                    states
-                        .ok()
-                        .filter(|s| generic(s, &search.dims))
-                        .map(|_| pick)
+                    )
+                    .map_err(|_| 1_usize)?;
+                    if generic(&states, &search.dims) {
+                        Ok(pick)
+                    } else {
+                        Err(2)
+                    }
                 })
                 .collect();
+            let mut why = [0_u64; 3];
+            let mut kept = Vec::new();
+            for j in judged {
+                match j {
+                    Ok(pick) => kept.push(pick),
+                    Err(k) => why[k] += 1,
+                }
+            }
+            if kept.is_empty() {
+                return Err(DesignError::Invalid {
+                    field: "layout".into(),
+                    message: format!(
+                        "no layout of the free elements can be searched: of {total}, {} put two elements of one kind (both friction, or both one-way) on the same links, {} leave a gear state that is not one DOF, {} are singular for any teeth",
+                        why[0], why[1], why[2]
+                    ),
+                });
+            }
             search.skipped_layouts = (total - kept.len()) as u64;
             search.variants = kept;
         }

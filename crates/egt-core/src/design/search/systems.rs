@@ -9,6 +9,7 @@ use crate::error::DesignError;
 use crate::model::equations::willis_row;
 
 use super::Search;
+use super::layouts::Placed;
 use super::space::{Dim, Teeth};
 
 /// An unknown set: its dimensions (one, or two for a Ravigneaux set) and the
@@ -57,15 +58,15 @@ pub(super) fn col(name: &str, links: &mut Vec<String>) -> usize {
 /// rows (searched ones marked by `dim_of`), the engaged elements' rows, the
 /// frame and w_in = 1.
 pub(super) fn states(
-    elements: &[(&str, &[String])],
+    elements: &[Placed<'_>],
     frame: &str,
     rows0: &Rows,
     targets: &crate::design::Targets,
 ) -> Result<Vec<StateSystem>, DesignError> {
     let (tx, willis, dim_of) = (&rows0.tx, &rows0.willis, &rows0.dim_of);
     let mut links = rows0.links.clone();
-    for (_, ls) in elements {
-        for l in *ls {
+    for e in elements {
+        for l in e.links {
             col(l, &mut links);
         }
     }
@@ -89,14 +90,14 @@ pub(super) fn states(
             rows.push(row);
         }
         for el in engaged {
-            let (_, e_links) =
-                elements
-                    .iter()
-                    .find(|e| e.0 == el)
-                    .ok_or_else(|| DesignError::Invalid {
-                        field: format!("transmission.states.{name}"),
-                        message: format!("unknown element `{el}`"),
-                    })?;
+            let e_links = elements
+                .iter()
+                .find(|e| e.name == el)
+                .ok_or_else(|| DesignError::Invalid {
+                    field: format!("transmission.states.{name}"),
+                    message: format!("unknown element `{el}`"),
+                })?
+                .links;
             let mut row = vec![0.0; n];
             let a = col(&e_links[0], &mut links);
             row[a] += 1.0;

@@ -324,3 +324,55 @@ fn a_cancelled_run_stops_and_says_so() {
     let text = serde_json::to_string(&ws).expect("stats");
     assert!(!text.contains("interrupted"), "{text}");
 }
+
+const C4: &str = include_str!(concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../examples/ford_c4_simpson.toml"
+));
+
+/// The C4 search with `layout` under `[layout]`, both sets' teeth free near
+/// the real 33/72 (three planets, profiles shifted by one tooth as the
+/// C4's are), the published ratios to three decimals.
+fn c4_search(layout: &str) -> Result<Search, DesignError> {
+    let text = format!(
+        "base = \"ford_c4_simpson.toml\"\ntop = 5\n[sets]\nfront = {{ sun = [30, 36], ring = [68, 76], planets = 3 }}\nrear = {{ sun = [30, 36], ring = [68, 76], planets = 3 }}\n[constraints]\nprofile_shift = 1\n[layout]\n{layout}\n[targets]\nratios = {{ \"1\" = 2.458, \"2\" = 1.458, \"3\" = 1.000, \"R\" = -2.182 }}\n"
+    );
+    let spec: SynthSpec = toml::from_str(&text).expect("test input");
+    Search::new(
+        spec,
+        parse_spec(C4, Format::Toml, "c4").expect("test input"),
+    )
+}
+
+/// A brake and a one-way brake on one member (the C4's low-reverse band and
+/// low one-way clutch on the rear carrier, as the NAG1's brake and freewheel)
+/// is a layout, not a doubled element: freeing both finds the real one.
+#[test]
+fn a_brake_beside_a_one_way_brake_on_one_member_is_searched() {
+    let s = c4_search("low_reverse_band = \"any\"\nlow_one_way = \"any\"").expect("test input");
+    let (found, stats) = s.run().expect("test input");
+    assert!(stats.layouts > 0);
+    let real = found.iter().any(|c| {
+        c.layout
+            .iter()
+            .all(|(name, links)| links == &["rear_carrier".to_string()] || !name.starts_with("low"))
+            && c.teeth.iter().all(|t| t.sun * 72 == t.ring * 33)
+    });
+    assert!(
+        real,
+        "{:?}",
+        found.iter().map(|c| &c.layout).collect::<Vec<_>>()
+    );
+}
+
+/// A layout filter that leaves no layout is an error naming `layout` and
+/// why, not an empty result: two friction brakes on one member.
+#[test]
+fn a_layout_filter_that_leaves_nothing_says_so() {
+    let err = c4_search("intermediate_band = [[\"rear_carrier\"]]")
+        .err()
+        .expect("every layout doubles a brake");
+    let text = err.to_string();
+    assert!(text.starts_with("layout:"), "{text}");
+    assert!(text.contains("1 put two elements of one kind"), "{text}");
+}
