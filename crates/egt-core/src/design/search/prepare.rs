@@ -126,6 +126,14 @@ impl Search {
                 .map(|p| p.kind);
             let field = |f: &str| format!("sets.{name}.{f}");
             let unknown = match (kind, rows.as_slice()) {
+                (None, _) if base.planetary.is_empty() => {
+                    return Err(DesignError::Invalid {
+                        field: format!("sets.{name}"),
+                        message: format!(
+                            "the base train declares no planetary sets: synth searches the teeth of sets given as [[planetary]] entries (name, sun, ring, carrier, teeth; kind for a double-pinion or Ravigneaux set), so write the gear pairs of `{name}` as one, with `name = \"{name}\"`"
+                        ),
+                    });
+                }
                 (None, _) => return Err(DesignError::UnknownSet(name.clone())),
                 (Some(PlanetaryKind::Simple), &[row]) => {
                     if range.sun2.is_some() {

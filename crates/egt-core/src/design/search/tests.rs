@@ -376,3 +376,23 @@ fn a_layout_filter_that_leaves_nothing_says_so() {
     assert!(text.starts_with("layout:"), "{text}");
     assert!(text.contains("1 put two elements of one kind"), "{text}");
 }
+
+/// A base built from gear pairs declares no sets: naming one under `[sets]`
+/// says what to declare instead of "no set of that name".
+#[test]
+fn a_gear_built_base_is_told_to_declare_its_sets() {
+    let base = "frame = \"H\"\nadjacency = \"H-sun:a H-ring:a H-carrier:a carrier-planet:b sun-planet:G=-21/30 planet-ring:G=72/21\"\n[[elements]]\nname = \"B\"\nkind = \"brake\"\nlinks = [\"ring\"]\n[transmission]\ninput = \"sun\"\noutput = \"carrier\"\nstates = { low = [\"B\"] }\n";
+    let spec: SynthSpec = toml::from_str(
+        "base = \"gears.toml\"\n[sets]\nP = { sun = [20, 40], ring = [60, 90] }\n[targets]\nratios = { \"low\" = 3.4 }\n",
+    )
+    .expect("test input");
+    let err = Search::new(
+        spec,
+        parse_spec(base, Format::Toml, "gears").expect("test input"),
+    )
+    .err()
+    .expect("no [[planetary]] to search");
+    let text = err.to_string();
+    assert!(text.starts_with("sets.P:"), "{text}");
+    assert!(text.contains("[[planetary]]"), "{text}");
+}
