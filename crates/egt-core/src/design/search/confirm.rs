@@ -21,6 +21,8 @@ impl Search {
                 p.teeth.planet = Some(t.planet);
                 if t.sun2.is_some() {
                     p.teeth.sun2 = t.sun2;
+                }
+                if t.planet2.is_some() {
                     p.teeth.planet2 = t.planet2;
                 }
             }

@@ -9,7 +9,7 @@ use crate::error::DesignError;
 use crate::spec::{PlanetaryKind, Spec};
 
 use super::layouts::{Layouts, doubled, layouts};
-use super::space::{Dim, basics, ravigneaux};
+use super::space::{Dim, basics, double_pinion_basics, ravigneaux};
 use super::systems::{Rows, Unknown, WillisRow, col, generic, states};
 
 /// A prepared search: the per-set candidate ratios and, per element layout,
@@ -135,18 +135,22 @@ impl Search {
                     });
                 }
                 (None, _) => return Err(DesignError::UnknownSet(name.clone())),
-                (Some(PlanetaryKind::Simple), &[row]) => {
+                (Some(kind @ (PlanetaryKind::Simple | PlanetaryKind::DoublePinion)), &[row]) => {
                     if range.sun2.is_some() {
                         return Err(DesignError::Invalid {
                             field: field("sun2"),
-                            message: "a simple set has one sun".into(),
+                            message: "a simple or double-pinion set has one sun".into(),
                         });
                     }
-                    let b = basics(name, range, &spec.constraints)?;
+                    let (b, sign) = if kind == PlanetaryKind::Simple {
+                        (basics(name, range, &spec.constraints)?, 1.0)
+                    } else {
+                        (double_pinion_basics(name, range, &spec.constraints)?, -1.0)
+                    };
                     dim_of[row] = Some(dims.len());
                     dims.push(Dim {
                         ks: b.iter().map(|x| x.k).collect(),
-                        sign: 1.0,
+                        sign,
                     });
                     Unknown {
                         dims: vec![dims.len() - 1],
@@ -171,7 +175,7 @@ impl Search {
                 _ => {
                     return Err(DesignError::Invalid {
                         field: format!("sets.{name}"),
-                        message: "the search finds the teeth of simple and Ravigneaux sets".into(),
+                        message: "the search finds the teeth of simple, double-pinion and Ravigneaux sets".into(),
                     });
                 }
             };

@@ -121,6 +121,55 @@ pub(super) fn check_ranges(
 
 /// Admissible tooth triples of one simple set, grouped by reduced ring/sun, sorted by k.
 pub(super) fn basics(name: &str, r: &SetRange, c: &Constraints) -> Result<Vec<Basic>, DesignError> {
+    by_ratio(name, r, c, &|sun, ring| {
+        coaxial_planet(sun, ring, r.planets, c).map(|p| (p, None))
+    })
+}
+
+/// The pinions of a double-pinion set (in modules, equal pinions p): the
+/// inner pinion meshes the sun at radius (s + p) / 2, the outer one the ring
+/// at (r - p) / 2, and they mesh each other at distance p, which a triangle
+/// reaches when r - s <= 4 p; the outer pinion's tip clears the sun and the
+/// inner one's the ring when 2 p + 2 <= r - s. The pinions are the smallest
+/// count meeting both and `min_planet`; assembly asks (r - s) / planets
+/// integer (the double-pinion condition).
+pub(super) fn double_pinion_planet(
+    sun: i64,
+    ring: i64,
+    planets: i64,
+    c: &Constraints,
+) -> Option<i64> {
+    let diff = ring - sun;
+    let p = c.min_planet.max((diff + 3) / 4);
+    if 2 * p + 2 > diff {
+        return None;
+    }
+    if c.assembly && diff % planets != 0 {
+        return None;
+    }
+    Some(p)
+}
+
+/// Admissible teeth of one double-pinion set by basic ratio k = ring / sun,
+/// as [`basics`] for a simple set; both pinions as `planet` and `planet2`.
+pub(super) fn double_pinion_basics(
+    name: &str,
+    r: &SetRange,
+    c: &Constraints,
+) -> Result<Vec<Basic>, DesignError> {
+    by_ratio(name, r, c, &|sun, ring| {
+        double_pinion_planet(sun, ring, r.planets, c).map(|p| (p, Some(p)))
+    })
+}
+
+/// Every (sun, ring) of the ranges that `planets` gives pinions for, grouped
+/// by k = ring / sun, ascending.
+fn by_ratio(
+    name: &str,
+    r: &SetRange,
+    c: &Constraints,
+    planets: &dyn Fn(i64, i64) -> Option<(i64, Option<i64>)>,
+) -> Result<Vec<Basic>, DesignError> {
     let bad = |f: &str, m: &str| DesignError::Invalid {
         field: format!("sets.{name}.{f}"),
         message: m.into(),
@@ -129,7 +178,7 @@ pub(super) fn basics(name: &str, r: &SetRange, c: &Constraints) -> Result<Vec<Ba
     let mut map: HashMap<Ratio<i64>, Vec<Teeth>> = HashMap::new();
     for sun in r.sun[0]..=r.sun[1] {
         for ring in r.ring[0]..=r.ring[1] {
-            let Some(planet) = coaxial_planet(sun, ring, r.planets, c) else {
+            let Some((planet, planet2)) = planets(sun, ring) else {
                 continue;
             };
             let k = ring as f64 / sun as f64;
@@ -143,7 +192,7 @@ pub(super) fn basics(name: &str, r: &SetRange, c: &Constraints) -> Result<Vec<Ba
                 ring,
                 planet,
                 sun2: None,
-                planet2: None,
+                planet2,
             });
         }
     }

@@ -396,3 +396,41 @@ fn a_gear_built_base_is_told_to_declare_its_sets() {
     assert!(text.starts_with("sets.P:"), "{text}");
     assert!(text.contains("[[planetary]]"), "{text}");
 }
+
+/// A double-pinion set as an unknown (issue 45): a two-speed whose first
+/// gear (carrier held, sun in, ring out) is z_r / z_s = 77/32 = 2.40625 is
+/// found again from 2.406 (three decimals); every candidate is a train egt
+/// accepts, with the ratios the search reported, and pinions that fit.
+#[test]
+fn a_double_pinion_unknown_set_is_found_again_from_its_ratio() {
+    let base = "frame = \"H\"\n[[planetary]]\nname = \"D\"\nkind = \"double_pinion\"\nsun = \"sun\"\nring = \"ring\"\ncarrier = \"carrier\"\nteeth = { sun = 32, ring = 77, planet = 15, planet2 = 15 }\n[[elements]]\nname = \"B\"\nkind = \"brake\"\nlinks = [\"carrier\"]\n[[elements]]\nname = \"C\"\nkind = \"clutch\"\nlinks = [\"sun\", \"carrier\"]\n[transmission]\ninput = \"sun\"\noutput = \"ring\"\nstates = { \"1\" = [\"B\"], \"2\" = [\"C\"] }\n";
+    let spec: SynthSpec = toml::from_str(
+        "base = \"dp.toml\"\ntop = 20\n[sets]\nD = { sun = [26, 38], ring = [66, 88], planets = 3 }\n[targets]\nratios = { \"1\" = 2.406, \"2\" = 1.0 }\n",
+    )
+    .expect("test input");
+    let s = Search::new(
+        spec,
+        parse_spec(base, Format::Toml, "dp").expect("test input"),
+    )
+    .expect("a double-pinion unknown is searched");
+    let (found, _) = s.run().expect("test input");
+    assert!(
+        found
+            .iter()
+            .any(|c| c.teeth[0].sun == 32 && c.teeth[0].ring == 77),
+        "{:?}",
+        found.iter().map(|c| &c.teeth).collect::<Vec<_>>()
+    );
+    for c in &found {
+        let t = &c.teeth[0];
+        assert!((t.ring as f64 / t.sun as f64 - 2.406).abs() <= 5e-4);
+        assert_eq!((t.ring - t.sun) % 3, 0, "assembly");
+        assert!(t.planet2 == Some(t.planet) && 2 * t.planet + 2 <= t.ring - t.sun);
+        let table = Train::from_spec(&s.candidate_spec(&c.teeth, &c.layout))
+            .expect("candidate spec")
+            .shift_table()
+            .expect("analysis");
+        let first = table.gears.iter().find(|g| g.state == "1").expect("gear 1");
+        assert!((first.ratio - t.ring as f64 / t.sun as f64).abs() < 1e-12);
+    }
+}
