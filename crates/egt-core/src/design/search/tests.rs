@@ -369,9 +369,9 @@ fn a_brake_beside_a_one_way_brake_on_one_member_is_searched() {
 /// why, not an empty result: two friction brakes on one member.
 #[test]
 fn a_layout_filter_that_leaves_nothing_says_so() {
-    let err = c4_search("intermediate_band = [[\"rear_carrier\"]]")
-        .err()
-        .expect("every layout doubles a brake");
+    let Err(err) = c4_search("intermediate_band = [[\"rear_carrier\"]]") else {
+        panic!("every layout doubles a brake");
+    };
     let text = err.to_string();
     assert!(text.starts_with("layout:"), "{text}");
     assert!(text.contains("1 put two elements of one kind"), "{text}");
