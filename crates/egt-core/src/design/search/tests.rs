@@ -386,12 +386,12 @@ fn a_gear_built_base_is_told_to_declare_its_sets() {
         "base = \"gears.toml\"\n[sets]\nP = { sun = [20, 40], ring = [60, 90] }\n[targets]\nratios = { \"low\" = 3.4 }\n",
     )
     .expect("test input");
-    let err = Search::new(
+    let Err(err) = Search::new(
         spec,
         parse_spec(base, Format::Toml, "gears").expect("test input"),
-    )
-    .err()
-    .expect("no [[planetary]] to search");
+    ) else {
+        panic!("no [[planetary]] to search");
+    };
     let text = err.to_string();
     assert!(text.starts_with("sets.P:"), "{text}");
     assert!(text.contains("[[planetary]]"), "{text}");
