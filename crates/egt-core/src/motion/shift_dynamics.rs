@@ -39,6 +39,7 @@ pub mod engagement;
 mod extremes;
 pub mod friction;
 pub mod lockup;
+mod mesh_loss;
 pub mod mode;
 mod named;
 pub mod ode;

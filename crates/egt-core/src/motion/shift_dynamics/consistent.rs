@@ -20,6 +20,7 @@
 
 use super::train_mode::{Mode, Phase, Setup, refuse};
 use crate::error::Result;
+use crate::solve::losses::Driver;
 
 /// A consistent mode at one instant, and how it was reached.
 pub(super) struct Settled {
@@ -39,7 +40,10 @@ const RATE_SLACK: f64 = 1e-9;
 
 /// The consistent mode at time `t` and state `y`, starting from `phases`.
 /// `fired` is the element whose event located this instant (its current
-/// phase has ended and is not a candidate), `None` at the start.
+/// phase has ended and is not a candidate), `None` at the start. With mesh
+/// losses, every candidate gets its meshes' directions (`mesh_loss.rs`):
+/// `prior` first where they hold (`flipped`, a mesh whose rolling power
+/// located this instant, unchecked), else the direction search.
 ///
 /// # Errors
 /// A tie-up (every candidate locks the train), a singular mode, or no
@@ -50,11 +54,13 @@ pub(super) fn settle(
     t: f64,
     y: &[f64],
     fired: Option<usize>,
+    prior: Option<&[Driver]>,
+    flipped: Option<usize>,
 ) -> Result<Settled> {
     let n = setup.n;
     // The way each locked element's torque pushes: it slips that way if released.
     let k = phases.len();
-    let now = setup.mode(phases)?;
+    let now = setup.directed(setup.mode(phases)?, t, y, prior, flipped)?;
     let dy = setup.rhs(&now, t, y);
     let (lam, _) = setup.locked_torques(&now, t, y, &dy);
     let options: Vec<Vec<Phase>> = (0..k)
@@ -111,6 +117,13 @@ pub(super) fn settle(
             yc[..n].copy_from_slice(speed.as_slice());
             lost = l;
         }
+        let mode = match setup.directed(mode, t, &yc, prior, flipped) {
+            Ok(m) => m,
+            Err(e) => {
+                tie_up.get_or_insert(e);
+                continue;
+            }
+        };
         let d = setup.rhs(&mode, t, &yc);
         let (torque, _) = setup.locked_torques(&mode, t, &yc, &d);
         let slack = RATE_SLACK * d[..n].iter().fold(0.0f64, |m, x| m.max(x.abs()));

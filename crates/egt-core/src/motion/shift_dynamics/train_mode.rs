@@ -8,6 +8,7 @@ use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 use super::compliance::OutputShaft;
 use super::friction::Capacity;
+use super::mesh_loss::{Lossy, MeshLosses};
 use super::mode::mode_basis;
 use super::shift::ShiftSim;
 use crate::error::{AnalysisError, Error, Result};
@@ -35,6 +36,9 @@ pub(super) struct Mode {
     /// Row index of the first kept element (held rigidly, always locked):
     /// they follow the Willis rows, in the order of [`Setup::kept`].
     pub(super) kept_row0: usize,
+    /// With mesh losses: the meshes' directions and the lossy system
+    /// (`mesh_loss.rs`); `None` for ideal meshes.
+    pub(super) lossy: Option<Lossy>,
 }
 
 pub(super) struct Setup<'a> {
@@ -52,6 +56,8 @@ pub(super) struct Setup<'a> {
     pub(super) one_way: Vec<bool>,
     pub(super) capacity: Vec<Capacity>,
     pub(super) n: usize,
+    /// The meshes' efficiencies when the shift has mesh losses.
+    pub(super) losses: Option<MeshLosses>,
 }
 
 impl Setup<'_> {
@@ -108,6 +114,7 @@ impl Setup<'_> {
             gram_inverse,
             row_of,
             kept_row0: willis,
+            lossy: None,
         })
     }
 
@@ -186,8 +193,16 @@ impl Setup<'_> {
         let n = self.n;
         let v = &y[..n];
         let (f, tf) = self.forces(&mode.phases, t, y);
-        let q = mode.reduced.solve(&(mode.basis.transpose() * &f));
-        let a = &mode.basis * q;
+        let (a, mesh) = match (&mode.lossy, &self.losses) {
+            (Some(lossy), Some(losses)) => {
+                let (a, mu) = self.lossy_solve(lossy, mode, &f);
+                (a, Some(losses.power(lossy, v, &mu)))
+            }
+            _ => (
+                &mode.basis * mode.reduced.solve(&(mode.basis.transpose() * &f)),
+                None,
+            ),
+        };
         let mut d = a.as_slice().to_vec();
         for (i, t) in tf.iter().enumerate() {
             d.push(-t * self.slip(i, v));
@@ -208,7 +223,32 @@ impl Setup<'_> {
                 d.push(slip);
             }
         }
+        // the meshes' loss, the last state
+        d.extend(mesh);
         d
+    }
+
+    /// The index of the mesh-loss energy in the state (the last one), with losses.
+    pub(super) fn mesh_at(&self) -> Option<usize> {
+        let shaft = if self.sim.output_shaft.is_some() {
+            2
+        } else {
+            0
+        };
+        self.losses.as_ref().map(|_| self.n + self.k() + 1 + shaft)
+    }
+
+    /// The multipliers of `mode` at state `y` with derivative `dy`: one per
+    /// row (Willis rows, kept, locked changing elements), in the sign of
+    /// `M v' - f = A^T lambda`.
+    fn multipliers(&self, mode: &Mode, t: f64, y: &[f64], dy: &[f64]) -> Vec<f64> {
+        let (f, _) = self.forces(&mode.phases, t, y);
+        if let Some(lossy) = &mode.lossy {
+            return self.lossy_solve(lossy, mode, &f).1;
+        }
+        let a = DVector::from_column_slice(&dy[..self.n]);
+        let r = &self.m * a - f;
+        (&mode.gram_inverse * (&mode.rows * r)).as_slice().to_vec()
     }
 
     /// The locked elements' torques on their first links: each changing
@@ -220,11 +260,7 @@ impl Setup<'_> {
         y: &[f64],
         dy: &[f64],
     ) -> (Vec<f64>, Vec<f64>) {
-        let n = self.n;
-        let (f, _) = self.forces(&mode.phases, t, y);
-        let a = DVector::from_column_slice(&dy[..n]);
-        let r = &self.m * a - f;
-        let lambda = &mode.gram_inverse * (&mode.rows * r);
+        let lambda = self.multipliers(mode, t, y, dy);
         let changing = mode
             .row_of
             .iter()
@@ -247,6 +283,11 @@ impl Setup<'_> {
                 Phase::Locked if self.one_way[i] => lam[i],
                 Phase::Locked => self.sim.law.static_limit(self.capacity[i].at(t)) - lam[i].abs(),
             };
+        }
+        // With losses, then each mesh's rolling power in its driver's sense.
+        if let (Some(lossy), Some(losses)) = (&mode.lossy, &self.losses) {
+            let mu = self.multipliers(mode, t, y, dy);
+            g.extend(losses.events(lossy, &y[..self.n], &mu));
         }
         g
     }
