@@ -793,3 +793,45 @@ fn a_compliant_output_from_the_flag_or_the_spec_is_one_run_and_bad_shafts_exit_2
         assert!(r.stderr.contains(says), "{bad:?}: {}", r.stderr);
     }
 }
+
+#[test]
+fn mesh_losses_from_the_flag_or_the_spec_are_one_run_in_the_energy_balance() {
+    let spec = std::fs::read_to_string(root().join("examples/zf_8hp70.toml")).expect("example");
+    let with_losses = spec.replace("name = \"2-3\"\n", "name = \"2-3\"\nlosses = true\n");
+    let mut flags: Vec<String> = UPSHIFT.iter().map(|s| s.to_string()).collect();
+    flags[1] = "-".into();
+    flags.extend(["--losses", "--format", "json"].map(String::from));
+    let flags: Vec<&str> = flags.iter().map(String::as_str).collect();
+    let by_flag = egt(&flags, Some(&spec));
+    assert_eq!(by_flag.code, 0, "{}", by_flag.stderr);
+    let by_spec = egt(
+        &["shift-sim", "-", "--shift", "2-3", "--format", "json"],
+        Some(&with_losses),
+    );
+    assert_eq!(by_spec.code, 0, "{}", by_spec.stderr);
+    assert_eq!(by_flag.stdout, by_spec.stdout);
+    let v: Value = serde_json::from_str(&by_flag.stdout).expect("json");
+    let mesh = v["mesh_loss"].as_f64().expect("mesh loss");
+    let friction: f64 = (v["dissipated"].as_array().expect("J").iter())
+        .map(|d| d.as_f64().expect("J"))
+        .sum();
+    assert!(mesh > 0.0 && mesh < friction, "{mesh} of {friction}");
+    assert!(v["max_energy_residual"].as_f64().expect("J") < 1e-7 * (mesh + friction));
+    // Without the option the document has no mesh loss at all.
+    let ideal = run(&with(&["--format", "json"]));
+    let ideal: Value = serde_json::from_str(&ideal.stdout).expect("json");
+    assert!(ideal.get("mesh_loss").is_none());
+    assert!(ideal["samples"][0].get("mesh_loss").is_none());
+    // The table names it, and the CSV carries it as a column.
+    let text = run(&with(&["--losses"]));
+    assert!(text.stdout.contains("mesh loss: "), "{}", text.stdout);
+    assert!(text.stdout.contains("- E_mesh)"), "{}", text.stdout);
+    let csv = run(&with(&["--losses", "--format", "csv"]));
+    assert!(
+        csv.stdout
+            .lines()
+            .next()
+            .expect("header")
+            .ends_with(",mesh_loss")
+    );
+}
