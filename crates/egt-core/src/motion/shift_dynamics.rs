@@ -45,6 +45,7 @@ mod named;
 pub mod ode;
 pub mod quality;
 mod request;
+mod rest;
 pub mod shift;
 mod train_mode;
 

@@ -532,6 +532,7 @@ mod tests {
             kept_torque_range: Vec::new(),
             dissipated: vec![0.0; 2],
             lock_loss: 0.0,
+            rest_time: None,
             mesh_loss: None,
             max_energy_residual: 0.0,
             steps: 0,

@@ -291,6 +291,10 @@ pub struct ShiftResult {
     pub kept_torque_range: Vec<[f64; 2]>,
     /// Energy each changing element dissipated (J).
     pub dissipated: Vec<f64>,
+    /// When the train came to rest (every link stopped, held by its locked
+    /// elements: `rest.rs`), if it did and stayed at rest; `None` otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rest_time: Option<f64>,
     /// Energy removed by the lock-up projections (J).
     pub lock_loss: f64,
     /// With mesh losses: the energy the meshes lost (J).
@@ -467,6 +471,7 @@ impl ShiftSim {
             kept_torque_range: Vec::new(),
             dissipated: vec![0.0; k],
             lock_loss: 0.0,
+            rest_time: None,
             mesh_loss: None,
             max_energy_residual: 0.0,
             steps: 0,

@@ -1,0 +1,94 @@
+//! A train brought to rest: when an event leaves every link at zero speed
+//! and the only mode that can hold the state is a tie-up (its locked rows
+//! leave no degree of freedom), the train stands still instead of being
+//! refused. Such a *rest* mode has no coordinates: its speeds are zero, its
+//! accelerations zero, and its locked elements carry the static torques
+//! (the multipliers of `A^T lambda = -f`, unique when its rows are
+//! independent). It lasts while each locked element holds its static torque
+//! within `mu_s C(t)` (a one-way element with its holding sign): those are
+//! its events, located as the others, and the run leaves rest by the
+//! consistent mode after one (`consistent.rs`).
+//!
+//! The typical case is braking with both elements holding: an on-coming
+//! element applied while the off-going one still holds drags the train down
+//! (a tie-up brake); the on-coming slip reaches zero exactly when every link
+//! stops, and the train then rests, held by both.
+
+use super::train_mode::Setup;
+
+/// Speeds at most this fraction of the run's initial speed scale count as
+/// rest (an event located at zero slip leaves speeds of rounding size).
+pub(super) const REST_ZERO: f64 = 1e-9;
+
+impl Setup<'_> {
+    /// Whether the speeds `v` are those of a train at rest, against the
+    /// largest speed at the start, `scale`.
+    pub(super) fn at_rest(&self, v: &[f64], scale: f64) -> bool {
+        v.iter().all(|w| w.abs() <= REST_ZERO * scale)
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::super::friction::{Capacity, FrictionLaw};
+    use super::super::shift::tests::{rel, two_speed, two_speed_upshift};
+    use super::super::shift::{InputTorque, ShiftSim};
+
+    /// The two-speed train braked by a tie-up: the ring brake keeps holding
+    /// (a capacity far above its torque) while the direct clutch applies at
+    /// a constant capacity. With the brake locked the train moves in first
+    /// (carrier w, sun 3.4 w), and the clutch slips at 2.4 w, so its
+    /// kinetic torque mu_k C brakes the output with T = 2.4 mu_k C on the
+    /// reduced inertia J = J_carrier + J_vehicle + 3.4^2 J_sun: the train
+    /// stops at t = J w0 / T having dissipated 1/2 J w0^2, and rests there,
+    /// held by both elements.
+    fn tie_up_brake() -> ShiftSim {
+        ShiftSim {
+            input_speed: 200.0,
+            input_torque: InputTorque::Constant(0.0),
+            road_load: [0.0; 3],
+            vehicle_inertia: 2.0,
+            law: FrictionLaw {
+                mu_static: 0.15,
+                mu_kinetic: 0.12,
+                decay: None,
+            },
+            off_going: Some(Capacity::Constant(1e6)),
+            on_coming: Some(Capacity::Constant(1000.0)),
+            t_end: 2.0,
+            ..two_speed_upshift()
+        }
+    }
+
+    #[test]
+    fn a_train_braked_by_both_elements_is_simulated_to_rest() {
+        let train = two_speed();
+        let sim = tie_up_brake();
+        let r = sim.run(&train).unwrap();
+        let (jc, js, jv, mu, c) = (0.05, 0.01, 2.0, 0.12, 1000.0);
+        let j = jc + jv + 3.4 * 3.4 * js;
+        let w0 = 200.0 / 3.4;
+        let torque = 2.4 * mu * c;
+        let t_rest = j * w0 / torque;
+        let energy = 0.5 * j * w0 * w0;
+        let rest = r.rest_time.unwrap();
+        assert!(rel(rest, t_rest) < 1e-9, "{rest} vs {t_rest}");
+        assert!(
+            rel(r.dissipated[1], energy) < 1e-9,
+            "{:?} vs {energy}",
+            r.dissipated
+        );
+        assert_eq!(r.dissipated[0], 0.0);
+        let last = r.changes.last().unwrap();
+        assert_eq!(
+            (last.element.as_str(), last.now.as_str(), last.dof),
+            ("direct_clutch", "locked", 0)
+        );
+        // At rest to the end: every speed zero, the energy balanced.
+        let end = r.samples.last().unwrap();
+        assert_eq!(end.t, 2.0);
+        assert!(end.speed.iter().all(|&w| w == 0.0));
+        assert!(r.max_energy_residual < 1e-9 * energy);
+    }
+}
