@@ -60,7 +60,7 @@ pub(super) fn settle(
     let n = setup.n;
     // The way each locked element's torque pushes: it slips that way if released.
     let k = phases.len();
-    let now = setup.directed(setup.mode(phases)?, t, y, prior, flipped)?;
+    let now = setup.directed(setup.mode_or_rest(phases, &y[..n])?, t, y, prior, flipped)?;
     let dy = setup.rhs(&now, t, y);
     let (lam, _) = setup.locked_torques(&now, t, y, &dy);
     let options: Vec<Vec<Phase>> = (0..k)
@@ -102,7 +102,7 @@ pub(super) fn settle(
     candidates.sort_by_key(|(_, key)| *key);
     let mut tie_up = None;
     for (c, _) in candidates {
-        let mode = match setup.mode(&c) {
+        let mode = match setup.mode_or_rest(&c, &y[..n]) {
             Ok(m) => m,
             Err(e) => {
                 tie_up.get_or_insert(e);

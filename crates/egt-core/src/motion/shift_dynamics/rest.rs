@@ -14,7 +14,8 @@
 //! (a tie-up brake); the on-coming slip reaches zero exactly when every link
 //! stops, and the train then rests, held by both.
 
-use super::train_mode::Setup;
+use super::train_mode::{Mode, Phase, Setup};
+use crate::error::Result;
 
 /// Speeds at most this fraction of the run's initial speed scale count as
 /// rest (an event located at zero slip leaves speeds of rounding size).
@@ -22,9 +23,26 @@ pub(super) const REST_ZERO: f64 = 1e-9;
 
 impl Setup<'_> {
     /// Whether the speeds `v` are those of a train at rest, against the
-    /// largest speed at the start, `scale`.
-    pub(super) fn at_rest(&self, v: &[f64], scale: f64) -> bool {
+    /// input speed at the start (exactly zero when that is zero).
+    pub(super) fn at_rest(&self, v: &[f64]) -> bool {
+        let scale = self.sim.input_speed.abs();
         v.iter().all(|w| w.abs() <= REST_ZERO * scale)
+    }
+
+    /// The mode of `phases`; when it ties the train up and the speeds `v`
+    /// are at rest, the rest mode (no DOF) instead of the refusal.
+    ///
+    /// # Errors
+    /// As [`Setup::mode`]: the tie-up of a train that moves, dependent rows,
+    /// missing inertia.
+    pub(super) fn mode_or_rest(&self, phases: &[Phase], v: &[f64]) -> Result<Mode> {
+        match self.mode(phases) {
+            Err(e) if self.at_rest(v) => match self.rest_mode(phases) {
+                Ok(m) if m.basis.ncols() == 0 => Ok(m),
+                _ => Err(e),
+            },
+            other => other,
+        }
     }
 }
 
@@ -90,5 +108,61 @@ mod tests {
         assert_eq!(end.t, 2.0);
         assert!(end.speed.iter().all(|&w| w == 0.0));
         assert!(r.max_energy_residual < 1e-9 * energy);
+    }
+
+    #[test]
+    fn a_rest_lasts_while_the_elements_hold_its_static_torques() {
+        // An input torque of 20 N m: the train stops at
+        // t = J w0 / (2.4 mu_k C - 3.4 T_in), then rests with the brake
+        // holding the whole input torque (the carrier is free, so the case
+        // reacts T_in through the ring). The brake's capacity falls from
+        // 1e5 to 0 over [1, 1.5]: it lets go where mu_s C(t) = T_in, and the
+        // train leaves rest in second (the clutch locked, every link at one
+        // speed).
+        let train = two_speed();
+        let (t_in, j, w0) = (20.0, 0.05 + 2.0 + 3.4 * 3.4 * 0.01, 200.0 / 3.4);
+        let sim = ShiftSim {
+            input_torque: InputTorque::Constant(t_in),
+            off_going: Some(Capacity::Ramp {
+                t0: 1.0,
+                t1: 1.5,
+                from: 1e5,
+                to: 0.0,
+            }),
+            ..tie_up_brake()
+        };
+        let r = sim.run(&train).unwrap();
+        let stop = j * w0 / (2.4 * 0.12 * 1000.0 - 3.4 * t_in);
+        let release = 1.0 + 0.5 * (1.0 - t_in / (0.15 * 1e5));
+        let what: Vec<(&str, &str, usize)> = (r.changes.iter())
+            .map(|c| (c.element.as_str(), c.now.as_str(), c.dof))
+            .collect();
+        assert_eq!(
+            what,
+            [
+                ("direct_clutch", "locked", 0),
+                ("ring_brake", "slipping", 1)
+            ]
+        );
+        assert!(
+            rel(r.changes[0].t, stop) < 1e-9,
+            "{} vs {stop}",
+            r.changes[0].t
+        );
+        assert!(
+            rel(r.changes[1].t, release) < 1e-9,
+            "{} vs {release}",
+            r.changes[1].t
+        );
+        // It did not stay at rest; at rest the brake held T_in.
+        assert_eq!(r.rest_time, None);
+        let resting = (r.samples.iter())
+            .find(|s| s.t > r.changes[0].t && s.t < r.changes[1].t)
+            .unwrap();
+        assert!(rel(resting.element_torque[0].abs(), t_in) < 1e-12);
+        let end = r.samples.last().unwrap();
+        let (sun, carrier) = (end.speed[1], end.speed[2]);
+        assert!(sun > 1.0 && rel(sun, carrier) < 1e-9, "{:?}", end.speed);
+        assert!(r.max_energy_residual < 1e-9 * r.dissipated[1]);
     }
 }

@@ -482,6 +482,11 @@ impl ShiftSim {
         let mut extremes = Extremes::new(1 + 2 * k + kept.len());
         // Takes a consistent mode: its changes, the on-coming lock, the loss.
         let take = |out: &mut ShiftResult, s: &Settled, t: f64| {
+            // At rest from here (no DOF), or moving again.
+            out.rest_time = match s.mode.basis.ncols() {
+                0 => out.rest_time.or(Some(t)),
+                _ => None,
+            };
             for &i in &s.changed {
                 let now = match s.mode.phases[i] {
                     Phase::Locked => "locked",

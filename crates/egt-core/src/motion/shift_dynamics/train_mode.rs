@@ -67,6 +67,16 @@ impl Setup<'_> {
     }
 
     pub(super) fn mode(&self, phases: &[Phase]) -> Result<Mode> {
+        self.mode_with(phases, false)
+    }
+
+    /// `phases` as a mode of a train at rest: a tie-up (no DOF) is allowed
+    /// (`rest.rs`).
+    pub(super) fn rest_mode(&self, phases: &[Phase]) -> Result<Mode> {
+        self.mode_with(phases, true)
+    }
+
+    fn mode_with(&self, phases: &[Phase], rest: bool) -> Result<Mode> {
         let mut locked = self.kept.clone();
         let mut row_of = vec![None; phases.len()];
         let willis = mode_basis(self.train, &[])?.rows.nrows();
@@ -84,7 +94,7 @@ impl Setup<'_> {
                 .collect::<Vec<_>>()
                 .join(", ")
         };
-        if mb.dof() == 0 {
+        if mb.dof() == 0 && !rest {
             return Err(refuse(format!(
                 "tie-up: with {} locked the train cannot move",
                 listed()
