@@ -835,3 +835,50 @@ fn mesh_losses_from_the_flag_or_the_spec_are_one_run_in_the_energy_balance() {
             .ends_with(",mesh_loss")
     );
 }
+
+#[test]
+fn a_train_braked_to_rest_by_both_elements_rests_instead_of_a_tie_up() {
+    // `A` keeps holding (20 000, far above its torque) while `C` applies:
+    // the two drag the train to a standstill, where it rests, held by both
+    // (before: exit 1, "singular: tie-up").
+    let args = [
+        "shift-sim",
+        "examples/zf_8hp70.toml",
+        "--from",
+        "2",
+        "--to",
+        "3",
+        "--input-speed",
+        "250",
+        "--input-torque",
+        "0",
+        "--vehicle-inertia",
+        "12",
+        "--off-going",
+        "20000",
+        "--on-coming",
+        "0.05:0.3:0:9000",
+        "--t-end",
+        "2",
+    ];
+    let text = egt(&args, None);
+    assert_eq!(text.code, 0, "{}", text.stderr);
+    assert!(text.stdout.contains("at rest from:"), "{}", text.stdout);
+    let json = egt(&[&args[..], &["--format", "json"]].concat(), None);
+    let v: Value = serde_json::from_str(&json.stdout).expect("json");
+    let rest = v["rest_time"].as_f64().expect("at rest");
+    assert_eq!(v["lock_time"].as_f64(), Some(rest));
+    let samples = v["samples"].as_array().expect("samples");
+    let last = samples.last().expect("a sample");
+    assert_eq!(last["t"].as_f64(), Some(2.0));
+    assert!((last["speed"].as_array().expect("speeds").iter()).all(|w| w.as_f64() == Some(0.0)));
+    assert_eq!(last["dof"].as_u64(), Some(0));
+    let dissipated: f64 = (v["dissipated"].as_array().expect("J").iter())
+        .map(|d| d.as_f64().expect("J"))
+        .sum();
+    assert!(v["max_energy_residual"].as_f64().expect("J") < 1e-9 * dissipated);
+    // Without a rest, the document has no rest_time.
+    let moving = run(&with(&["--format", "json"]));
+    let moving: Value = serde_json::from_str(&moving.stdout).expect("json");
+    assert!(moving.get("rest_time").is_none());
+}

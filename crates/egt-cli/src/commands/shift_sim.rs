@@ -383,6 +383,13 @@ fn table(
         "shift time:                                   {} s",
         opt(r.shift_time)
     )?;
+    if let Some(t) = r.rest_time {
+        writeln!(
+            out,
+            "at rest from:                                 {} s (every link stopped, held by the locked elements)",
+            report::float(t)
+        )?;
+    }
     writeln!(
         out,
         "output torque: max {} N m, min {} N m",
