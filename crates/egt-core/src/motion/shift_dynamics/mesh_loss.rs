@@ -363,7 +363,7 @@ mod tests {
         let train = zf();
         let sim = settling();
         let r = sim.run(&train).unwrap();
-        assert_eq!(r.lock_time.is_some(), true);
+        assert!(r.lock_time.is_some());
         let pf = power_of(&train, "3", &r, 300.0);
         let t = train.checked_transmission().unwrap();
         let (i, o) = (t.input.index(), t.output.index());
