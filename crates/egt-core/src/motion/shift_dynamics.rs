@@ -23,14 +23,19 @@
 //!   events), `consistent` (the consistent mode at `t = 0` and after every
 //!   event: release what cannot hold, lock what can), `extremes` (the
 //!   reported ranges, over both sides of every event and between samples)
-//!   `named` (a spec's `[[shift]]` made into a [`ShiftSim`]) and `compliance`
-//!   (an optional compliant output shaft to the vehicle, [`OutputShaft`]).
+//!   `named` (a spec's `[[shift]]` made into a [`ShiftSim`]), `compliance`
+//!   (an optional compliant output shaft to the vehicle, [`OutputShaft`]),
+//!   `mesh_loss` (optional mesh losses: the gear pairs' efficiencies on
+//!   each mode's meshing forces with `egt power`'s direction rule, the loss
+//!   in the energy balance) and `rest` (a train braked to a standstill
+//!   rests, held by its elements, instead of being refused as a tie-up).
 //! - [`quality`]: the torque and inertia phases of a finished shift and its
 //!   quality measures (output-torque dip and overshoot, oscillation after the
 //!   lock, jerk, steps at events, each element's energy and peak power),
 //!   read from the samples.
 //!
-//! Not built yet: mesh losses in the shift. See
+//! Not built yet: the road load's Coulomb term as a static friction at rest
+//! (a creep torque against it at a standstill is refused). See
 //! docs/shift_dynamics.md.
 
 mod compliance;
