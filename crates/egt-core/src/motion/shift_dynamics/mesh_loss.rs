@@ -307,7 +307,9 @@ impl Lossy {
 #[cfg(test)]
 #[allow(clippy::unwrap_used)]
 mod tests {
-    use super::super::shift::tests::{rel, simpson, upshift, zf, zf_2_3};
+    use super::super::shift::tests::{
+        APPLY, RELEASE, rel, simpson, upshift, zf, zf_2_3, zf_change,
+    };
     use super::super::shift::{ShiftResult, ShiftSim};
     use crate::analysis::dynamics::DynamicsRequest;
     use crate::analysis::power::PowerRequest;
@@ -462,5 +464,35 @@ mod tests {
         for (a, b) in lossy.dissipated.iter().zip(&ideal.dissipated) {
             assert!(rel(*a, *b) < 1e-7, "{a} vs {b}");
         }
+    }
+
+    #[test]
+    fn a_lossy_double_swap_ends_in_fourth_with_its_energy_balanced() {
+        // The 8HP 1-4 (A, C off; D, E on) with losses: the kinematics stay
+        // the ideal train's, so it ends in fourth's ratio (egt shift).
+        let train = zf();
+        let sim = ShiftSim {
+            losses: true,
+            ..zf_change(
+                "1",
+                "4",
+                &[("A", RELEASE), ("C", RELEASE), ("D", APPLY), ("E", APPLY)],
+            )
+        };
+        let r = sim.run(&train).unwrap();
+        assert!(r.lock_time.is_some());
+        let t = train.checked_transmission().unwrap();
+        let last = r.samples.last().unwrap();
+        let ratio = last.speed[t.input.index()] / last.speed[t.output.index()];
+        let fourth = train.analyse_gear("4").unwrap().ratio;
+        assert!(rel(ratio, fourth) < 1e-9, "{ratio} vs {fourth}");
+        let mesh = r.mesh_loss.unwrap();
+        let dissipated = r.dissipated.iter().sum::<f64>() + mesh;
+        assert!(mesh > 0.0);
+        assert!(
+            r.max_energy_residual < 1e-7 * dissipated,
+            "{} of {dissipated}",
+            r.max_energy_residual
+        );
     }
 }
