@@ -23,9 +23,11 @@
 //! and after every mode change, and kept while each lossy mesh's rolling
 //! power `-mu_m tau (w_j - w_k)` keeps its sign. Its zero is an event,
 //! located like the others: the mesh's driver flips there (the loss is zero
-//! at that instant either way). A mesh that is idle when its mode begins
-//! (not rolling, or carrying round-off) stays lossless until the next mode
-//! change.
+//! at that instant either way). A lossy mesh that is idle when its mode
+//! begins (not rolling, or carrying round-off) has an event too: its power
+//! reaching [`IDLE_POWER`] of the train's power scale, where the search
+//! gives it its direction (a mesh that starts to roll when an element lets
+//! go).
 
 use nalgebra::DVector;
 
@@ -36,6 +38,11 @@ use crate::numerics::linalg::Lu;
 use crate::solve::losses::{
     Directions, Driver, ForceSolution, LossySolver, Meshes, idle_tolerance, mesh_torque,
 };
+
+/// The power, relative to the train's (its torque scale times its largest
+/// speed when the directions were found), at which an idle lossy mesh is
+/// given a direction.
+pub(super) const IDLE_POWER: f64 = 1e-9;
 
 /// The train's meshes as the time model needs them: ratio, basic
 /// efficiency, and the coordinates of gear j and the carrier (for the
@@ -54,6 +61,8 @@ pub(super) struct Lossy {
     /// `tau'` of each mesh under `drivers`.
     force_ratio: Vec<f64>,
     lu: Lu,
+    /// [`IDLE_POWER`] times the train's power scale.
+    idle_power: f64,
 }
 
 impl MeshLosses {
@@ -97,17 +106,19 @@ impl MeshLosses {
     }
 
     /// Event functions of the lossy meshes: each one's rolling power in the
-    /// sense of its driver, positive while the driver holds (`INFINITY` for
-    /// an idle or ideal mesh).
+    /// sense of its driver, positive while the driver holds; for an idle
+    /// lossy mesh, the idle power less the size of its power (`INFINITY`
+    /// for an ideal mesh).
     pub(super) fn events(&self, lossy: &Lossy, v: &[f64], mu: &[f64]) -> Vec<f64> {
         let rolling = self.rolling(v);
         (0..self.ratios.len())
             .map(|m| {
                 let p = -mu[m] * self.ratios[m] * rolling[m];
                 match lossy.drivers[m] {
+                    _ if self.efficiency[m] >= 1.0 => f64::INFINITY,
                     Driver::GearI => p,
                     Driver::GearJ => -p,
-                    Driver::None => f64::INFINITY,
+                    Driver::None => lossy.idle_power - p.abs(),
                 }
             })
             .collect()
@@ -219,8 +230,9 @@ impl LossySolver for System<'_> {
 impl Setup<'_> {
     /// `mode` with its lossy force rows: the directions at time `t`, state
     /// `y` from `prior` when they are consistent there (every lossy mesh's
-    /// implied driver is its own, or it is idle; mesh `flipped` is not
-    /// checked: it sits at its zero), else from the one direction search.
+    /// implied driver is its own, idle ones included, so that a mesh that
+    /// stops rolling loses its direction; mesh `flipped` is not checked: it
+    /// sits at its zero), else from the one direction search.
     /// Without losses, `mode` as it is.
     ///
     /// # Errors
@@ -247,10 +259,7 @@ impl Setup<'_> {
             let tol = idle_tolerance(&sys);
             let holds = (0..prior.len()).all(|m| {
                 let d = meshes.implied_at(&sys, m, tol);
-                flipped == Some(m)
-                    || losses.efficiency[m] >= 1.0
-                    || d == prior[m]
-                    || d == Driver::None
+                flipped == Some(m) || losses.efficiency[m] >= 1.0 || d == prior[m]
             });
             if holds {
                 drivers = Some(prior.to_vec());
@@ -266,11 +275,13 @@ impl Setup<'_> {
                 search.dirs
             }
         };
+        let idle_power = IDLE_POWER * sys.torque_scale() * meshes.speed_scale;
         let (force_ratio, lu) = (sys.force_ratio, sys.lu);
         mode.lossy = Some(Lossy {
             drivers,
             force_ratio,
             lu,
+            idle_power,
         });
         Ok(mode)
     }
@@ -292,15 +303,19 @@ impl Setup<'_> {
 }
 
 impl Lossy {
-    /// The drivers with mesh `m`'s flipped (its rolling power crossed zero).
-    pub(super) fn flipped(&self, m: usize) -> Vec<Driver> {
+    /// The drivers to try after mesh `m`'s event, and the mesh not to
+    /// check: a driving mesh's power crossed zero, so its driver flips (it
+    /// sits at its zero, unchecked); an idle one's power grew, so it is
+    /// checked and gets its direction from the search.
+    pub(super) fn after_event(&self, m: usize) -> (Vec<Driver>, Option<usize>) {
         let mut d = self.drivers.clone();
-        d[m] = match d[m] {
+        let flipped = match d[m] {
             Driver::GearI => Driver::GearJ,
             Driver::GearJ => Driver::GearI,
-            Driver::None => Driver::None,
+            Driver::None => return (d, None),
         };
-        d
+        d[m] = flipped;
+        (d, Some(m))
     }
 }
 

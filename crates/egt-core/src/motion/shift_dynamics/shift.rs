@@ -712,7 +712,10 @@ impl ShiftSim {
                 // The right limit: a consistent mode after the change (an
                 // element's event, or with losses a mesh's driver flipping).
                 let (fired, prior, flipped) = match &mode.lossy {
-                    Some(lossy) if i >= k => (None, Some(lossy.flipped(i - k)), Some(i - k)),
+                    Some(lossy) if i >= k => {
+                        let (prior, flipped) = lossy.after_event(i - k);
+                        (None, Some(prior), flipped)
+                    }
                     Some(lossy) => (Some(i), Some(lossy.drivers.clone()), None),
                     None => (Some(i), None, None),
                 };
