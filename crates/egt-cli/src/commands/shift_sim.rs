@@ -386,7 +386,7 @@ fn table(
     if let Some(t) = r.rest_time {
         writeln!(
             out,
-            "at rest from:                                 {} s (every link stopped, held by the locked elements)",
+            "at rest from:                                 {} s (every link stopped)",
             report::float(t)
         )?;
     }

@@ -28,14 +28,15 @@
 //!   `mesh_loss` (optional mesh losses: the gear pairs' efficiencies on
 //!   each mode's meshing forces with `egt power`'s direction rule, the loss
 //!   in the energy balance) and `rest` (a train braked to a standstill
-//!   rests, held by its elements, instead of being refused as a tie-up).
+//!   rests, held by its elements or parked by the road load, instead of
+//!   being refused as a tie-up).
 //! - [`quality`]: the torque and inertia phases of a finished shift and its
 //!   quality measures (output-torque dip and overshoot, oscillation after the
 //!   lock, jerk, steps at events, each element's energy and peak power),
 //!   read from the samples.
 //!
-//! Not built yet: the road load's Coulomb term as a static friction at rest
-//! (a creep torque against it at a standstill is refused). See
+//! Not built yet: a vehicle parked behind a compliant output shaft, and a
+//! stop of the output while other links still move (two DOF or more). See
 //! docs/shift_dynamics.md.
 
 mod compliance;

@@ -13,6 +13,18 @@
 //! element applied while the off-going one still holds drags the train down
 //! (a tie-up brake); the on-coming slip reaches zero exactly when every link
 //! stops, and the train then rests, held by both.
+//!
+//! A vehicle stopped by its road load is *parked*: the road load's Coulomb
+//! term `c0` (its brakes, its rolling resistance) is a static friction at
+//! rest. When the train stops in a mode of one DOF (an element's slip
+//! reaching zero with every link, e.g. the released one after a shift), the
+//! mode is tried with the output held (a row `w_out = 0`, no DOF left); it
+//! holds while the static torque at the output, that row's multiplier, is
+//! within `c0` (an event), and the output torque at rest is that reaction.
+//! A static torque above `c0` rolls the vehicle back. Not with a compliant
+//! output (the vehicle is not the output link).
+
+use nalgebra::{Cholesky, DMatrix};
 
 use super::train_mode::{Mode, Phase, Setup};
 use crate::error::Result;
@@ -35,6 +47,37 @@ impl Setup<'_> {
     /// # Errors
     /// As [`Setup::mode`]: the tie-up of a train that moves, dependent rows,
     /// missing inertia.
+    /// The road load's Coulomb term `c0`: the torque that holds the output
+    /// of a vehicle at rest (its brakes, its rolling resistance); 0 with a
+    /// compliant output (the vehicle is not the output link: never parked).
+    pub(super) fn stopping(&self) -> f64 {
+        match self.sim.output_shaft {
+            Some(_) => 0.0,
+            None => self.sim.road_load[0].max(0.0),
+        }
+    }
+
+    /// `phases` with the vehicle parked: a mode of one DOF whose output
+    /// moves, held at the output by the road load (an extra row `w_out =
+    /// 0`), so no DOF is left. `None` when `phases` does not give such a
+    /// mode (a tie-up, more DOF, or an output that does not move in it).
+    pub(super) fn parked_mode(&self, phases: &[Phase]) -> Option<Mode> {
+        let mut mode = self.mode(phases).ok()?;
+        let (n, r) = (self.n, mode.rows.nrows());
+        let moves = mode.basis.ncols() == 1 && mode.basis[(self.output, 0)].abs() > 1e-9;
+        if !moves {
+            return None;
+        }
+        let mut rows = mode.rows.clone().insert_row(r, 0.0);
+        rows[(r, self.output)] = 1.0;
+        mode.gram_inverse = (&rows * rows.transpose()).try_inverse()?;
+        mode.rows = rows;
+        mode.basis = DMatrix::zeros(n, 0);
+        mode.reduced = Cholesky::new(DMatrix::zeros(0, 0))?;
+        mode.park_row = Some(r);
+        Some(mode)
+    }
+
     pub(super) fn mode_or_rest(&self, phases: &[Phase], v: &[f64]) -> Result<Mode> {
         match self.mode(phases) {
             Err(e) if self.at_rest(v) => match self.rest_mode(phases) {
@@ -164,5 +207,73 @@ mod tests {
         let (sun, carrier) = (end.speed[1], end.speed[2]);
         assert!(sun > 1.0 && rel(sun, carrier) < 1e-9, "{:?}", end.speed);
         assert!(r.max_energy_residual < 1e-9 * r.dissipated[1]);
+    }
+
+    /// The two-speed power-on 1-2 upshift, then braked by the road load's
+    /// Coulomb term `c0` against a constant input torque `t_in`: in second
+    /// (direct, every link at one speed, J = J_sun + J_carrier + J_vehicle)
+    /// the output decelerates at `(c0 - t_in) / J` once the brake's capacity
+    /// is gone (t = 0.25 s).
+    fn braked_in_second(t_in: f64, c0: f64) -> (ShiftSim, f64) {
+        let sim = ShiftSim {
+            input_torque: InputTorque::Constant(t_in),
+            road_load: [c0, 0.0, 0.0],
+            t_end: 3.0,
+            ..two_speed_upshift()
+        };
+        (sim, 0.01 + 0.05 + 2.0)
+    }
+
+    #[test]
+    fn a_vehicle_braked_by_its_road_load_stops_and_is_held_by_it() {
+        // 20 N m in against c0 = 300: the vehicle stops at
+        // t_a + J w_a / (c0 - t_in) from any sample (t_a, w_a) after the
+        // lock and the brake's ramp, and stays parked: the road load holds
+        // the static 20 N m (below c0), which is the output torque at rest.
+        let train = two_speed();
+        let (t_in, c0) = (20.0, 300.0);
+        let (sim, j) = braked_in_second(t_in, c0);
+        let r = sim.run(&train).unwrap();
+        let lock = r.lock_time.unwrap();
+        let carrier = train.link_id("carrier").unwrap().index();
+        let a = (r.samples.iter())
+            .find(|s| s.t >= lock.max(0.25) && s.dof == 1)
+            .unwrap();
+        let stop = a.t + j * a.speed[carrier] / (c0 - t_in);
+        let rest = r.rest_time.unwrap();
+        assert!(rel(rest, stop) < 1e-9, "{rest} vs {stop}");
+        let last = r.changes.last().unwrap();
+        assert_eq!((last.element.as_str(), last.dof), ("ring_brake", 0));
+        let end = r.samples.last().unwrap();
+        assert_eq!(end.t, 3.0);
+        assert!(end.speed.iter().all(|&w| w == 0.0));
+        assert!(rel(end.output_torque, t_in) < 1e-9, "{}", end.output_torque);
+        let dissipated: f64 = r.dissipated.iter().sum();
+        assert!(r.max_energy_residual < 1e-8 * dissipated);
+    }
+
+    #[test]
+    fn a_static_torque_above_the_road_loads_c0_rolls_the_vehicle_back() {
+        // -100 N m (engine braking) against c0 = 50: the vehicle stops,
+        // but at rest the road load cannot hold 100 N m, so it rolls back,
+        // accelerating at (t_in + c0) / J with the road load now forward.
+        let train = two_speed();
+        let (t_in, c0) = (-100.0, 50.0);
+        let (sim, j) = braked_in_second(t_in, c0);
+        let r = sim.run(&train).unwrap();
+        assert_eq!(r.rest_time, None);
+        let carrier = train.link_id("carrier").unwrap().index();
+        let stop = r.changes.last().unwrap();
+        assert_eq!((stop.element.as_str(), stop.dof), ("ring_brake", 1));
+        let end = r.samples.last().unwrap();
+        let back = (t_in + c0) / j * (end.t - stop.t);
+        assert!(end.speed[carrier] < 0.0);
+        assert!(
+            rel(end.speed[carrier], back) < 1e-9,
+            "{} vs {back}",
+            end.speed[carrier]
+        );
+        let dissipated: f64 = r.dissipated.iter().sum();
+        assert!(r.max_energy_residual < 1e-8 * dissipated);
     }
 }

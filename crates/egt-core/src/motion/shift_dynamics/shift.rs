@@ -42,7 +42,7 @@ use nalgebra::DVector;
 use serde::Serialize;
 
 use super::compliance::OutputShaft;
-use super::consistent::{Settled, settle};
+use super::consistent::{Cause, Settled, settle};
 use super::extremes::Extremes;
 use super::friction::{Capacity, FrictionLaw};
 use super::mesh_loss::MeshLosses;
@@ -550,7 +550,7 @@ impl ShiftSim {
         };
         // At t = 0 every locked element is checked against its capacity: the
         // old gear's elements may not hold what the shift asks of them.
-        let settled = settle(&setup, &first, 0.0, &y, None, None, None)?;
+        let settled = settle(&setup, &first, 0.0, &y, Cause::Start, None)?;
         take(&mut out, &settled, 0.0);
         let Settled {
             mut mode,
@@ -711,23 +711,19 @@ impl ShiftSim {
                 }
                 // The right limit: a consistent mode after the change (an
                 // element's event, or with losses a mesh's driver flipping).
-                let (fired, prior, flipped) = match &mode.lossy {
-                    Some(lossy) if i >= k => {
+                // An element's event, a mesh's (its driver), or the parked
+                // vehicle's (its static torque reached c0): the last ones.
+                let meshes = mode.lossy.as_ref().map_or(0, |l| l.drivers.len());
+                let drivers = mode.lossy.as_ref().map(|l| l.drivers.clone());
+                let (cause, prior) = match &mode.lossy {
+                    _ if i < k => (Cause::Element(i), drivers),
+                    Some(lossy) if i < k + meshes => {
                         let (prior, flipped) = lossy.after_event(i - k);
-                        (None, Some(prior), flipped)
+                        (Cause::Mesh(flipped), Some(prior))
                     }
-                    Some(lossy) => (Some(i), Some(lossy.drivers.clone()), None),
-                    None => (Some(i), None, None),
+                    _ => (Cause::Unpark, drivers),
                 };
-                let s = settle(
-                    &setup,
-                    &mode.phases,
-                    te,
-                    &ye,
-                    fired,
-                    prior.as_deref(),
-                    flipped,
-                )?;
+                let s = settle(&setup, &mode.phases, te, &ye, cause, prior.as_deref())?;
                 take(&mut out, &s, te);
                 lock_loss += s.lost;
                 (mode, y) = (s.mode, s.y);

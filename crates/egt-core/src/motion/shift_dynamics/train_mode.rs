@@ -39,6 +39,9 @@ pub(super) struct Mode {
     /// With mesh losses: the meshes' directions and the lossy system
     /// (`mesh_loss.rs`); `None` for ideal meshes.
     pub(super) lossy: Option<Lossy>,
+    /// The row holding the output at rest by the road load's Coulomb term
+    /// (`rest.rs`), when the vehicle is parked.
+    pub(super) park_row: Option<usize>,
 }
 
 pub(super) struct Setup<'a> {
@@ -125,6 +128,7 @@ impl Setup<'_> {
             row_of,
             kept_row0: willis,
             lossy: None,
+            park_row: None,
         })
     }
 
@@ -251,7 +255,7 @@ impl Setup<'_> {
     /// The multipliers of `mode` at state `y` with derivative `dy`: one per
     /// row (Willis rows, kept, locked changing elements), in the sign of
     /// `M v' - f = A^T lambda`.
-    fn multipliers(&self, mode: &Mode, t: f64, y: &[f64], dy: &[f64]) -> Vec<f64> {
+    pub(super) fn multipliers(&self, mode: &Mode, t: f64, y: &[f64], dy: &[f64]) -> Vec<f64> {
         let (f, _) = self.forces(&mode.phases, t, y);
         if let Some(lossy) = &mode.lossy {
             return self.lossy_solve(lossy, mode, &f).1;
@@ -299,6 +303,10 @@ impl Setup<'_> {
             let mu = self.multipliers(mode, t, y, dy);
             g.extend(losses.events(lossy, &y[..self.n], &mu));
         }
+        // Parked, last: the road load's static margin.
+        if let Some(r) = mode.park_row {
+            g.push(self.stopping() - self.multipliers(mode, t, y, dy)[r].abs());
+        }
         g
     }
 
@@ -332,9 +340,11 @@ impl Setup<'_> {
         let (lam, kept) = self.locked_torques(mode, t, y, dy);
         let k = phases.len();
         let mut q = Vec::with_capacity(1 + 2 * k + kept.len());
-        q.push(match self.shaft_state(y) {
-            Some((shaft, w_v, phi)) => shaft.torque(v[self.output], w_v, phi),
-            None => self.sim.vehicle_inertia * dy[self.output] + self.road(v[self.output]),
+        q.push(match (self.shaft_state(y), mode.park_row) {
+            (Some((shaft, w_v, phi)), _) => shaft.torque(v[self.output], w_v, phi),
+            // Parked: the road load's static reaction holds the vehicle.
+            (None, Some(r)) => -self.multipliers(mode, t, y, dy)[r],
+            (None, None) => self.sim.vehicle_inertia * dy[self.output] + self.road(v[self.output]),
         });
         q.extend((0..k).map(|i| match phases[i] {
             Phase::Locked => lam[i],
