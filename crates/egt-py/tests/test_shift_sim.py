@@ -223,3 +223,12 @@ def test_mesh_losses_are_the_clis_and_close_the_energy_balance() -> None:
     assert s.mesh_loss is not None and s.mesh_loss > 0.0
     assert s.max_energy_residual < 1e-7 * (sum(s.energy) + s.mesh_loss)
     assert train.simulate_shift("2", "3", **UPSHIFT).mesh_loss is None  # type: ignore[arg-type]
+
+
+def test_a_train_braked_to_rest_rests_as_the_cli_says() -> None:
+    train = zf()
+    args: Dict[str, Any] = {**UPSHIFT, "input_torque": 0.0, "road_load": (0.0, 0.0, 0.0), "off_going": 20000.0}
+    s = train.simulate_shift("2", "3", t_end=2.0, **args)
+    assert s.rest_time is not None and s.rest_time == s.lock_time
+    assert np.all(s.speeds[-1] == 0.0) and s.dof[-1] == 0
+    assert train.simulate_shift("2", "3", **UPSHIFT).rest_time is None  # type: ignore[arg-type]

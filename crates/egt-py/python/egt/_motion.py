@@ -379,6 +379,9 @@ class ShiftSimulation(_Documented):
     """Energy each element dissipated over the run [J]."""
     lock_loss: float
     mesh_loss: Optional[float]
+    rest_time: Optional[float]
+    """When the train came to rest and stayed (every link stopped, held by its
+    elements or parked by the road load) [s]; else ``None``."""
     """Energy the meshes lost over the run [J], with ``losses=True``; else ``None``."""
     max_energy_residual: float
     steps: int
@@ -428,6 +431,7 @@ class ShiftSimulation(_Documented):
             energy=tuple(d["dissipated"]),
             lock_loss=d["lock_loss"],
             mesh_loss=d.get("mesh_loss"),
+            rest_time=d.get("rest_time"),
             max_energy_residual=d["max_energy_residual"],
             steps=d["steps"],
             method=d["method"],
