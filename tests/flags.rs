@@ -130,6 +130,7 @@ const RUNS: &[(&str, &str, Base, &[&str])] = &[
     ("shift-sim", "road-load", UP, &[]),
     ("shift-sim", "vehicle-inertia", UP, &[]),
     ("shift-sim", "output-shaft", UP, &["--output-shaft", "5000,1"]),
+    ("shift-sim", "losses", UP, &["--losses"]),
     ("shift-sim", "mu", UP, &["--mu", "0.15,0.12"]),
     ("shift-sim", "mu-decay", UP, &["--mu-decay", "10"]),
     ("shift-sim", "off-going", UP, &[]),

@@ -793,3 +793,92 @@ fn a_compliant_output_from_the_flag_or_the_spec_is_one_run_and_bad_shafts_exit_2
         assert!(r.stderr.contains(says), "{bad:?}: {}", r.stderr);
     }
 }
+
+#[test]
+fn mesh_losses_from_the_flag_or_the_spec_are_one_run_in_the_energy_balance() {
+    let spec = std::fs::read_to_string(root().join("examples/zf_8hp70.toml")).expect("example");
+    let with_losses = spec.replace("name = \"2-3\"\n", "name = \"2-3\"\nlosses = true\n");
+    let mut flags: Vec<String> = UPSHIFT.iter().map(|s| s.to_string()).collect();
+    flags[1] = "-".into();
+    flags.extend(["--losses", "--format", "json"].map(String::from));
+    let flags: Vec<&str> = flags.iter().map(String::as_str).collect();
+    let by_flag = egt(&flags, Some(&spec));
+    assert_eq!(by_flag.code, 0, "{}", by_flag.stderr);
+    let by_spec = egt(
+        &["shift-sim", "-", "--shift", "2-3", "--format", "json"],
+        Some(&with_losses),
+    );
+    assert_eq!(by_spec.code, 0, "{}", by_spec.stderr);
+    assert_eq!(by_flag.stdout, by_spec.stdout);
+    let v: Value = serde_json::from_str(&by_flag.stdout).expect("json");
+    let mesh = v["mesh_loss"].as_f64().expect("mesh loss");
+    let friction: f64 = (v["dissipated"].as_array().expect("J").iter())
+        .map(|d| d.as_f64().expect("J"))
+        .sum();
+    assert!(mesh > 0.0 && mesh < friction, "{mesh} of {friction}");
+    assert!(v["max_energy_residual"].as_f64().expect("J") < 1e-7 * (mesh + friction));
+    // Without the option the document has no mesh loss at all.
+    let ideal = run(&with(&["--format", "json"]));
+    let ideal: Value = serde_json::from_str(&ideal.stdout).expect("json");
+    assert!(ideal.get("mesh_loss").is_none());
+    assert!(ideal["samples"][0].get("mesh_loss").is_none());
+    // The table names it, and the CSV carries it as a column.
+    let text = run(&with(&["--losses"]));
+    assert!(text.stdout.contains("mesh loss: "), "{}", text.stdout);
+    assert!(text.stdout.contains("- E_mesh)"), "{}", text.stdout);
+    let csv = run(&with(&["--losses", "--format", "csv"]));
+    assert!(
+        csv.stdout
+            .lines()
+            .next()
+            .expect("header")
+            .ends_with(",mesh_loss")
+    );
+}
+
+#[test]
+fn a_train_braked_to_rest_by_both_elements_rests_instead_of_a_tie_up() {
+    // `A` keeps holding (20 000, far above its torque) while `C` applies:
+    // the two drag the train to a standstill, where it rests, held by both
+    // (before: exit 1, "singular: tie-up").
+    let args = [
+        "shift-sim",
+        "examples/zf_8hp70.toml",
+        "--from",
+        "2",
+        "--to",
+        "3",
+        "--input-speed",
+        "250",
+        "--input-torque",
+        "0",
+        "--vehicle-inertia",
+        "12",
+        "--off-going",
+        "20000",
+        "--on-coming",
+        "0.05:0.3:0:9000",
+        "--t-end",
+        "2",
+    ];
+    let text = egt(&args, None);
+    assert_eq!(text.code, 0, "{}", text.stderr);
+    assert!(text.stdout.contains("at rest from:"), "{}", text.stdout);
+    let json = egt(&[&args[..], &["--format", "json"]].concat(), None);
+    let v: Value = serde_json::from_str(&json.stdout).expect("json");
+    let rest = v["rest_time"].as_f64().expect("at rest");
+    assert_eq!(v["lock_time"].as_f64(), Some(rest));
+    let samples = v["samples"].as_array().expect("samples");
+    let last = samples.last().expect("a sample");
+    assert_eq!(last["t"].as_f64(), Some(2.0));
+    assert!((last["speed"].as_array().expect("speeds").iter()).all(|w| w.as_f64() == Some(0.0)));
+    assert_eq!(last["dof"].as_u64(), Some(0));
+    let dissipated: f64 = (v["dissipated"].as_array().expect("J").iter())
+        .map(|d| d.as_f64().expect("J"))
+        .sum();
+    assert!(v["max_energy_residual"].as_f64().expect("J") < 1e-9 * dissipated);
+    // Without a rest, the document has no rest_time.
+    let moving = run(&with(&["--format", "json"]));
+    let moving: Value = serde_json::from_str(&moving.stdout).expect("json");
+    assert!(moving.get("rest_time").is_none());
+}

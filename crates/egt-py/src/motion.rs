@@ -252,7 +252,7 @@ pub fn shift_named<'py>(
 
 /// A gear change in time (egt_core::shift_dynamics::ShiftSim), as its serde form.
 #[pyfunction]
-#[pyo3(signature = (core, from_, to, input_speed, input_torque, torque_table, road_load, vehicle_inertia, mu, mu_decay, off_going, on_coming, ramps, t_end, rtol, atol, method, max_steps, output_shaft))]
+#[pyo3(signature = (core, from_, to, input_speed, input_torque, torque_table, road_load, vehicle_inertia, mu, mu_decay, off_going, on_coming, ramps, t_end, rtol, atol, method, max_steps, output_shaft, losses))]
 #[allow(clippy::too_many_arguments)]
 pub fn shift_sim<'py>(
     py: Python<'py>,
@@ -275,6 +275,7 @@ pub fn shift_sim<'py>(
     method: &str,
     max_steps: Option<usize>,
     output_shaft: Option<(f64, f64)>,
+    losses: bool,
 ) -> Result<Bound<'py, PyAny>> {
     use egt_core::shift_dynamics::{FrictionLaw, InputTorque, OutputShaft, ShiftSim};
     let method = shift_method(method)?;
@@ -314,6 +315,7 @@ pub fn shift_sim<'py>(
         method,
         max_steps: max_steps.unwrap_or(egt_core::shift_dynamics::DEFAULT_MAX_STEPS),
         output_shaft: output_shaft.map(|(stiffness, damping)| OutputShaft { stiffness, damping }),
+        losses,
     };
     // The document is the run's serde form (and the version): one payload.
     guard(|| {

@@ -204,3 +204,31 @@ def test_a_compliant_output_is_the_clis_and_checked_by_name() -> None:
         train.simulate_shift("2", "3", output_shaft=0.0, **UPSHIFT)  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="output_shaft"):
         train.simulate_shift("2", "3", output_shaft=(1.0, 2.0, 3.0), **UPSHIFT)  # type: ignore[arg-type]
+
+
+def test_mesh_losses_are_the_clis_and_close_the_energy_balance() -> None:
+    train = zf()
+    s = train.simulate_shift("2", "3", losses=True, **UPSHIFT)  # type: ignore[arg-type]
+    out = subprocess.run(
+        [
+            sys.executable, "-m", "egt", "shift-sim", str(EXAMPLES / "zf_8hp70.toml"),
+            "--from", "2", "--to", "3", "--input-speed", "250", "--input-torque", "300",
+            "--road-load", "20,0.2,0.002", "--vehicle-inertia", "12",
+            "--off-going", "0.05:0.15:5000:0", "--on-coming", "0.05:0.3:0:9000",
+            "--losses", "--format", "json",
+        ],
+        capture_output=True, text=True, check=True,
+    )
+    assert s.to_dict() == json.loads(out.stdout)
+    assert s.mesh_loss is not None and s.mesh_loss > 0.0
+    assert s.max_energy_residual < 1e-7 * (sum(s.energy) + s.mesh_loss)
+    assert train.simulate_shift("2", "3", **UPSHIFT).mesh_loss is None  # type: ignore[arg-type]
+
+
+def test_a_train_braked_to_rest_rests_as_the_cli_says() -> None:
+    train = zf()
+    args: Dict[str, Any] = {**UPSHIFT, "input_torque": 0.0, "road_load": (0.0, 0.0, 0.0), "off_going": 20000.0}
+    s = train.simulate_shift("2", "3", t_end=2.0, **args)
+    assert s.rest_time is not None and s.rest_time == s.lock_time
+    assert np.all(s.speeds[-1] == 0.0) and s.dof[-1] == 0
+    assert train.simulate_shift("2", "3", **UPSHIFT).rest_time is None  # type: ignore[arg-type]

@@ -140,6 +140,11 @@ pub struct Args {
     /// seconds is refused at once.
     #[arg(long, value_name = "N", default_value_t = egt_core::shift_dynamics::DEFAULT_MAX_STEPS)]
     pub max_steps: usize,
+    /// Mesh losses: the gear pairs' `efficiency` (as `egt power` applies
+    /// them) on the meshing forces; the meshes' loss is reported with the
+    /// elements' energies. With `--shift`, as the shift's `losses = true`.
+    #[arg(long)]
+    pub losses: bool,
     /// Write the shift plot (SVG) to FILE.
     #[arg(long, value_name = "FILE")]
     pub plot: Option<PathBuf>,
@@ -238,15 +243,20 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
             atol: args.atol,
             method,
             max_steps: args.max_steps,
-            ..ShiftSim::named(train, name).map_err(|e| {
-                // An unknown name is the flag's; anything else the section's.
-                let context = if e.location().0 == Some("shift") {
-                    format!("{} (flag `--shift`)", loaded.source)
-                } else {
-                    format!("{}: [[shift]] `{name}`", loaded.source)
-                };
-                anyhow::Error::new(e).context(context)
-            })?
+            ..ShiftSim::named(train, name)
+                .map(|s| ShiftSim {
+                    losses: s.losses || args.losses,
+                    ..s
+                })
+                .map_err(|e| {
+                    // An unknown name is the flag's; anything else the section's.
+                    let context = if e.location().0 == Some("shift") {
+                        format!("{} (flag `--shift`)", loaded.source)
+                    } else {
+                        format!("{}: [[shift]] `{name}`", loaded.source)
+                    };
+                    anyhow::Error::new(e).context(context)
+                })?
         },
         None => ShiftSim {
             from: args.from.clone().unwrap_or_default(),
@@ -272,6 +282,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
             atol: args.atol,
             method,
             max_steps: args.max_steps,
+            losses: args.losses,
         },
     };
     let r = sim.run(train).map_err(|e| {
@@ -372,6 +383,13 @@ fn table(
         "shift time:                                   {} s",
         opt(r.shift_time)
     )?;
+    if let Some(t) = r.rest_time {
+        writeln!(
+            out,
+            "at rest from:                                 {} s (every link stopped)",
+            report::float(t)
+        )?;
+    }
     writeln!(
         out,
         "output torque: max {} N m, min {} N m",
@@ -405,9 +423,17 @@ fn table(
             .join(", "),
         report::sci(r.lock_loss)
     )?;
+    if let Some(m) = r.mesh_loss {
+        writeln!(out, "mesh loss: {} J", report::float(m))?;
+    }
     writeln!(
         out,
-        "energy balance (W_in - dKE - E_friction - E_lock): largest residual {} J over {} steps ({})",
+        "energy balance (W_in - dKE - E_friction - E_lock{}): largest residual {} J over {} steps ({})",
+        if r.mesh_loss.is_some() {
+            " - E_mesh"
+        } else {
+            ""
+        },
         report::sci(r.max_energy_residual),
         r.steps,
         r.method
@@ -534,6 +560,9 @@ fn csv(out: &mut dyn Write, train: &Train, r: &ShiftResult) -> anyhow::Result<()
             .map(|e| format!("torque_{}", report::csv_name(e))),
     );
     header.extend(["output_torque", "energy_residual", "dof"].map(String::from));
+    if r.mesh_loss.is_some() {
+        header.push("mesh_loss".into());
+    }
     writeln!(out, "{}", header.join(","))?;
     for s in &r.samples {
         let mut row = vec![format!("{:e}", s.t)];
@@ -545,6 +574,7 @@ fn csv(out: &mut dyn Write, train: &Train, r: &ShiftResult) -> anyhow::Result<()
         row.push(format!("{:e}", s.output_torque));
         row.push(format!("{:e}", s.energy_residual));
         row.push(s.dof.to_string());
+        row.extend(s.mesh_loss.map(|m| format!("{m:e}")));
         writeln!(out, "{}", row.join(","))?;
     }
     Ok(())

@@ -23,14 +23,20 @@
 //!   events), `consistent` (the consistent mode at `t = 0` and after every
 //!   event: release what cannot hold, lock what can), `extremes` (the
 //!   reported ranges, over both sides of every event and between samples)
-//!   `named` (a spec's `[[shift]]` made into a [`ShiftSim`]) and `compliance`
-//!   (an optional compliant output shaft to the vehicle, [`OutputShaft`]).
+//!   `named` (a spec's `[[shift]]` made into a [`ShiftSim`]), `compliance`
+//!   (an optional compliant output shaft to the vehicle, [`OutputShaft`]),
+//!   `mesh_loss` (optional mesh losses: the gear pairs' efficiencies on
+//!   each mode's meshing forces with `egt power`'s direction rule, the loss
+//!   in the energy balance) and `rest` (a train braked to a standstill
+//!   rests, held by its elements or parked by the road load, instead of
+//!   being refused as a tie-up).
 //! - [`quality`]: the torque and inertia phases of a finished shift and its
 //!   quality measures (output-torque dip and overshoot, oscillation after the
 //!   lock, jerk, steps at events, each element's energy and peak power),
 //!   read from the samples.
 //!
-//! Not built yet: mesh losses in the shift. See
+//! Not built yet: a vehicle parked behind a compliant output shaft, and a
+//! stop of the output while other links still move (two DOF or more). See
 //! docs/shift_dynamics.md.
 
 mod compliance;
@@ -39,11 +45,13 @@ pub mod engagement;
 mod extremes;
 pub mod friction;
 pub mod lockup;
+mod mesh_loss;
 pub mod mode;
 mod named;
 pub mod ode;
 pub mod quality;
 mod request;
+mod rest;
 pub mod shift;
 mod train_mode;
 

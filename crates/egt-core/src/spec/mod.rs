@@ -115,6 +115,10 @@ pub struct ShiftSpec {
     /// default: rigid.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub output_shaft: Option<OutputShaftSpec>,
+    /// Mesh losses: the gear pairs' `efficiency` on the meshing forces, as
+    /// `egt power` applies them (`--losses`). Default false (ideal meshes).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub losses: bool,
 }
 
 /// A torsional shaft from the output link to the vehicle, reduced to the

@@ -146,6 +146,7 @@ def shift_sim(
     method: str,
     max_steps: Optional[int],
     output_shaft: Optional[Tuple[float, float]],
+    losses: bool,
 ) -> Dict[str, Any]: ...
 def shift_named(
     core: TrainCore,

@@ -365,7 +365,7 @@ class ShiftSimulation(_Documented):
     dissipated: np.ndarray
     """(samples, elements) energy each element has dissipated so far [J]."""
     energy_residual: np.ndarray
-    """(samples,) W_applied - dKE - E_friction - E_lock [J]."""
+    """(samples,) W_applied - dKE - E_friction - E_lock (- E_mesh with losses) [J]."""
     dof: np.ndarray
     """(samples,) degrees of freedom of the mode."""
     changes: Tuple[Tuple[float, str, str, int], ...]
@@ -378,6 +378,11 @@ class ShiftSimulation(_Documented):
     energy: Tuple[float, ...]
     """Energy each element dissipated over the run [J]."""
     lock_loss: float
+    mesh_loss: Optional[float]
+    rest_time: Optional[float]
+    """When the train came to rest and stayed (every link stopped, held by its
+    elements or parked by the road load) [s]; else ``None``."""
+    """Energy the meshes lost over the run [J], with ``losses=True``; else ``None``."""
     max_energy_residual: float
     steps: int
     method: str
@@ -425,6 +430,8 @@ class ShiftSimulation(_Documented):
             output_torque_range=(d["output_torque_range"][0], d["output_torque_range"][1]),
             energy=tuple(d["dissipated"]),
             lock_loss=d["lock_loss"],
+            mesh_loss=d.get("mesh_loss"),
+            rest_time=d.get("rest_time"),
             max_energy_residual=d["max_energy_residual"],
             steps=d["steps"],
             method=d["method"],

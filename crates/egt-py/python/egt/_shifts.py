@@ -43,6 +43,7 @@ class ShiftMethods:
         method: str = "auto",
         max_steps: Optional[int] = None,
         output_shaft: Optional[Union[float, Sequence[float]]] = None,
+        losses: bool = False,
     ) -> ShiftSimulation:
         """A gear change in time, as ``egt shift-sim`` (docs/shift_dynamics.md).
 
@@ -66,6 +67,9 @@ class ShiftMethods:
         default 2 000 000). ``output_shaft`` is a compliant shaft from the
         output link to the vehicle inertia, ``k`` or ``(k, c)`` [N m/rad,
         N m s/rad] (``egt shift-sim --output-shaft K,C``); default rigid.
+        ``losses=True`` puts the gear pairs' efficiencies on the meshing
+        forces, as ``egt power`` does (``egt shift-sim --losses``); the
+        meshes' loss is ``mesh_loss`` and enters the energy balance.
         """
 
         def cap(v: Union[float, Sequence[float]], field: str) -> List[float]:
@@ -112,6 +116,7 @@ class ShiftMethods:
             str(method),
             None if max_steps is None else count(max_steps, "max_steps", 2**63 - 1),
             shaft,
+            bool(losses),
         )
         return ShiftSimulation._from_core(self._links, raw)
 

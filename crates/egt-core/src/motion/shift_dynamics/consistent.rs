@@ -20,6 +20,7 @@
 
 use super::train_mode::{Mode, Phase, Setup, refuse};
 use crate::error::Result;
+use crate::solve::losses::Driver;
 
 /// A consistent mode at one instant, and how it was reached.
 pub(super) struct Settled {
@@ -33,13 +34,32 @@ pub(super) struct Settled {
     pub(super) changed: Vec<usize>,
 }
 
+/// What located the instant a mode is settled at.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum Cause {
+    /// `t = 0`.
+    Start,
+    /// A changing element's event: its current phase has ended and is not
+    /// a candidate.
+    Element(usize),
+    /// A lossy mesh's event; the mesh whose driver flipped (unchecked), if
+    /// it had one.
+    Mesh(Option<usize>),
+    /// The parked vehicle's static torque reached the road load's `c0`: it
+    /// may not stay parked.
+    Unpark,
+}
+
 /// Relative slack on the slip acceleration of an element that starts to slip
 /// (a rate of rounding size, against the largest acceleration, is no sign).
 const RATE_SLACK: f64 = 1e-9;
 
-/// The consistent mode at time `t` and state `y`, starting from `phases`.
-/// `fired` is the element whose event located this instant (its current
-/// phase has ended and is not a candidate), `None` at the start.
+/// The consistent mode at time `t` and state `y`, starting from `phases`,
+/// at an instant located by `cause`. With mesh losses, every candidate gets
+/// its meshes' directions (`mesh_loss.rs`): `prior` first where they hold,
+/// else the direction search. At rest with a road load `c0 > 0`, each
+/// candidate is tried parked first (`rest.rs`): the output held by the
+/// road load while its static torque is within `c0`.
 ///
 /// # Errors
 /// A tie-up (every candidate locks the train), a singular mode, or no
@@ -49,12 +69,27 @@ pub(super) fn settle(
     phases: &[Phase],
     t: f64,
     y: &[f64],
-    fired: Option<usize>,
+    cause: Cause,
+    prior: Option<&[Driver]>,
 ) -> Result<Settled> {
     let n = setup.n;
+    let fired = match cause {
+        Cause::Element(i) => Some(i),
+        _ => None,
+    };
+    let flipped = match cause {
+        Cause::Mesh(m) => m,
+        _ => None,
+    };
+    let parks: &[bool] =
+        if cause != Cause::Unpark && setup.stopping() > 0.0 && setup.at_rest(&y[..n]) {
+            &[true, false]
+        } else {
+            &[false]
+        };
     // The way each locked element's torque pushes: it slips that way if released.
     let k = phases.len();
-    let now = setup.mode(phases)?;
+    let now = setup.directed(setup.mode_or_rest(phases, &y[..n])?, t, y, prior, flipped)?;
     let dy = setup.rhs(&now, t, y);
     let (lam, _) = setup.locked_torques(&now, t, y, &dy);
     let options: Vec<Vec<Phase>> = (0..k)
@@ -95,22 +130,37 @@ pub(super) fn settle(
     }
     candidates.sort_by_key(|(_, key)| *key);
     let mut tie_up = None;
-    for (c, _) in candidates {
-        let mode = match setup.mode(&c) {
+    for (c, park) in (candidates.iter()).flat_map(|(c, _)| parks.iter().map(move |&p| (c, p))) {
+        let mode = if park {
+            match setup.parked_mode(c) {
+                Some(m) => m,
+                None => continue,
+            }
+        } else {
+            match setup.mode_or_rest(c, &y[..n]) {
+                Ok(m) => m,
+                Err(e) => {
+                    tie_up.get_or_insert(e);
+                    continue;
+                }
+            }
+        };
+        let locks = (0..k).any(|i| c[i] == Phase::Locked && phases[i] != Phase::Locked);
+        let mut yc = y.to_vec();
+        let mut lost = 0.0;
+        // A lock, or a rest (no DOF: the speeds of rounding size go to 0).
+        if locks || mode.basis.ncols() == 0 {
+            let (speed, l) = setup.project(&mode, &y[..n]);
+            yc[..n].copy_from_slice(speed.as_slice());
+            lost = l;
+        }
+        let mode = match setup.directed(mode, t, &yc, prior, flipped) {
             Ok(m) => m,
             Err(e) => {
                 tie_up.get_or_insert(e);
                 continue;
             }
         };
-        let locks = (0..k).any(|i| c[i] == Phase::Locked && phases[i] != Phase::Locked);
-        let mut yc = y.to_vec();
-        let mut lost = 0.0;
-        if locks {
-            let (speed, l) = setup.project(&mode, &y[..n]);
-            yc[..n].copy_from_slice(speed.as_slice());
-            lost = l;
-        }
         let d = setup.rhs(&mode, t, &yc);
         let (torque, _) = setup.locked_torques(&mode, t, &yc, &d);
         let slack = RATE_SLACK * d[..n].iter().fold(0.0f64, |m, x| m.max(x.abs()));
@@ -124,7 +174,10 @@ pub(super) fn settle(
             }
             Phase::Slipping(_) => true,
         });
-        if holds {
+        let parked = mode
+            .park_row
+            .is_none_or(|r| setup.multipliers(&mode, t, &yc, &d)[r].abs() <= setup.stopping());
+        if holds && parked {
             let changed = (0..k).filter(|&i| entered(i)).collect();
             return Ok(Settled {
                 mode,

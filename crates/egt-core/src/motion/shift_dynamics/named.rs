@@ -85,6 +85,7 @@ impl ShiftSim {
             atol: DEFAULT_TOLERANCE,
             method: ShiftMethod::Auto,
             max_steps: DEFAULT_MAX_STEPS,
+            losses: s.losses,
         })
     }
 }

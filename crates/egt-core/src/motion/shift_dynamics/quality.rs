@@ -510,6 +510,7 @@ mod tests {
                 output_torque: q,
                 dissipated: vec![0.0; 2],
                 energy_residual: 0.0,
+                mesh_loss: None,
                 dof: 1,
                 kept_torque: Vec::new(),
             })
@@ -531,6 +532,8 @@ mod tests {
             kept_torque_range: Vec::new(),
             dissipated: vec![0.0; 2],
             lock_loss: 0.0,
+            rest_time: None,
+            mesh_loss: None,
             max_energy_residual: 0.0,
             steps: 0,
             method: "explicit".into(),

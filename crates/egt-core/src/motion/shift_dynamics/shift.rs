@@ -42,9 +42,10 @@ use nalgebra::DVector;
 use serde::Serialize;
 
 use super::compliance::OutputShaft;
-use super::consistent::{Settled, settle};
+use super::consistent::{Cause, Settled, settle};
 use super::extremes::Extremes;
 use super::friction::{Capacity, FrictionLaw};
+use super::mesh_loss::MeshLosses;
 use super::mode::{element_row, mode_basis};
 use super::ode;
 use super::quality::ShiftQuality;
@@ -184,6 +185,11 @@ pub struct ShiftSim {
     /// Steps (accepted and rejected) allowed before the run is refused with
     /// the `budget` error ([`DEFAULT_MAX_STEPS`]; `egt shift-sim --max-steps`).
     pub max_steps: usize,
+    /// Mesh losses: each gear pair's basic efficiency (the spec's
+    /// `efficiency`) on the meshing forces, with `egt power`'s direction
+    /// rule (`mesh_loss.rs`; `egt shift-sim --losses`). `false`: ideal
+    /// meshes, the run unchanged.
+    pub losses: bool,
 }
 
 /// Where the explicit method's steps became limited by stability.
@@ -228,8 +234,11 @@ pub struct ShiftSample {
     pub output_torque: f64,
     /// Energy dissipated so far by each changing element (J).
     pub dissipated: Vec<f64>,
-    /// `W_applied - dKE - E_friction - E_lock` (J).
+    /// `W_applied - dKE - E_friction - E_lock - E_mesh` (J).
     pub energy_residual: f64,
+    /// With mesh losses: the energy the meshes lost so far (J).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mesh_loss: Option<f64>,
     /// Degrees of freedom of the mode.
     pub dof: usize,
     /// Torque of each kept element on its first link (its Lagrange
@@ -282,8 +291,15 @@ pub struct ShiftResult {
     pub kept_torque_range: Vec<[f64; 2]>,
     /// Energy each changing element dissipated (J).
     pub dissipated: Vec<f64>,
+    /// When the train came to rest (every link stopped, held by its locked
+    /// elements: `rest.rs`), if it did and stayed at rest; `None` otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rest_time: Option<f64>,
     /// Energy removed by the lock-up projections (J).
     pub lock_loss: f64,
+    /// With mesh losses: the energy the meshes lost (J).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mesh_loss: Option<f64>,
     /// Largest |energy residual| over the run (J).
     pub max_energy_residual: f64,
     /// Accepted steps.
@@ -403,6 +419,7 @@ impl ShiftSim {
             one_way: changing.iter().map(|&e| is_one_way(kind(e))).collect(),
             capacity: capacity.clone(),
             n,
+            losses: self.losses.then(|| MeshLosses::new(train)).transpose()?,
         };
         // Start: the old gear's steady motion at the input speed.
         let start = mode_basis(train, &from.engaged)?;
@@ -422,6 +439,9 @@ impl ShiftSim {
                 w_out,
                 shaft.twist_for(self.vehicle_inertia * accel + setup.road(w_out)),
             ]);
+        }
+        if setup.losses.is_some() {
+            y.push(0.0); // the meshes' loss
         }
         let ke0 = setup.energy(&y);
         let first: Vec<Phase> = (0..k)
@@ -451,6 +471,8 @@ impl ShiftSim {
             kept_torque_range: Vec::new(),
             dissipated: vec![0.0; k],
             lock_loss: 0.0,
+            rest_time: None,
+            mesh_loss: None,
             max_energy_residual: 0.0,
             steps: 0,
             method: String::new(),
@@ -460,6 +482,11 @@ impl ShiftSim {
         let mut extremes = Extremes::new(1 + 2 * k + kept.len());
         // Takes a consistent mode: its changes, the on-coming lock, the loss.
         let take = |out: &mut ShiftResult, s: &Settled, t: f64| {
+            // At rest from here (no DOF), or moving again.
+            out.rest_time = match s.mode.basis.ncols() {
+                0 => out.rest_time.or(Some(t)),
+                _ => None,
+            };
             for &i in &s.changed {
                 let now = match s.mode.phases[i] {
                     Phase::Locked => "locked",
@@ -496,10 +523,12 @@ impl ShiftSim {
             let q = setup.observe(mode, t, y, dy);
             ext.add(&q);
             // W_applied - dKE - each element's friction work - E_lock, in that order
+            let mesh = setup.mesh_at().map(|at| y[at]);
             let residual = y[n..n + k]
                 .iter()
                 .fold(y[n + k] - (setup.energy(y) - ke0), |r, d| r - d)
-                - loss;
+                - loss
+                - mesh.unwrap_or(0.0);
             out.max_energy_residual = out.max_energy_residual.max(residual.abs());
             let mut speed = vec![0.0; train.links().len()];
             for (k, &l) in train.coordinates().iter().enumerate() {
@@ -513,6 +542,7 @@ impl ShiftSim {
                 output_torque: q[0],
                 dissipated: y[n..n + k].to_vec(),
                 energy_residual: residual,
+                mesh_loss: mesh,
                 dof: mode.basis.ncols(),
                 kept_torque: q[1 + 2 * k..].to_vec(),
             });
@@ -520,7 +550,7 @@ impl ShiftSim {
         };
         // At t = 0 every locked element is checked against its capacity: the
         // old gear's elements may not hold what the shift asks of them.
-        let settled = settle(&setup, &first, 0.0, &y, None)?;
+        let settled = settle(&setup, &first, 0.0, &y, Cause::Start, None)?;
         take(&mut out, &settled, 0.0);
         let Settled {
             mut mode,
@@ -638,7 +668,7 @@ impl ShiftSim {
             // that entered its phase at the crossing (g = 0) and heads the
             // wrong way fires at once.
             let mut first: Option<(f64, usize)> = None;
-            for i in 0..k {
+            for i in 0..g0.len() {
                 if (g0[i] > 0.0 && g1[i] <= 0.0) || (g0[i] == 0.0 && g1[i] < 0.0) {
                     let te = ode::locate(
                         |s| {
@@ -679,8 +709,21 @@ impl ShiftSim {
                         )));
                     }
                 }
-                // The right limit: a consistent mode after the change.
-                let s = settle(&setup, &mode.phases, te, &ye, Some(i))?;
+                // The right limit: a consistent mode after the change (an
+                // element's event, or with losses a mesh's driver flipping).
+                // An element's event, a mesh's (its driver), or the parked
+                // vehicle's (its static torque reached c0): the last ones.
+                let meshes = mode.lossy.as_ref().map_or(0, |l| l.drivers.len());
+                let drivers = mode.lossy.as_ref().map(|l| l.drivers.clone());
+                let (cause, prior) = match &mode.lossy {
+                    _ if i < k => (Cause::Element(i), drivers),
+                    Some(lossy) if i < k + meshes => {
+                        let (prior, flipped) = lossy.after_event(i - k);
+                        (Cause::Mesh(flipped), Some(prior))
+                    }
+                    _ => (Cause::Unpark, drivers),
+                };
+                let s = settle(&setup, &mode.phases, te, &ye, cause, prior.as_deref())?;
                 take(&mut out, &s, te);
                 lock_loss += s.lost;
                 (mode, y) = (s.mode, s.y);
@@ -720,6 +763,7 @@ impl ShiftSim {
             .collect();
         out.dissipated = y[n..n + k].to_vec();
         out.lock_loss = lock_loss;
+        out.mesh_loss = setup.mesh_at().map(|at| y[at]);
         out.shift_start = capacity[coming.clone()]
             .iter()
             .filter_map(|c| first_positive(c, self.t_end))
@@ -797,6 +841,7 @@ pub(super) mod tests {
             max_steps: DEFAULT_MAX_STEPS,
             ramps: Vec::new(),
             output_shaft: None,
+            losses: false,
         }
     }
 

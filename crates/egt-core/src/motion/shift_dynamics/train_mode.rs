@@ -8,6 +8,7 @@ use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 use super::compliance::OutputShaft;
 use super::friction::Capacity;
+use super::mesh_loss::{Lossy, MeshLosses};
 use super::mode::mode_basis;
 use super::shift::ShiftSim;
 use crate::error::{AnalysisError, Error, Result};
@@ -35,6 +36,12 @@ pub(super) struct Mode {
     /// Row index of the first kept element (held rigidly, always locked):
     /// they follow the Willis rows, in the order of [`Setup::kept`].
     pub(super) kept_row0: usize,
+    /// With mesh losses: the meshes' directions and the lossy system
+    /// (`mesh_loss.rs`); `None` for ideal meshes.
+    pub(super) lossy: Option<Lossy>,
+    /// The row holding the output at rest by the road load's Coulomb term
+    /// (`rest.rs`), when the vehicle is parked.
+    pub(super) park_row: Option<usize>,
 }
 
 pub(super) struct Setup<'a> {
@@ -52,6 +59,8 @@ pub(super) struct Setup<'a> {
     pub(super) one_way: Vec<bool>,
     pub(super) capacity: Vec<Capacity>,
     pub(super) n: usize,
+    /// The meshes' efficiencies when the shift has mesh losses.
+    pub(super) losses: Option<MeshLosses>,
 }
 
 impl Setup<'_> {
@@ -61,6 +70,16 @@ impl Setup<'_> {
     }
 
     pub(super) fn mode(&self, phases: &[Phase]) -> Result<Mode> {
+        self.mode_with(phases, false)
+    }
+
+    /// `phases` as a mode of a train at rest: a tie-up (no DOF) is allowed
+    /// (`rest.rs`).
+    pub(super) fn rest_mode(&self, phases: &[Phase]) -> Result<Mode> {
+        self.mode_with(phases, true)
+    }
+
+    fn mode_with(&self, phases: &[Phase], rest: bool) -> Result<Mode> {
         let mut locked = self.kept.clone();
         let mut row_of = vec![None; phases.len()];
         let willis = mode_basis(self.train, &[])?.rows.nrows();
@@ -78,7 +97,7 @@ impl Setup<'_> {
                 .collect::<Vec<_>>()
                 .join(", ")
         };
-        if mb.dof() == 0 {
+        if mb.dof() == 0 && !rest {
             return Err(refuse(format!(
                 "tie-up: with {} locked the train cannot move",
                 listed()
@@ -108,6 +127,8 @@ impl Setup<'_> {
             gram_inverse,
             row_of,
             kept_row0: willis,
+            lossy: None,
+            park_row: None,
         })
     }
 
@@ -186,8 +207,16 @@ impl Setup<'_> {
         let n = self.n;
         let v = &y[..n];
         let (f, tf) = self.forces(&mode.phases, t, y);
-        let q = mode.reduced.solve(&(mode.basis.transpose() * &f));
-        let a = &mode.basis * q;
+        let (a, mesh) = match (&mode.lossy, &self.losses) {
+            (Some(lossy), Some(losses)) => {
+                let (a, mu) = self.lossy_solve(lossy, mode, &f);
+                (a, Some(losses.power(lossy, v, &mu)))
+            }
+            _ => (
+                &mode.basis * mode.reduced.solve(&(mode.basis.transpose() * &f)),
+                None,
+            ),
+        };
         let mut d = a.as_slice().to_vec();
         for (i, t) in tf.iter().enumerate() {
             d.push(-t * self.slip(i, v));
@@ -208,7 +237,32 @@ impl Setup<'_> {
                 d.push(slip);
             }
         }
+        // the meshes' loss, the last state
+        d.extend(mesh);
         d
+    }
+
+    /// The index of the mesh-loss energy in the state (the last one), with losses.
+    pub(super) fn mesh_at(&self) -> Option<usize> {
+        let shaft = if self.sim.output_shaft.is_some() {
+            2
+        } else {
+            0
+        };
+        self.losses.as_ref().map(|_| self.n + self.k() + 1 + shaft)
+    }
+
+    /// The multipliers of `mode` at state `y` with derivative `dy`: one per
+    /// row (Willis rows, kept, locked changing elements), in the sign of
+    /// `M v' - f = A^T lambda`.
+    pub(super) fn multipliers(&self, mode: &Mode, t: f64, y: &[f64], dy: &[f64]) -> Vec<f64> {
+        let (f, _) = self.forces(&mode.phases, t, y);
+        if let Some(lossy) = &mode.lossy {
+            return self.lossy_solve(lossy, mode, &f).1;
+        }
+        let a = DVector::from_column_slice(&dy[..self.n]);
+        let r = &self.m * a - f;
+        (&mode.gram_inverse * (&mode.rows * r)).as_slice().to_vec()
     }
 
     /// The locked elements' torques on their first links: each changing
@@ -220,11 +274,7 @@ impl Setup<'_> {
         y: &[f64],
         dy: &[f64],
     ) -> (Vec<f64>, Vec<f64>) {
-        let n = self.n;
-        let (f, _) = self.forces(&mode.phases, t, y);
-        let a = DVector::from_column_slice(&dy[..n]);
-        let r = &self.m * a - f;
-        let lambda = &mode.gram_inverse * (&mode.rows * r);
+        let lambda = self.multipliers(mode, t, y, dy);
         let changing = mode
             .row_of
             .iter()
@@ -247,6 +297,15 @@ impl Setup<'_> {
                 Phase::Locked if self.one_way[i] => lam[i],
                 Phase::Locked => self.sim.law.static_limit(self.capacity[i].at(t)) - lam[i].abs(),
             };
+        }
+        // With losses, then each mesh's rolling power in its driver's sense.
+        if let (Some(lossy), Some(losses)) = (&mode.lossy, &self.losses) {
+            let mu = self.multipliers(mode, t, y, dy);
+            g.extend(losses.events(lossy, &y[..self.n], &mu));
+        }
+        // Parked, last: the road load's static margin.
+        if let Some(r) = mode.park_row {
+            g.push(self.stopping() - self.multipliers(mode, t, y, dy)[r].abs());
         }
         g
     }
@@ -281,9 +340,11 @@ impl Setup<'_> {
         let (lam, kept) = self.locked_torques(mode, t, y, dy);
         let k = phases.len();
         let mut q = Vec::with_capacity(1 + 2 * k + kept.len());
-        q.push(match self.shaft_state(y) {
-            Some((shaft, w_v, phi)) => shaft.torque(v[self.output], w_v, phi),
-            None => self.sim.vehicle_inertia * dy[self.output] + self.road(v[self.output]),
+        q.push(match (self.shaft_state(y), mode.park_row) {
+            (Some((shaft, w_v, phi)), _) => shaft.torque(v[self.output], w_v, phi),
+            // Parked: the road load's static reaction holds the vehicle.
+            (None, Some(r)) => -self.multipliers(mode, t, y, dy)[r],
+            (None, None) => self.sim.vehicle_inertia * dy[self.output] + self.road(v[self.output]),
         });
         q.extend((0..k).map(|i| match phases[i] {
             Phase::Locked => lam[i],
