@@ -207,22 +207,40 @@ impl Setup<'_> {
         let n = self.n;
         let v = &y[..n];
         let (f, tf) = self.forces(&mode.phases, t, y);
-        let (a, mesh) = match (&mode.lossy, &self.losses) {
+        let mut d = Vec::with_capacity(y.len());
+        let mesh = match (&mode.lossy, &self.losses) {
             (Some(lossy), Some(losses)) => {
                 let (a, mu) = self.lossy_solve(lossy, mode, &f);
-                (a, Some(losses.power(lossy, v, &mu)))
+                d.extend_from_slice(a.as_slice());
+                Some(losses.power(lossy, v, &mu))
             }
-            _ => (
-                &mode.basis * mode.reduced.solve(&(mode.basis.transpose() * &f)),
-                None,
-            ),
+            _ => {
+                // v' = N (N^T M N)^-1 N^T f, the reduced solve in place and
+                // N q written straight into the derivative (no temporaries
+                // but q: this runs at every stage of every step).
+                let mut q = mode.basis.tr_mul(&f);
+                mode.reduced.solve_mut(&mut q);
+                d.extend((0..n).map(|i| {
+                    mode.basis
+                        .row(i)
+                        .iter()
+                        .zip(q.iter())
+                        .map(|(b, x)| b * x)
+                        .sum::<f64>()
+                }));
+                None
+            }
         };
-        let mut d = a.as_slice().to_vec();
         for (i, t) in tf.iter().enumerate() {
             d.push(-t * self.slip(i, v));
         }
         match self.shaft_state(y) {
-            None => d.push(self.applied(y).iter().zip(v).map(|(x, w)| x * w).sum()),
+            // The applied torques' power: the input's and the road's (as
+            // `applied`, without a vector).
+            None => d.push(
+                self.sim.input_torque.at(v[self.input]) * v[self.input]
+                    - self.road(v[self.output]) * v[self.output],
+            ),
             Some((shaft, w_v, phi)) => {
                 // The input's work, the road's on the vehicle, the damper's loss.
                 let w_out = v[self.output];
