@@ -48,10 +48,15 @@ pub(crate) fn damped_modes(
     let r = lambda.len();
     let c = DVector::from_iterator(model.elastic.len(), model.elastic.iter().map(|e| e.damping));
     let modal = deflections.transpose() * DMatrix::from_diagonal(&c) * deflections;
+    // In the balanced state (Omega q, q'), Omega = diag(omega): every block
+    // of the size of the frequencies, [[0, Omega], [-Omega, -Phi^T C Phi]],
+    // the same eigenvalues as [[0, I], [-Lambda, -Phi^T C Phi]] without its
+    // spread of scales (Lambda ~ omega^2 beside 1).
     let mut a = DMatrix::zeros(2 * r, 2 * r);
-    a.view_mut((0, r), (r, r)).fill_with_identity();
     for (k, &l) in lambda.iter().enumerate() {
-        a[(r + k, k)] = -l;
+        let w = l.max(0.0).sqrt();
+        a[(k, r + k)] = w;
+        a[(r + k, k)] = -w;
     }
     a.view_mut((r, r), (r, r)).copy_from(&(-modal));
     let schur = Schur::try_new(a, f64::EPSILON, 100 * 2 * r.max(1)).ok_or_else(|| {

@@ -103,12 +103,10 @@ fn cholesky_l(m: DMatrix<f64>) -> Result<DMatrix<f64>> {
 /// (n x r), `springs` the springs' rows (m x n), `k` and `m` the n x n
 /// stiffness and (diagonal) mass matrices.
 ///
-/// With M_z = L L^T (L = sqrt(M) when no element is held), the elastic modes
-/// are the eigenvectors v of A = L^-1 K_z L^-T off the rigid directions
-/// Q = orth(L^T R) (R: the springs' null space, the rigid-body motion), and
-/// phi = L^-T v. The rigid directions are deflated exactly, A' = P A P - s Q
-/// Q^T (P = I - Q Q^T, s above every eigenvalue of A), so that they sort
-/// first with eigenvalue -s and one symmetric eigenproblem gives the rest.
+/// With M_z = L L^T (L = sqrt(M) when no element is held), the modes are
+/// phi = L^-T v for the eigenvectors v of A = L^-1 K_z L^-T: the rigid-body
+/// modes those of the zero eigenvalues (checked against the springs, else
+/// found as the springs' null space and deflated, [`deflated`]).
 pub(crate) fn solve(
     t: &DMatrix<f64>,
     springs: &DMatrix<f64>,
@@ -124,10 +122,8 @@ pub(crate) fn solve(
     } else {
         (t.transpose() * k * t, t.transpose() * m * t, springs * t)
     };
-    let (rb, _) = null_space(&sz, r)?;
-    let dof = rb.ncols();
-    // A = L^-1 K_z L^-T, and the rigid directions L^T R.
-    let (a, lt_r, l) = if whole {
+    // M_z = L L^T and A = L^-1 K_z L^-T.
+    let l = if whole {
         if let Some(low) = mz
             .diagonal()
             .iter()
@@ -140,54 +136,121 @@ pub(crate) fn solve(
             }
             .into());
         }
-        let root: Vec<f64> = (0..r).map(|i| mz[(i, i)].sqrt()).collect();
-        let a = DMatrix::from_fn(r, r, |i, j| kz[(i, j)] / (root[i] * root[j]));
-        let lt_r = DMatrix::from_fn(r, dof, |i, j| root[i] * rb[(i, j)]);
-        (a, lt_r, None)
+        None
     } else {
-        let l = cholesky_l(mz.clone())?;
-        let y = l.solve_lower_triangular(&kz).ok_or_else(singular_mass)?;
-        let a = l
-            .solve_lower_triangular(&y.transpose())
-            .ok_or_else(singular_mass)?;
-        let lt_r = l.transpose() * &rb;
-        (a, lt_r, Some(l))
+        Some(cholesky_l(mz.clone())?)
+    };
+    let a = match &l {
+        None => DMatrix::from_fn(r, r, |i, j| kz[(i, j)] / (mz[(i, i)] * mz[(j, j)]).sqrt()),
+        Some(l) => {
+            let y = l.solve_lower_triangular(&kz).ok_or_else(singular_mass)?;
+            l.solve_lower_triangular(&y.transpose())
+                .ok_or_else(singular_mass)?
+        }
     };
     let a = (&a + a.transpose()) * 0.5;
+    // phi_z = L^-T v.
+    let back = |v: &DMatrix<f64>| -> Result<DMatrix<f64>> {
+        let z = match &l {
+            None => DMatrix::from_fn(r, v.ncols(), |i, j| v[(i, j)] / mz[(i, i)].sqrt()),
+            Some(l) => l
+                .transpose()
+                .solve_upper_triangular(v)
+                .ok_or_else(singular_mass)?,
+        };
+        Ok(if whole { z } else { t * z })
+    };
+    // One eigenproblem of A: its lowest eigenvectors are the rigid-body
+    // modes when they are plainly so (below 1e-12 of the largest eigenvalue,
+    // every spring's normalised row annihilating them, and a gap of four
+    // orders to the next, which deflects some spring). Otherwise the
+    // springs' null space decides, and its directions are deflated exactly.
+    let (values, vectors) = sym_eigen(&a)?;
+    let top = values
+        .iter()
+        .fold(0.0_f64, |x, v| x.max(v.abs()))
+        .max(f64::MIN_POSITIVE);
+    let dof = values.iter().take_while(|v| **v <= 1e-12 * top).count();
+    if dof == r || values[dof] > 1e-8 * top {
+        let z = back(&vectors)?;
+        let rigid = z.columns(0, dof).into_owned();
+        let first = z.columns(dof, (r - dof).min(1)).into_owned();
+        if moves_no_spring(springs, &rigid, 1e-8)
+            && (dof == r || !moves_no_spring(springs, &first, 1e-6))
+        {
+            return Ok(Eigen {
+                rigid,
+                lambda: values.iter().skip(dof).map(|v| v.max(0.0)).collect(),
+                elastic: z.columns(dof, r - dof).into_owned(),
+            });
+        }
+    }
+    deflated(&a, &sz, &mz, l.as_ref(), &back)
+}
+
+/// Every column of `shapes` leaves each spring undeflected: |row . phi|
+/// within `tol` of |row| |phi| (the springs' scales do not matter).
+fn moves_no_spring(springs: &DMatrix<f64>, shapes: &DMatrix<f64>, tol: f64) -> bool {
+    shapes.column_iter().all(|phi| {
+        let size = phi.amax();
+        springs.row_iter().all(|row| {
+            let norm = row.norm();
+            norm == 0.0 || (row * phi)[0].abs() <= tol * norm * size
+        })
+    })
+}
+
+/// The robust route: the springs' null space R (the rigid-body motion),
+/// its directions Q = orth(L^T R) deflated from A exactly, A' = P A P - s Q
+/// Q^T (P = I - Q Q^T, s above every eigenvalue of A), so that they sort
+/// first with eigenvalue -s, and one more eigenproblem for the rest.
+fn deflated(
+    a: &DMatrix<f64>,
+    sz: &DMatrix<f64>,
+    mz: &DMatrix<f64>,
+    l: Option<&DMatrix<f64>>,
+    back: &dyn Fn(&DMatrix<f64>) -> Result<DMatrix<f64>>,
+) -> Result<Eigen> {
+    let r = a.nrows();
+    let (rb, _) = null_space(sz, r)?;
+    let dof = rb.ncols();
     let deflated = if dof == 0 {
-        a
+        a.clone()
     } else {
+        let lt_r = match l {
+            None => DMatrix::from_fn(r, dof, |i, j| mz[(i, i)].sqrt() * rb[(i, j)]),
+            Some(l) => l.transpose() * &rb,
+        };
         let q = lt_r.qr().q();
         let shift = 1.0 + a.norm();
-        let aq = &a * &q;
+        let aq = a * &q;
         let qaq = q.transpose() * &aq;
-        &a - &aq * q.transpose() - &q * aq.transpose()
+        a - &aq * q.transpose() - &q * aq.transpose()
             + &q * (qaq - DMatrix::identity(dof, dof) * shift) * q.transpose()
     };
     let (values, vectors) = sym_eigen(&deflated)?;
     let lambda: Vec<f64> = values.iter().skip(dof).map(|v| v.max(0.0)).collect();
-    let v = vectors.columns(dof, r - dof).into_owned();
-    // phi_z = L^-T v.
-    let z_elastic = match &l {
-        None => DMatrix::from_fn(r, r - dof, |i, j| v[(i, j)] / mz[(i, i)].sqrt()),
-        Some(l) => l
-            .transpose()
-            .solve_upper_triangular(&v)
-            .ok_or_else(singular_mass)?,
-    };
+    let elastic = back(&vectors.columns(dof, r - dof).into_owned())?;
     // The rigid shapes, M-orthonormal: R (R^T M R)^(-1/2) by Cholesky.
     let rigid = if dof == 0 {
-        DMatrix::zeros(t.nrows(), 0)
+        back(&DMatrix::zeros(r, 0))?
     } else {
-        let lr = cholesky_l(rb.transpose() * &mz * &rb)?;
+        let lr = cholesky_l(rb.transpose() * mz * &rb)?;
         let inv = lr.try_inverse().ok_or_else(singular_mass)?;
         let z = &rb * inv.transpose();
-        if whole { z } else { t * z }
+        // back() maps L^T-coordinates; the rigid shapes are in z already.
+        match l {
+            None => {
+                let lt = DMatrix::from_fn(r, dof, |i, j| mz[(i, i)].sqrt() * z[(i, j)]);
+                back(&lt)?
+            }
+            Some(l) => back(&(l.transpose() * z))?,
+        }
     };
     Ok(Eigen {
         rigid,
         lambda,
-        elastic: if whole { z_elastic } else { t * z_elastic },
+        elastic,
     })
 }
 
@@ -221,6 +284,90 @@ mod tests {
         for (c, &l) in e.lambda.iter().enumerate() {
             let phi = e.elastic.column(c);
             assert!((&k * phi - l * (&m * phi)).amax() < 1e-12);
+        }
+    }
+
+    /// Unit inertias on a chain, springs 1-2 stiff and 2-3 soft by 14
+    /// orders: the soft mode's eigenvalue is below 1e-12 of the largest, so
+    /// the one eigenproblem cannot tell it from a rigid-body mode; the check
+    /// against the springs sends it to the null-space route, which counts
+    /// one rigid-body mode, not two.
+    #[test]
+    fn a_soft_spring_is_not_taken_for_a_rigid_body_mode() {
+        let (stiff, soft) = (1.0e8, 1.0e-6);
+        let springs = DMatrix::from_row_slice(2, 3, &[1.0, -1.0, 0.0, 0.0, 1.0, -1.0]);
+        let k = DMatrix::from_row_slice(
+            3,
+            3,
+            &[
+                stiff,
+                -stiff,
+                0.0,
+                -stiff,
+                stiff + soft,
+                -soft,
+                0.0,
+                -soft,
+                soft,
+            ],
+        );
+        let m = DMatrix::identity(3, 3);
+        let Ok(e) = solve(&DMatrix::identity(3, 3), &springs, &k, &m) else {
+            panic!("a positive mass");
+        };
+        assert_eq!(e.rigid.ncols(), 1);
+        assert_eq!(e.lambda.len(), 2);
+        // The stiff pair: 2 k_stiff (unit inertias), to round-off.
+        assert!((e.lambda[1] / (2.0 * stiff) - 1.0).abs() < 1e-12);
+        // The soft one, k_soft (1/2 + 1), is 1e-14 of the largest: dense
+        // solvers give it to about eps / 1e-14 relative, no better.
+        assert!(
+            (e.lambda[0] / (1.5 * soft) - 1.0).abs() < 0.1,
+            "{}",
+            e.lambda[0]
+        );
+    }
+
+    /// The two routes (one eigenproblem; the null space deflated) give the
+    /// same frequencies on a chain they both handle.
+    #[test]
+    fn both_routes_give_the_same_frequencies() {
+        let springs = DMatrix::from_row_slice(
+            3,
+            4,
+            &[
+                1.0, -1.0, 0.0, 0.0, 0.0, 1.0, -1.0, 0.0, 0.0, 0.0, 1.0, -1.0,
+            ],
+        );
+        let stiff = [3.0, 5.0, 7.0];
+        let k = springs.transpose()
+            * DMatrix::from_diagonal(&nalgebra::DVector::from_row_slice(&stiff))
+            * &springs;
+        let m = DMatrix::from_diagonal(&nalgebra::DVector::from_row_slice(&[1.0, 2.0, 0.5, 4.0]));
+        let t = DMatrix::identity(4, 4);
+        let Ok(fast) = solve(&t, &springs, &k, &m) else {
+            panic!("a positive mass");
+        };
+        let a = DMatrix::from_fn(4, 4, |i, j| k[(i, j)] / (m[(i, i)] * m[(j, j)]).sqrt());
+        let back = |v: &DMatrix<f64>| -> Result<DMatrix<f64>> {
+            Ok(DMatrix::from_fn(4, v.ncols(), |i, j| {
+                v[(i, j)] / m[(i, i)].sqrt()
+            }))
+        };
+        let Ok(slow) = deflated(&a, &springs, &m, None, &back) else {
+            panic!("a positive mass");
+        };
+        assert_eq!((fast.rigid.ncols(), slow.rigid.ncols()), (1, 1));
+        for (x, y) in fast.lambda.iter().zip(&slow.lambda) {
+            assert!((x - y).abs() < 1e-12 * y, "{x} vs {y}");
+        }
+        // Both rigid shapes are the uniform rotation, M-normalised.
+        for e in [&fast, &slow] {
+            let v = e.rigid.column(0);
+            assert!(
+                (v.amax() - v.amin()).abs() < 1e-12
+                    && ((v.transpose() * &m * v)[0] - 1.0).abs() < 1e-12
+            );
         }
     }
 }
