@@ -25,6 +25,8 @@
 //!   reported ranges, over both sides of every event and between samples)
 //!   `named` (a spec's `[[shift]]` made into a [`ShiftSim`]) and `compliance`
 //!   (an optional compliant output shaft to the vehicle, [`OutputShaft`]).
+//! - [`stepping`]: the same model advanced piece by piece over `[t, t + h]`
+//!   with capacities set by the caller ([`ShiftStepper`], the FMU's step).
 //! - [`quality`]: the torque and inertia phases of a finished shift and its
 //!   quality measures (output-torque dip and overshoot, oscillation after the
 //!   lock, jerk, steps at events, each element's energy and peak power),
@@ -45,6 +47,7 @@ pub mod ode;
 pub mod quality;
 mod request;
 pub mod shift;
+pub mod stepping;
 mod train_mode;
 
 pub use compliance::OutputShaft;
@@ -58,3 +61,4 @@ pub use shift::{
     DEFAULT_MAX_STEPS, InputTorque, MAX_STEP, MIN_RTOL, ModeChange, ShiftMethod, ShiftResult,
     ShiftSample, ShiftSim, Stiffness,
 };
+pub use stepping::{ShiftStepper, StepInputs};
