@@ -9,8 +9,10 @@
 //! initial gear start locked and stay so while their capacity holds them; the
 //! others slip (with no torque at zero capacity). A piece takes each
 //! element's capacity as a straight line over the piece (its value at `t` and
-//! its rate; rate 0 holds it), and the input torque as a constant. The
-//! step-size control is `run`'s; `run` itself is unchanged.
+//! its rate; rate 0 holds it), and the input torque as a constant; since
+//! inputs may jump between pieces, each piece starts by making the mode
+//! consistent (as `run` does at `t = 0`). The step-size control is `run`'s;
+//! `run` itself is unchanged.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -408,8 +410,19 @@ impl ShiftStepper {
         let n = setup.n;
         let k = setup.k();
         let mut st = self.state.clone();
-        let mut mode: Mode = setup.mode(&st.phases)?;
-        let mut y = std::mem::take(&mut st.y);
+        // The inputs may have jumped since the last piece (an importer that
+        // holds them over each step): the mode is made consistent with the
+        // new capacities first, as at t = 0 (a locked element they cannot
+        // hold releases now, not never: its event function starts negative).
+        let settled = settle(&setup, &st.phases, t_start, &st.y, None)?;
+        let (changes, locks) = self.taken(&settled, t_start);
+        st.changes.extend(changes);
+        for (i, l) in locks {
+            st.lock_time[i] = Some(l);
+        }
+        st.lock_loss += settled.lost;
+        let mut mode: Mode = settled.mode;
+        let mut y = settled.y;
         let mut t_now = t_start;
         let mut f0 = setup.rhs(&mode, t_now, &y);
         let mut h = st.h;
@@ -619,6 +632,40 @@ mod tests {
             }
             assert!((s.output_torque() - last.output_torque).abs() < 1e-6 * last.output_torque);
         }
+    }
+
+    #[test]
+    fn capacities_held_over_each_piece_still_release_and_lock_a_little_later() {
+        // The staircase an importer that cannot interpolate sends: a
+        // capacity that drops below the locked torque between pieces
+        // releases its element at the piece's start.
+        let (train, sim) = (zf(), zf_2_3());
+        let run = sim.run(&train).unwrap();
+        let h = 1e-2;
+        let (c0, _) = ramps_at(&sim, 0.0);
+        let mut s = ShiftStepper::new(&train, &sim, &c0).unwrap();
+        for j in 0..100 {
+            let (capacity, _) = ramps_at(&sim, f64::from(j) * h);
+            let inputs = StepInputs {
+                input_torque: 300.0,
+                capacity_rate: vec![0.0; 5],
+                capacity,
+            };
+            s.advance(&inputs, h).unwrap();
+        }
+        assert!(!s.locked(0) && s.locked(2));
+        let lock = s.lock_time(2).unwrap();
+        assert!(lock > run.lock_time.unwrap() && lock < run.lock_time.unwrap() + 2.0 * h);
+        let released = s.changes().iter().find(|c| c.element == "A").unwrap();
+        assert_eq!(released.now, "slipping");
+        // In the new gear: the input over the output speed is third's ratio.
+        let last = run.samples.last().unwrap();
+        let (i, o) = (
+            train.link_id("input").unwrap().index(),
+            train.link_id("output").unwrap().index(),
+        );
+        let ratio = last.speed[i] / last.speed[o];
+        assert!((s.input_speed() / s.output_speed() - ratio).abs() < 1e-9 * ratio);
     }
 
     #[test]
