@@ -241,3 +241,20 @@ def test_simulate_fmu_runs_the_unit_on_held_inputs(units: Dict[str, Path], refer
     ref_in, ref_out = speeds_at_end(reference)
     assert last["input.speed"] / last["output.speed"] == pytest.approx(ref_in / ref_out, rel=1e-9)
     assert 0.0 < last["C.lock_time"] - reference["lock_time"] < 2e-3
+
+
+def test_the_fmpy_example_of_the_docs_runs(units: Dict[str, Path], tmp_path: Path,
+                                           monkeypatch: pytest.MonkeyPatch) -> None:
+    """docs/fmu.md's ```python block, pasted where the unit is."""
+    import re
+    import shutil
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    block = re.findall(r"```python\n(.*?)```", (ROOT / "docs" / "fmu.md").read_text(), flags=re.S)
+    assert len(block) == 1
+    shutil.copy(units["zf_8hp70"], tmp_path / "zf_8hp70.fmu")
+    monkeypatch.chdir(tmp_path)
+    exec(compile(block[0], "docs/fmu.md", "exec"), {})
+    assert (tmp_path / "shift.svg").stat().st_size > 0
