@@ -393,3 +393,70 @@ impl Instance {
             .sum();
     }
 }
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    fn zf() -> Instance {
+        let spec = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../examples/zf_8hp70.toml"
+        ))
+        .unwrap();
+        Instance::new(&spec).unwrap()
+    }
+
+    fn vr(i: &Instance, name: &str) -> u32 {
+        let at = i.variables().reals.iter().position(|r| r.name == name);
+        u32::try_from(at.unwrap()).unwrap()
+    }
+
+    #[test]
+    fn the_state_machine_refuses_calls_out_of_order_and_bad_values() {
+        let mut i = zf();
+        assert!(i.do_step(0.0, 1e-3).unwrap_err().contains("not allowed"));
+        let cap = vr(&i, "C.capacity");
+        assert!(
+            i.set_real(&[cap], &[f64::NAN])
+                .unwrap_err()
+                .contains("not finite")
+        );
+        assert!(i.set_real(&[cap], &[-1.0]).unwrap_err().contains(">= 0"));
+        let out = vr(&i, "output.speed");
+        assert!(i.set_real(&[out], &[1.0]).unwrap_err().contains("output"));
+        i.setup_experiment(0.0).unwrap();
+        i.enter_initialization().unwrap();
+        i.exit_initialization().unwrap();
+        let speed = vr(&i, "initial_input_speed");
+        assert!(
+            i.set_real(&[speed], &[1.0])
+                .unwrap_err()
+                .contains("parameter")
+        );
+        assert!(
+            i.do_step(0.5, 1e-3)
+                .unwrap_err()
+                .contains("the unit is at 0")
+        );
+        i.do_step(0.0, 1e-3).unwrap();
+        assert!((i.time() - 1e-3).abs() < 1e-15);
+        // The start values hold the first gear: A, B and C locked (bits 1, 2, 4).
+        let mut locked = [0];
+        i.get_integer(&[LOCKED_ELEMENTS], &mut locked).unwrap();
+        assert_eq!(locked[0], 1 + 2 + 4);
+        i.reset();
+        assert_eq!(i.state(), State::Instantiated);
+        assert!((i.time()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn an_initial_gear_out_of_range_is_refused_at_initialisation() {
+        let mut i = zf();
+        i.set_integer(&[INITIAL_GEAR], &[10]).unwrap();
+        i.enter_initialization().unwrap();
+        let e = i.exit_initialization().unwrap_err();
+        assert!(e.contains("initial_gear 10 is not in 1..=9"), "{e}");
+    }
+}
