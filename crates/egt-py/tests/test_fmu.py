@@ -180,7 +180,8 @@ def test_two_instances_side_by_side_equal_one(zf_dir: str) -> None:
     one = list(run_unit(alone, 1e-2))
     alone.close()
     a, b = Unit(zf_dir, "a"), Unit(zf_dir, "b")
-    both = [(next(x), next(y)) for x, y in zip(run_unit(a, 1e-2), run_unit(b, 1e-2))]
+    # zip steps a, then b, then a again: the two instances advance in turn
+    both = list(zip(run_unit(a, 1e-2), run_unit(b, 1e-2)))
     a.close()
     b.close()
     assert [x for x, _ in both] == one and [y for _, y in both] == one
@@ -205,7 +206,7 @@ def test_a_nan_or_negative_input_is_an_error_and_python_goes_on(zf_dir: str,
         with pytest.raises(Exception, match="fmi2SetReal failed with status 3"):
             unit.fmu.setReal([unit.vr["C.capacity"]], [value])
     logged = capsys.readouterr().out
-    assert "`C.capacity` = nan is not finite" in logged and "`C.capacity` = -5 must be >= 0" in logged
+    assert "`C.capacity` = NaN is not finite" in logged and "`C.capacity` = -5 must be >= 0" in logged
     # refused values are not stored: the unit goes on from where it was
     assert unit.get("input.speed", "C.slip") == before
     unit.step(1e-3)
