@@ -414,15 +414,25 @@ impl ShiftStepper {
         // holds them over each step): the mode is made consistent with the
         // new capacities first, as at t = 0 (a locked element they cannot
         // hold releases now, not never: its event function starts negative).
-        let settled = settle(&setup, &st.phases, t_start, &st.y, None)?;
-        let (changes, locks) = self.taken(&settled, t_start);
-        st.changes.extend(changes);
-        for (i, l) in locks {
-            st.lock_time[i] = Some(l);
+        // Only a violated element (an event function already below zero)
+        // can change the mode here, so the settling is skipped otherwise.
+        let mut mode: Mode = setup.mode(&st.phases)?;
+        let mut y = std::mem::take(&mut st.y);
+        let d0 = setup.rhs(&mode, t_start, &y);
+        if setup
+            .events(&mode, t_start, &y, &d0)
+            .iter()
+            .any(|g| *g < 0.0)
+        {
+            let settled = settle(&setup, &mode.phases, t_start, &y, None)?;
+            let (changes, locks) = self.taken(&settled, t_start);
+            st.changes.extend(changes);
+            for (i, l) in locks {
+                st.lock_time[i] = Some(l);
+            }
+            st.lock_loss += settled.lost;
+            (mode, y) = (settled.mode, settled.y);
         }
-        st.lock_loss += settled.lost;
-        let mut mode: Mode = settled.mode;
-        let mut y = settled.y;
         let mut t_now = t_start;
         let mut f0 = setup.rhs(&mode, t_now, &y);
         let mut h = st.h;
