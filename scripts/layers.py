@@ -10,7 +10,9 @@ commands, and the bindings.
 3. The Python bindings (egt-py) use the CLI only through `egt_cli::run` (the
    wheel's `egt` command); the documents they return come from egt-views.
 4. egt-views (the JSON documents) depends on egt-core only.
-5. The Python package's modules import each other without a cycle at run
+5. egt-fmu (the FMI boundary) depends on egt-core only, and its `unsafe`
+   is in `ffi.rs` alone.
+6. The Python package's modules import each other without a cycle at run
    time (imports under `if TYPE_CHECKING:` are for annotations only).
 
 The layers of `crates/egt-core/src`, bottom to top (ARCHITECTURE.md):
@@ -38,6 +40,7 @@ SRC = ROOT / "crates" / "egt-core" / "src"
 CLI = ROOT / "crates" / "egt-cli" / "src"
 PY = ROOT / "crates" / "egt-py" / "src"
 VIEWS = ROOT / "crates" / "egt-views" / "src"
+FMU = ROOT / "crates" / "egt-fmu" / "src"
 PYPKG = ROOT / "crates" / "egt-py" / "python" / "egt"
 
 LAYERS = {
@@ -139,6 +142,19 @@ def bindings_problems() -> list[str]:
     return bad
 
 
+def fmu_problems() -> list[str]:
+    """egt-fmu reaching past egt-core, or `unsafe` outside its ffi.rs."""
+    bad = []
+    for path in sorted(FMU.rglob("*.rs")):
+        for n, line in code_lines(path.read_text()):
+            where = f"egt-fmu/src/{path.relative_to(FMU)}:{n}"
+            if re.search(r"\b(egt_cli|egt_py|egt_views|pyo3|clap)\b", line):
+                bad.append(f"{where}: the FMI boundary depends on more than egt-core")
+            if re.search(r"\bunsafe\b", line) and path.name != "ffi.rs":
+                bad.append(f"{where}: `unsafe` outside ffi.rs")
+    return bad
+
+
 def python_cycles() -> list[str]:
     """Cycles among the package's modules through run-time imports
     (module level or inside functions; `if TYPE_CHECKING:` blocks aside)."""
@@ -193,7 +209,7 @@ def main() -> int:
                         f"{path.relative_to(SRC)}:{n}: layer `{name}` imports "
                         f"`{top}` above it: {line.strip()}"
                     )
-    bad += cli_problems() + bindings_problems() + python_cycles()
+    bad += cli_problems() + bindings_problems() + fmu_problems() + python_cycles()
     if bad:
         print("layers.py: imports that break the layering:", *bad, sep="\n  ")
         return 1

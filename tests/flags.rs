@@ -60,6 +60,10 @@ const RUNS: &[(&str, &str, Base, &[&str])] = &[
     ("shift", "format", ZF, &["--format", "json"]),
     ("shift", "state", ZF, &["--state", "1"]),
     ("shift", "plot", ZF, &["--plot", "{tmp}/ladder.svg"]),
+    ("fmu", "spec-format", ZF, &["--spec-format", "toml", "-o", "{tmp}/a.fmu"]),
+    ("fmu", "output", ZF, &["--output", "{tmp}/b.fmu"]),
+    ("fmu", "model-identifier", ZF, &["-o", "{tmp}/c.fmu", "--model-identifier", "zf"]),
+    ("fmu", "library", ZF, &["-o", "{tmp}/d.fmu", "--library", "{lib}"]),
     ("graph", "spec-format", FIG3, &["--spec-format", "toml"]),
     ("graph", "format", FIG3, &["--format", "json"]),
     ("graph", "svg", FIG3, &["--svg"]),
@@ -184,6 +188,7 @@ fn every_flag_of_every_command_runs_with_a_valid_value() {
     let tmp = std::env::temp_dir().join(format!("egt-flags-{}", std::process::id()));
     std::fs::create_dir_all(&tmp).expect("temp dir");
     let t = tmp.to_string_lossy().to_string();
+    let lib = crate::fmu::library().to_string_lossy().to_string();
     let fig3 = egt_core::parse_spec(
         &std::fs::read_to_string(crate::util::root().join("examples/fig3_example61.toml"))
             .expect("fig3"),
@@ -223,7 +228,7 @@ fn every_flag_of_every_command_runs_with_a_valid_value() {
             base.args()
                 .iter()
                 .chain(*rest)
-                .map(|a| a.replace("{tmp}", &t)),
+                .map(|a| a.replace("{tmp}", &t).replace("{lib}", &lib)),
         );
         let argv: Vec<&str> = args.iter().map(String::as_str).collect();
         let r = egt(&argv, None);

@@ -36,6 +36,9 @@ mod synth;
 // Issue 14: `egt shift-sim`, a gear change in time, on the 8HP example.
 mod shift_sim;
 
+// Issue 44: `egt fmu`, a transmission packaged as an FMI 2.0 Co-Simulation unit.
+mod fmu;
+
 // Issue 42: every flag of every subcommand run with a valid value.
 mod flags;
 

@@ -35,6 +35,8 @@ pub enum Command {
     Shift(commands::shift::Args),
     /// Simulate a gear change in time (a spec with a `[transmission]`): the off-going element releases, the on-coming one slips and locks.
     ShiftSim(commands::shift_sim::Args),
+    /// A transmission as an FMI 2.0 Co-Simulation unit (.fmu): shift elements driven by their capacities.
+    Fmu(commands::fmu::Args),
     /// Write the train's graph as Graphviz DOT (links, turning and gear pairs, shift elements).
     Graph(commands::graph::Args),
     /// Stability of the linearised motion (eq. 19-27): [V], [M], [K], eigenvalues, modes, verdict.
@@ -93,6 +95,7 @@ pub fn run(command: &Command, out: &mut dyn Write) -> anyhow::Result<()> {
         Command::Power(args) => commands::power::run(args, out),
         Command::Shift(args) => commands::shift::run(args, out),
         Command::ShiftSim(args) => commands::shift_sim::run(args, out),
+        Command::Fmu(args) => commands::fmu::run(args, out),
         Command::Graph(args) => commands::graph::run(args, out),
         Command::Stability(args) => commands::stability::run(args, out),
         Command::Modes(args) => commands::modes::run(args, out),

@@ -8,6 +8,7 @@ pub mod circuits;
 pub mod completions;
 pub mod dynamics;
 pub mod enumerate;
+pub mod fmu;
 pub mod graph;
 pub mod kinematics;
 pub mod modes;

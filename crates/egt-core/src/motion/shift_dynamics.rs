@@ -30,6 +30,8 @@
 //!   in the energy balance) and `rest` (a train braked to a standstill
 //!   rests, held by its elements or parked by the road load, instead of
 //!   being refused as a tie-up).
+//! - [`stepping`]: the same model advanced piece by piece over `[t, t + h]`
+//!   with capacities set by the caller ([`ShiftStepper`], the FMU's step).
 //! - [`quality`]: the torque and inertia phases of a finished shift and its
 //!   quality measures (output-torque dip and overshoot, oscillation after the
 //!   lock, jerk, steps at events, each element's energy and peak power),
@@ -53,6 +55,7 @@ pub mod quality;
 mod request;
 mod rest;
 pub mod shift;
+pub mod stepping;
 mod train_mode;
 
 pub use compliance::OutputShaft;
@@ -66,3 +69,4 @@ pub use shift::{
     DEFAULT_MAX_STEPS, InputTorque, MAX_STEP, MIN_RTOL, ModeChange, ShiftMethod, ShiftResult,
     ShiftSample, ShiftSim, Stiffness,
 };
+pub use stepping::{ShiftStepper, StepInputs};

@@ -1,0 +1,261 @@
+"""Issue 44: a transmission as an FMI 2.0 Co-Simulation unit (`egt fmu`),
+imported by FMPy, an FMI implementation that shares no code with egt.
+
+The unit is packaged by the cargo-built `egt` (its shared library beside it,
+docs/fmu.md); FMPy validates its model description, and FMPy's FMU2Slave
+drives it step by step against `egt shift-sim` of the same shift."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any, Dict, Iterator, List, Tuple
+
+import pytest
+
+fmpy = pytest.importorskip("fmpy")
+tomllib = pytest.importorskip("tomllib")
+
+from fmpy import extract, read_model_description  # noqa: E402
+from fmpy.fmi2 import FMU2Slave  # noqa: E402
+from fmpy.validation import validate_fmu  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[3]
+EXAMPLES = ROOT / "examples"
+SPEC = EXAMPLES / "zf_8hp70.toml"
+
+
+def egt_binary() -> Path:
+    """The cargo-built `egt` (a no-op build after `make test-rust`), beside
+    which `cargo build` leaves egt-fmu's shared library."""
+    subprocess.run(["cargo", "build", "--quiet", "-p", "egt-cli", "-p", "egt-fmu"], cwd=ROOT, check=True)
+    target = Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
+    return target / "debug" / "egt"
+
+
+@pytest.fixture(scope="module")
+def units(tmp_path_factory: pytest.TempPathFactory) -> Dict[str, Path]:
+    """`egt fmu` of the 8HP70 and the C4: the .fmu files."""
+    out = tmp_path_factory.mktemp("fmu")
+    egt = egt_binary()
+    made = {}
+    for name in ["zf_8hp70", "ford_c4_simpson"]:
+        path = out / f"{name}.fmu"
+        subprocess.run([str(egt), "fmu", str(EXAMPLES / f"{name}.toml"), "-o", str(path)], check=True,
+                       capture_output=True)
+        made[name] = path
+    return made
+
+
+@pytest.fixture(scope="module")
+def zf_dir(units: Dict[str, Path]) -> str:
+    directory: str = extract(str(units["zf_8hp70"]))
+    return directory
+
+
+@pytest.mark.parametrize("name", ["zf_8hp70", "ford_c4_simpson"])
+def test_fmpy_validates_the_unit(units: Dict[str, Path], name: str) -> None:
+    assert validate_fmu(str(units[name])) == []
+    md = read_model_description(str(units[name]))
+    assert md.fmiVersion == "2.0" and md.coSimulation is not None
+    units_of = {v.name: v.unit for v in md.modelVariables}
+    spec = tomllib.loads((EXAMPLES / f"{name}.toml").read_text())
+    for e in spec["elements"]:
+        assert units_of[f"{e['name']}.capacity"] == "N.m"
+        assert units_of[f"{e['name']}.slip"] == "rad/s"
+        assert units_of[f"{e['name']}.energy"] == "J"
+
+
+def shift_2_3() -> Dict[str, Any]:
+    """The spec's `[[shift]] 2-3`."""
+    spec = tomllib.loads(SPEC.read_text())
+    shift: Dict[str, Any] = next(s for s in spec["shift"] if s["name"] == "2-3")
+    return shift
+
+
+def ramp_at(ramp: List[float], t: float) -> Tuple[float, float]:
+    """A `[t0, t1, from, to]` ramp's value at `t` and its slope on `[t, t + dt)`."""
+    t0, t1, c0, c1 = ramp
+    if t < t0:
+        return c0, 0.0
+    if t >= t1:
+        return c1, 0.0
+    slope = (c1 - c0) / (t1 - t0)
+    return c0 + slope * (t - t0), slope
+
+
+class Unit:
+    """One instance of the 8HP unit through FMPy's FMU2Slave."""
+
+    def __init__(self, directory: str, name: str) -> None:
+        self.md = read_model_description(directory)
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=directory,
+                             modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
+        self.fmu.instantiate()
+        self.shift = shift_2_3()
+        self.initialise()
+
+    def initialise(self) -> None:
+        s, vr = self.shift, self.vr
+        self.fmu.setupExperiment(startTime=0.0)
+        self.fmu.enterInitializationMode()
+        self.fmu.setInteger([vr["initial_gear"]], [2])
+        names = ["initial_input_speed", "road_load_c0", "road_load_c1", "road_load_c2", "vehicle_inertia"]
+        values = [s["input_speed"], *s["road_load"], s["vehicle_inertia"]]
+        self.fmu.setReal([vr[n] for n in names], values)
+        self.set_inputs(0.0)
+        self.fmu.exitInitializationMode()
+        self.t = 0.0
+
+    def set_inputs(self, t: float) -> None:
+        """The input table at `t`: the input torque, `A` and `C` on the
+        spec's ramps (values and slopes), `B` and `E` held, `D` open."""
+        vr, ramps = self.vr, self.shift["ramps"]
+        caps = {"A": ramp_at(ramps["A"], t), "C": ramp_at(ramps["C"], t), "B": (1e7, 0.0),
+                "D": (0.0, 0.0), "E": (1e7, 0.0)}
+        refs = [vr["input.torque"]] + [vr[f"{e}.capacity"] for e in caps]
+        self.fmu.setReal(refs, [self.shift["input_torque"]] + [c[0] for c in caps.values()])
+        self.fmu.setRealInputDerivatives(refs, [1] * len(refs), [0.0] + [c[1] for c in caps.values()])
+
+    def step(self, h: float) -> None:
+        self.set_inputs(self.t)
+        self.fmu.doStep(currentCommunicationPoint=self.t, communicationStepSize=h)
+        self.t += h
+
+    def get(self, *names: str) -> List[float]:
+        values: List[float] = self.fmu.getReal([self.vr[n] for n in names])
+        return values
+
+    def close(self) -> None:
+        self.fmu.terminate()
+        self.fmu.freeInstance()
+
+
+def run_unit(unit: Unit, h: float, t_end: float = 1.0) -> Iterator[List[float]]:
+    for _ in range(round(t_end / h)):
+        unit.step(h)
+        yield unit.get("input.speed", "output.speed", "A.energy", "C.energy", "C.lock_time", "output.torque")
+
+
+@pytest.fixture(scope="module")
+def reference() -> Dict[str, Any]:
+    """`egt shift-sim examples/zf_8hp70.toml --shift 2-3 --format json`."""
+    out = subprocess.run([sys.executable, "-m", "egt", "shift-sim", str(SPEC), "--shift", "2-3", "--format", "json"],
+                         capture_output=True, text=True, check=True)
+    ref: Dict[str, Any] = json.loads(out.stdout)
+    return ref
+
+
+def speeds_at_end(ref: Dict[str, Any]) -> Tuple[float, float]:
+    import egt
+
+    links = egt.load(str(SPEC)).link_names
+    speed = ref["samples"][-1]["speed"]
+    return speed[links.index("input")], speed[links.index("output")]
+
+
+@pytest.mark.parametrize("h", [1e-3, 1e-2])
+def test_the_8hp_2_3_upshift_through_fmpy_equals_egt_shift_sim(zf_dir: str, reference: Dict[str, Any],
+                                                                h: float) -> None:
+    unit = Unit(zf_dir, "a")
+    *_, last = run_unit(unit, h)
+    unit.close()
+    w_in, w_out, e_a, e_c, lock, _ = last
+    # the lock falls inside a communication step, not on its boundary
+    assert abs(lock / h - round(lock / h)) > 1e-3
+    assert abs(lock - reference["lock_time"]) < 1e-6
+    ref_in, ref_out = speeds_at_end(reference)
+    assert w_in == pytest.approx(ref_in, rel=1e-6) and w_out == pytest.approx(ref_out, rel=1e-6)
+    e_ref = dict(zip(reference["elements"], reference["dissipated"]))
+    assert e_a == pytest.approx(e_ref["A"], rel=1e-6) and e_c == pytest.approx(e_ref["C"], rel=1e-6)
+
+
+def test_two_instances_side_by_side_equal_one(zf_dir: str) -> None:
+    alone = Unit(zf_dir, "alone")
+    one = list(run_unit(alone, 1e-2))
+    alone.close()
+    a, b = Unit(zf_dir, "a"), Unit(zf_dir, "b")
+    # zip steps a, then b, then a again: the two instances advance in turn
+    both = list(zip(run_unit(a, 1e-2), run_unit(b, 1e-2)))
+    a.close()
+    b.close()
+    assert [x for x, _ in both] == one and [y for _, y in both] == one
+
+
+def test_reset_and_initialise_again_repeat_the_run(zf_dir: str) -> None:
+    unit = Unit(zf_dir, "r")
+    first = list(run_unit(unit, 1e-2, 0.3))
+    unit.fmu.reset()
+    unit.initialise()
+    again = list(run_unit(unit, 1e-2, 0.3))
+    unit.close()
+    assert again == first
+
+
+def test_a_nan_or_negative_input_is_an_error_and_python_goes_on(zf_dir: str,
+                                                                capsys: pytest.CaptureFixture[str]) -> None:
+    unit = Unit(zf_dir, "bad")
+    unit.step(1e-3)
+    before = unit.get("input.speed", "C.slip")
+    for value in [math.nan, -5.0]:
+        with pytest.raises(Exception, match="fmi2SetReal failed with status 3"):
+            unit.fmu.setReal([unit.vr["C.capacity"]], [value])
+    logged = capsys.readouterr().out
+    assert "`C.capacity` = NaN is not finite" in logged and "`C.capacity` = -5 must be >= 0" in logged
+    # refused values are not stored: the unit goes on from where it was
+    assert unit.get("input.speed", "C.slip") == before
+    unit.step(1e-3)
+    assert unit.t == pytest.approx(2e-3) and all(math.isfinite(v) for v in unit.get("input.speed", "C.slip"))
+    unit.close()
+
+
+def test_simulate_fmu_runs_the_unit_on_held_inputs(units: Dict[str, Path], reference: Dict[str, Any]) -> None:
+    """FMPy's own loop (`simulate_fmu`) sets the inputs at each communication
+    point and holds them over the step (its `set_input_derivatives` needs
+    exactly nine inputs in FMPy 0.3.32): the ramps become staircases, so the
+    shift is that much later, and ends in third gear all the same."""
+    import numpy as np
+
+    s = shift_2_3()
+    t = np.linspace(0.0, 1.0, 1001)
+    table = np.zeros(len(t), dtype=[("time", float), ("input.torque", float)]
+                     + [(f"{e}.capacity", float) for e in "ABCDE"])
+    table["time"] = t
+    table["input.torque"] = s["input_torque"]
+    table["A.capacity"] = [ramp_at(s["ramps"]["A"], x)[0] for x in t]
+    table["C.capacity"] = [ramp_at(s["ramps"]["C"], x)[0] for x in t]
+    table["B.capacity"] = table["E.capacity"] = 1e7
+    start = {"initial_gear": 2, "initial_input_speed": s["input_speed"], "vehicle_inertia": s["vehicle_inertia"],
+             **{f"road_load_c{i}": c for i, c in enumerate(s["road_load"])}}
+    r = fmpy.simulate_fmu(str(units["zf_8hp70"]), start_values=start, input=table, output_interval=1e-3,
+                          stop_time=1.0, output=["input.speed", "output.speed", "C.lock_time", "locked_elements"])
+    last = r[-1]
+    md = read_model_description(str(units["zf_8hp70"]))
+    bits = next(v for v in md.modelVariables if v.name == "locked_elements").description
+    assert "4 = `C`" in bits and "1 = `A`" in bits
+    assert last["locked_elements"] & 4 and not last["locked_elements"] & 1
+    ref_in, ref_out = speeds_at_end(reference)
+    assert last["input.speed"] / last["output.speed"] == pytest.approx(ref_in / ref_out, rel=1e-9)
+    assert 0.0 < last["C.lock_time"] - reference["lock_time"] < 2e-3
+
+
+def test_the_fmpy_example_of_the_docs_runs(units: Dict[str, Path], tmp_path: Path,
+                                           monkeypatch: pytest.MonkeyPatch) -> None:
+    """docs/fmu.md's ```python block, pasted where the unit is."""
+    import re
+    import shutil
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    block = re.findall(r"```python\n(.*?)```", (ROOT / "docs" / "fmu.md").read_text(), flags=re.S)
+    assert len(block) == 1
+    shutil.copy(units["zf_8hp70"], tmp_path / "zf_8hp70.fmu")
+    monkeypatch.chdir(tmp_path)
+    exec(compile(block[0], "docs/fmu.md", "exec"), {})
+    assert (tmp_path / "shift.svg").stat().st_size > 0
