@@ -521,3 +521,98 @@ fn a_cancelled_enumeration_hands_on_whole_trees_only_a_prefix_of_the_atlas() {
     assert!(!part.is_empty() && part.len() < whole.len());
     assert_eq!(part[..], whole[..part.len()]);
 }
+
+/// Every displacement graph at `ATLAS_LINKS` (default 7) links, 1 DOF,
+/// before egt's checks, with why it is in or out of the atlas (the first
+/// error of its breadth-first layout), written to `ATLAS_OUT` (default
+/// `/tmp/atlas_candidates.txt`) as `reason<TAB>rotation code<TAB>adjacency`
+/// for scripts/atlas_compare.py, which compares them with an independent
+/// generator (issue 46). The members must be the atlas.
+#[test]
+#[ignore = "seconds at 9 links in release; run by hand (docs/atlas.md)"]
+fn candidates_with_reasons() {
+    use std::fmt::Write as _;
+    let n: usize = std::env::var("ATLAS_LINKS").map_or(7, |s| s.parse().unwrap());
+    let path = std::env::var("ATLAS_OUT").unwrap_or("/tmp/atlas_candidates.txt".into());
+    let req = AtlasRequest {
+        links: n,
+        dof: 1,
+        level: GraphLevel::Displacement,
+        part: None,
+        fractionation: Fractionation::Layout,
+    };
+    let rows: Vec<(String, String, String)> = trees::trees(n)
+        .par_iter()
+        .flat_map_iter(|t| {
+            found_in_tree(t, &req, &NEVER)
+                .into_iter()
+                .collect::<Vec<_>>()
+        })
+        .map(|(_, f)| {
+            let bfs = Emitted::new(&f.graph, &f.levels, &bfs_tree(&f.graph));
+            let reason = if checked_form(&f.graph, &f.levels).is_some() {
+                "member".to_string()
+            } else {
+                let e = egt_check(&bfs.adjacency).expect_err("rejected");
+                let d = format!("{e:?}");
+                d.split(['{', '(', ' '])
+                    .take(2)
+                    .collect::<Vec<_>>()
+                    .join("")
+            };
+            // For one DOF, egt's checks reject exactly the chains with a
+            // sub-chain that the gear pairs inside it cannot let move.
+            assert_eq!(
+                reason == "member",
+                !has_rigid_subchain(&f.graph),
+                "{}",
+                bfs.adjacency
+            );
+            let rcode: String = f.rcode.iter().map(|b| format!("{b:02x}")).collect();
+            (reason, rcode, bfs.adjacency)
+        })
+        .collect();
+    let members = rows.iter().filter(|r| r.0 == "member").count();
+    assert_eq!(members, codes(n, 1, GraphLevel::Displacement).len());
+    // Measured (docs/atlas.md); the same by scripts/atlas_gen.py and nauty.
+    let expected = match n {
+        6 => Some((90, 81)),
+        7 => Some((821, 647)),
+        8 => Some((9371, 6360)),
+        9 => Some((124_923, 71_833)),
+        _ => None,
+    };
+    if let Some(e) = expected {
+        assert_eq!((rows.len(), members), e);
+    }
+    let mut text = String::new();
+    for (reason, rcode, adjacency) in &rows {
+        writeln!(text, "{reason}\t{rcode}\t{adjacency}").unwrap();
+    }
+    std::fs::write(&path, text).unwrap();
+    eprintln!(
+        "{n} links: {} candidates, {members} members, in {path}",
+        rows.len()
+    );
+}
+
+/// Whether some `k >= 3` links hold `k - 1` or more gear pairs with both
+/// gears and the carrier among them: a sub-chain whose Gruebler count
+/// (paper eq. (1)) leaves it no motion relative to itself.
+fn has_rigid_subchain(g: &ChainGraph) -> bool {
+    let n = g.links();
+    let masks: Vec<u32> = g
+        .pairs(Joint::Gear)
+        .iter()
+        .map(|&(a, b)| {
+            let k = (0..n)
+                .find(|&k| g.joint(a, k) == Joint::Turning && g.joint(b, k) == Joint::Turning)
+                .expect("a carrier");
+            (1u32 << a) | (1 << b) | (1 << k)
+        })
+        .collect();
+    (1u32..1 << n).any(|s| {
+        let k = s.count_ones() as usize;
+        k >= 3 && masks.iter().filter(|&&m| m & s == m).count() + 1 >= k
+    })
+}
