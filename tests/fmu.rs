@@ -1,5 +1,5 @@
-//! Issue 44: `egt fmu SPEC -o FILE` packages a transmission as an FMI 2.0
-//! Co-Simulation unit; its contents (the importer's view) are tested by
+//! Issue 44: `egt fmu SPEC -o FILE` packages a transmission, or a train
+//! without shift elements, as an FMI 2.0 Co-Simulation unit; its contents (the importer's view) are tested by
 //! FMPy in crates/egt-py/tests/test_fmu.py.
 
 use std::path::PathBuf;
@@ -52,12 +52,41 @@ fn the_8hp_unit_holds_its_description_library_and_spec() {
 }
 
 #[test]
-fn a_spec_without_a_transmission_or_a_missing_library_is_refused() {
+fn a_train_without_elements_is_a_unit_and_elements_without_states_or_inertias_are_refused() {
     let out = tmp("refused", "x.fmu");
     let o = out.to_string_lossy();
-    let r = egt(&["fmu", "examples/fig3_example61.toml", "-o", &o], None);
-    assert_ne!(r.code, 0);
-    assert!(r.stderr.contains("transmission"), "{}", r.stderr);
+    let r = egt(&["fmu", "examples/fig5_stability.toml", "-o", &o], None);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    std::fs::remove_file(&out).expect("the unit");
+    // Shift elements without `[transmission]`: neither kind of unit.
+    let zf = std::fs::read_to_string(root().join("examples/zf_8hp70.toml")).expect("the 8HP");
+    let cut = tmp("refused", "cut.toml");
+    std::fs::write(
+        &cut,
+        &zf[..zf.find("[transmission]").expect("a transmission")],
+    )
+    .expect("cut");
+    let r = egt(&["fmu", &cut.to_string_lossy(), "-o", &o], None);
+    assert_eq!(r.code, 1);
+    assert!(
+        r.stderr.contains("shift elements") && r.stderr.contains("gear states"),
+        "{}",
+        r.stderr
+    );
+    // A train without inertia cannot step: refused when packaged.
+    let bare = tmp("refused", "bare.toml");
+    std::fs::write(
+        &bare,
+        r#"frame = "0"
+links = [{ name = "m" }, { name = "o" }]
+revolutes = [{ links = ["0", "m"], level = "a" }, { links = ["0", "o"], level = "b" }]
+gears = [{ links = ["m", "o"], ratio = -2.0 }]
+"#,
+    )
+    .expect("bare");
+    let r = egt(&["fmu", &bare.to_string_lossy(), "-o", &o], None);
+    assert_eq!(r.code, 1);
+    assert!(r.stderr.contains("inertia"), "{}", r.stderr);
     let missing = root().join("no-such-library.so");
     let m = missing.to_string_lossy();
     let r = egt(

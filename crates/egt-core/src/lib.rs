@@ -133,7 +133,7 @@ pub use model::train::{ElementId, GearState, ShiftElement, Transmission};
 pub use motion::shift_dynamics;
 pub use motion::simulate::{
     LinearCurves, Method, ReducedDynamics, Sample, Simulation, SimulationOptions,
-    SimulationOverrides, SimulationRequest, TorqueFn, TorqueModel,
+    SimulationOverrides, SimulationRequest, SimulationStepper, TorqueFn, TorqueModel,
 };
 pub use solve::kinematics::{RelativeSpeed, SpeedInput, Speeds};
 pub use solve::rows::Extra;

@@ -6,7 +6,7 @@
 
 use serde::Serialize;
 
-use crate::variables::{Causality, INITIAL_GEAR, LOCKED_ELEMENTS, Variables};
+use crate::variables::{Causality, INITIAL_GEAR, Kind, LOCKED_ELEMENTS, Variables};
 
 /// The units the variables use, with their SI base-unit exponents
 /// (`rad`, `kg`, `m`, `s`).
@@ -232,7 +232,8 @@ pub fn model_description(
         .collect::<Vec<_>>()
         .join(", ");
     let count = i32::try_from(variables.gears.len()).unwrap_or(i32::MAX);
-    list.push(ScalarVariable {
+    let transmission = variables.kind == Kind::Transmission;
+    list.extend(transmission.then(|| ScalarVariable {
         name: "initial_gear".into(),
         value_reference: INITIAL_GEAR,
         description: format!("the gear at the start: {gears}"),
@@ -245,8 +246,8 @@ pub fn model_description(
             min: Some(1),
             max: Some(count),
         }),
-    });
-    list.push(ScalarVariable {
+    }));
+    list.extend(transmission.then(|| ScalarVariable {
         name: "locked_elements".into(),
         value_reference: LOCKED_ELEMENTS,
         description: format!("the mode: the sum of the locked elements' bits, {bits}"),
@@ -259,7 +260,7 @@ pub fn model_description(
             min: None,
             max: None,
         }),
-    });
+    }));
     // 1-based indices of the outputs in the list, in order.
     let outputs: Vec<Unknown> = (list.iter().enumerate())
         .filter(|(_, v)| v.causality == "output")
@@ -271,7 +272,11 @@ pub fn model_description(
         fmi_version: "2.0",
         model_name,
         guid: &guid,
-        description: "a transmission's shift dynamics (egt): friction elements that slip, lock and overrun, driven by their capacities",
+        description: if transmission {
+            "a transmission's shift dynamics (egt): friction elements that slip, lock and overrun, driven by their capacities"
+        } else {
+            "a gear train's forward dynamics (egt): its links' speeds under the spec's torque-speed curves and the applied torques"
+        },
         generation_tool: format!("egt {}", env!("CARGO_PKG_VERSION")),
         naming: "flat",
         event_indicators: 0,
@@ -454,15 +459,42 @@ mod tests {
     }
 
     #[test]
-    fn a_train_without_a_transmission_or_with_clashing_names_is_refused() {
-        let plain = spec("fig3_example61");
-        let train = Train::from_str(&plain, Format::Toml, "fig3").unwrap();
-        assert!(
-            Variables::of(&train)
-                .unwrap_err()
-                .0
-                .contains("transmission")
-        );
+    fn a_train_without_elements_is_a_unit_of_its_links_and_has_no_integers() {
+        let xml = describe("fig5_stability");
+        let els = elements(&xml);
+        let vars: HashMap<&str, &HashMap<String, String>> = (els.iter())
+            .filter(|(n, _)| n == "ScalarVariable")
+            .map(|(_, a)| (a["name"].as_str(), a))
+            .collect();
+        for link in ["2", "3", "4", "5", "6"] {
+            assert_eq!(
+                vars[format!("{link}.torque").as_str()]["causality"],
+                "input"
+            );
+            assert_eq!(
+                vars[format!("{link}.speed").as_str()]["causality"],
+                "output"
+            );
+        }
+        // The spec's `[analysis.simulate] initial` links are the parameters.
+        for p in ["2.initial_speed", "4.initial_speed", "dt"] {
+            assert_eq!(vars[p]["causality"], "parameter");
+        }
+        assert!(!vars.contains_key("3.initial_speed") && !vars.contains_key("1.speed"));
+        assert!(!vars.contains_key("initial_gear") && !vars.contains_key("locked_elements"));
+        assert!(!els.iter().any(|(n, _)| n == "Integer"));
+        assert_eq!(vars["work"]["causality"], "output");
+    }
+
+    #[test]
+    fn elements_without_a_transmission_or_clashing_names_are_refused() {
+        // Shift elements with no gear states: neither a transmission nor a
+        // train without elements.
+        let text = spec("zf_8hp70");
+        let cut = &text[..text.find("[transmission]").unwrap()];
+        let train = Train::from_str(cut, Format::Toml, "cut").unwrap();
+        let e = Variables::of(&train).unwrap_err().0;
+        assert!(e.contains("shift elements"), "{e}");
         // an element named like the input link: two `input.torque`
         let clash = spec("zf_8hp70")
             .replace("name = \"A\"", "name = \"input\"")

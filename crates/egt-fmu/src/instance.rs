@@ -1,15 +1,23 @@
 //! One instance of the unit, in safe Rust: its values by value reference,
 //! the FMI 2.0 Co-Simulation state machine (instantiated, initialisation,
-//! stepping, terminated), and `do_step` over egt-core's [`ShiftStepper`].
+//! stepping, terminated), and `do_step` over egt-core's [`ShiftStepper`]
+//! (a transmission) or [`SimulationStepper`] (a train without elements).
 //! Every call returns `Err(message)` for the boundary to log and turn into
 //! `fmi2Error`; a refused call leaves the instance as it was.
 
 use egt_core::shift_dynamics::{
     DEFAULT_MAX_STEPS, FrictionLaw, InputTorque, ShiftMethod, ShiftSim, ShiftStepper, StepInputs,
 };
-use egt_core::{Format, Train};
+use egt_core::{Format, LinkId, Method, SimulationStepper, Train};
 
-use crate::variables::{Causality, INITIAL_GEAR, LOCKED_ELEMENTS, Role, Variables};
+use crate::variables::{Causality, INITIAL_GEAR, Kind, LOCKED_ELEMENTS, Role, Variables};
+
+/// What an initialised instance steps.
+#[derive(Debug, Clone)]
+enum Stepper {
+    Shift(Box<ShiftStepper>),
+    Train(Box<SimulationStepper>),
+}
 
 /// Where an instance is in the FMI 2.0 Co-Simulation state machine.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -36,7 +44,7 @@ pub struct Instance {
     locked: i32,
     state: State,
     start_time: f64,
-    stepper: Option<ShiftStepper>,
+    stepper: Option<Stepper>,
 }
 
 /// What a refused call says.
@@ -126,6 +134,58 @@ impl Instance {
     /// inertias, an initial gear whose elements cannot hold).
     pub fn exit_initialization(&mut self) -> Result<(), Refusal> {
         self.expect(&[State::Initialization], "fmi2ExitInitializationMode")?;
+        let stepper = match self.variables.kind {
+            Kind::Transmission => Stepper::Shift(Box::new(self.shift_stepper()?)),
+            Kind::Train => Stepper::Train(Box::new(self.train_stepper()?)),
+        };
+        self.stepper = Some(stepper);
+        self.state = State::Stepping;
+        self.write_outputs();
+        Ok(())
+    }
+
+    fn value(&self, role: Role) -> f64 {
+        self.variables
+            .real(role)
+            .map_or(0.0, |vr| self.reals[vr as usize])
+    }
+
+    /// A transmission's inputs for a step: the input and load torques and
+    /// each element's capacity with its rate.
+    fn step_inputs(&self) -> StepInputs {
+        let k = self.variables.elements.len();
+        let mut inputs = StepInputs {
+            input_torque: 0.0,
+            load_torque: 0.0,
+            capacity: vec![0.0; k],
+            capacity_rate: vec![0.0; k],
+        };
+        for (vr, r) in self.variables.reals.iter().enumerate() {
+            match r.role {
+                Role::Capacity(i) => {
+                    inputs.capacity[i] = self.reals[vr];
+                    inputs.capacity_rate[i] = self.rates[vr];
+                }
+                Role::InputTorque => inputs.input_torque = self.reals[vr],
+                Role::LoadTorque => inputs.load_torque = self.reals[vr],
+                _ => {}
+            }
+        }
+        inputs
+    }
+
+    /// A train's applied torques, by link index.
+    fn link_torques(&self) -> Vec<f64> {
+        let mut torques = vec![0.0; self.train.links().len()];
+        for (vr, r) in self.variables.reals.iter().enumerate() {
+            if let Role::LinkTorque(l) = r.role {
+                torques[l] = self.reals[vr];
+            }
+        }
+        torques
+    }
+
+    fn shift_stepper(&self) -> Result<ShiftStepper, Refusal> {
         let gear = usize::try_from(self.initial_gear - 1)
             .ok()
             .and_then(|g| self.variables.gears.get(g))
@@ -137,11 +197,7 @@ impl Instance {
                 )
             })?
             .clone();
-        let value = |role| {
-            self.variables
-                .real(role)
-                .map_or(0.0, |vr| self.reals[vr as usize])
-        };
+        let value = |role| self.value(role);
         let sim = ShiftSim {
             from: gear.clone(),
             to: gear,
@@ -166,14 +222,25 @@ impl Instance {
             // The unit steps the ideal model (ShiftStepper has no mesh losses).
             losses: false,
         };
-        let capacity: Vec<f64> = (0..self.variables.elements.len())
-            .map(|i| value(Role::Capacity(i)))
+        ShiftStepper::new(&self.train, &sim, &self.step_inputs()).map_err(|e| e.to_string())
+    }
+
+    fn train_stepper(&self) -> Result<SimulationStepper, Refusal> {
+        let initial: Vec<(LinkId, f64)> = (self.variables.reals.iter().enumerate())
+            .filter_map(|(vr, r)| match r.role {
+                Role::InitialLinkSpeed(l) => Some((LinkId::from_index(l), self.reals[vr])),
+                _ => None,
+            })
             .collect();
-        let stepper = ShiftStepper::new(&self.train, &sim, &capacity).map_err(|e| e.to_string())?;
-        self.stepper = Some(stepper);
-        self.state = State::Stepping;
-        self.write_outputs();
-        Ok(())
+        let method = match &self.train.analysis().simulate {
+            Some(s) => match &s.method {
+                Some(m) => m.parse().map_err(|e: String| e)?,
+                None => Method::default(),
+            },
+            None => Method::default(),
+        };
+        SimulationStepper::new(&self.train, &initial, self.value(Role::Dt), method)
+            .map_err(|e| e.to_string())
     }
 
     /// `fmi2Terminate`.
@@ -231,7 +298,7 @@ impl Instance {
             }
             let positive = matches!(
                 var.role,
-                Role::MuStatic | Role::MuKinetic | Role::Rtol | Role::Atol
+                Role::MuStatic | Role::MuKinetic | Role::Rtol | Role::Atol | Role::Dt
             );
             if positive && v <= 0.0 {
                 return Err(format!("`{name}` = {v} must be > 0"));
@@ -266,7 +333,7 @@ impl Instance {
     /// Another reference, or too late.
     pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Result<(), Refusal> {
         for (&vr, &v) in vrs.iter().zip(values) {
-            if vr != INITIAL_GEAR {
+            if vr != INITIAL_GEAR || self.variables.kind != Kind::Transmission {
                 return Err(format!("integer {vr} cannot be set"));
             }
             self.expect(
@@ -284,6 +351,9 @@ impl Instance {
     /// An unknown reference.
     pub fn get_integer(&self, vrs: &[u32], values: &mut [i32]) -> Result<(), Refusal> {
         for (&vr, v) in vrs.iter().zip(values) {
+            if self.variables.kind != Kind::Transmission {
+                return Err(format!("no integer variable with value reference {vr}"));
+            }
             *v = match vr {
                 INITIAL_GEAR => self.initial_gear,
                 LOCKED_ELEMENTS => self.locked,
@@ -339,32 +409,18 @@ impl Instance {
     /// instance stays at `current`).
     pub fn do_step(&mut self, current: f64, h: f64) -> Result<(), Refusal> {
         self.expect(&[State::Stepping], "fmi2DoStep")?;
-        let stepper = self.stepper.as_mut().ok_or("no stepper")?;
-        let reached = self.start_time + stepper.time();
+        let reached = self.time();
         if (current - reached).abs() > 1e-9 * reached.abs().max(1.0) {
             return Err(format!(
                 "the step starts at {current}, but the unit is at {reached}"
             ));
         }
-        let k = self.variables.elements.len();
-        let (mut capacity, mut capacity_rate) = (vec![0.0; k], vec![0.0; k]);
-        let mut input_torque = 0.0;
-        for (vr, r) in self.variables.reals.iter().enumerate() {
-            match r.role {
-                Role::Capacity(i) => {
-                    capacity[i] = self.reals[vr];
-                    capacity_rate[i] = self.rates[vr];
-                }
-                Role::InputTorque => input_torque = self.reals[vr],
-                _ => {}
-            }
+        let (inputs, torques) = (self.step_inputs(), self.link_torques());
+        match self.stepper.as_mut().ok_or("no stepper")? {
+            Stepper::Shift(s) => s.advance(&inputs, h),
+            Stepper::Train(s) => s.advance(&torques, h),
         }
-        let inputs = StepInputs {
-            input_torque,
-            capacity,
-            capacity_rate,
-        };
-        stepper.advance(&inputs, h).map_err(|e| e.to_string())?;
+        .map_err(|e| e.to_string())?;
         self.rates.fill(0.0);
         self.write_outputs();
         Ok(())
@@ -372,27 +428,45 @@ impl Instance {
 
     /// The time reached.
     pub fn time(&self) -> f64 {
-        self.start_time + self.stepper.as_ref().map_or(0.0, ShiftStepper::time)
+        self.start_time
+            + match &self.stepper {
+                Some(Stepper::Shift(s)) => s.time(),
+                Some(Stepper::Train(s)) => s.time(),
+                None => 0.0,
+            }
     }
 
     fn write_outputs(&mut self) {
-        let Some(s) = &self.stepper else { return };
-        for (vr, r) in self.variables.reals.iter().enumerate() {
-            let v = match r.role {
-                Role::Speed(c) => s.speeds()[c],
-                Role::OutputTorque => s.output_torque(),
-                Role::Slip(i) => s.slip(i),
-                Role::ElementTorque(i) => s.element_torque(i),
-                Role::Energy(i) => s.dissipated(i),
-                Role::LockTime(i) => s.lock_time(i).map_or(-1.0, |t| self.start_time + t),
-                _ => continue,
-            };
-            self.reals[vr] = v;
+        match &self.stepper {
+            Some(Stepper::Shift(s)) => {
+                for (vr, r) in self.variables.reals.iter().enumerate() {
+                    self.reals[vr] = match r.role {
+                        Role::Speed(c) => s.speeds()[c],
+                        Role::OutputTorque => s.output_torque(),
+                        Role::Slip(i) => s.slip(i),
+                        Role::ElementTorque(i) => s.element_torque(i),
+                        Role::Energy(i) => s.dissipated(i),
+                        Role::LockTime(i) => s.lock_time(i).map_or(-1.0, |t| self.start_time + t),
+                        _ => continue,
+                    };
+                }
+                self.locked = (0..self.variables.elements.len().min(31))
+                    .filter(|&i| s.locked(i))
+                    .map(|i| 1 << i)
+                    .sum();
+            }
+            Some(Stepper::Train(s)) => {
+                for (vr, r) in self.variables.reals.iter().enumerate() {
+                    self.reals[vr] = match r.role {
+                        Role::LinkSpeed(l) => s.speeds()[l],
+                        Role::Work => s.work(),
+                        Role::KineticEnergy => s.energy(),
+                        _ => continue,
+                    };
+                }
+            }
+            None => {}
         }
-        self.locked = (0..self.variables.elements.len().min(31))
-            .filter(|&i| s.locked(i))
-            .map(|i| 1 << i)
-            .sum();
     }
 }
 
@@ -460,5 +534,38 @@ mod tests {
         i.enter_initialization().unwrap();
         let e = i.exit_initialization().unwrap_err();
         assert!(e.contains("initial_gear 10 is not in 1..=9"), "{e}");
+    }
+
+    #[test]
+    fn a_train_without_elements_steps_as_its_simulation_and_has_no_integers() {
+        let text = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../examples/fig5_stability.toml"
+        ))
+        .unwrap();
+        let mut i = Instance::new(&text).unwrap();
+        assert!(i.set_integer(&[INITIAL_GEAR], &[1]).is_err());
+        assert!(i.get_integer(&[LOCKED_ELEMENTS], &mut [0]).is_err());
+        let dt = vr(&i, "dt");
+        assert!(i.set_real(&[dt], &[0.0]).unwrap_err().contains("> 0"));
+        i.enter_initialization().unwrap();
+        i.exit_initialization().unwrap();
+        for k in 0..100 {
+            i.do_step(f64::from(k) * 1e-2, 1e-2).unwrap();
+        }
+        // The spec's own simulation: RK4, dt 1e-3, t_end 1, from 330 and 80.
+        let train = egt_core::Train::from_str(&text, Format::Toml, "fig5").unwrap();
+        let req = egt_core::SimulationRequest::from_spec(&train).unwrap();
+        let last = train.simulate(&req).unwrap().samples.pop().unwrap();
+        for link in ["2", "3", "4", "6"] {
+            let l = train.link_id(link).unwrap().index();
+            let mut w = [0.0];
+            i.get_real(&[vr(&i, &format!("{link}.speed"))], &mut w)
+                .unwrap();
+            assert!((w[0] - last.speed[l]).abs() < 1e-9 * last.speed[l].abs().max(1.0));
+        }
+        let mut work = [0.0];
+        i.get_real(&[vr(&i, "work")], &mut work).unwrap();
+        assert!((work[0] - last.work).abs() < 1e-9 * last.work.abs().max(1.0));
     }
 }

@@ -1,10 +1,11 @@
-//! The unit's variables, made from a transmission spec once: their names (the
-//! spec's link and element names), value references, causalities, units and
-//! start values. The model description lists them and an instance reads and
-//! writes its values by them, so the two cannot disagree.
+//! The unit's variables, made from a spec once (a transmission's, or a
+//! train's without shift elements): their names (the spec's link and element
+//! names), value references, causalities, units and start values. The model
+//! description lists them and an instance reads and writes its values by
+//! them, so the two cannot disagree.
 
-use egt_core::Train;
 use egt_core::shift_dynamics::{DEFAULT_MU, DEFAULT_TOLERANCE};
+use egt_core::{LinkId, Train};
 
 /// The capacity an element of the initial gear starts with when the importer
 /// sets none (N m per unit friction coefficient): far above any torque the
@@ -13,6 +14,10 @@ pub const HELD_CAPACITY: f64 = 1e5;
 
 /// The input speed a unit starts at by default (rad/s).
 pub const DEFAULT_INPUT_SPEED: f64 = 100.0;
+
+/// A train's largest integration step when its spec gives neither `dt` nor
+/// `t_end` (s).
+pub const DEFAULT_DT: f64 = 1e-4;
 
 /// What a real variable is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -47,6 +52,30 @@ pub enum Role {
     Energy(usize),
     /// The last time an element locked, -1 before any (output).
     LockTime(usize),
+    /// The torque the surroundings apply against the output (input).
+    LoadTorque,
+    /// A link's speed at `t = 0`, by link index (a train's parameter).
+    InitialLinkSpeed(usize),
+    /// The largest integration step (a train's parameter, s).
+    Dt,
+    /// The torque applied to a link, by link index (a train's input).
+    LinkTorque(usize),
+    /// A link's speed, by link index (a train's output).
+    LinkSpeed(usize),
+    /// The applied torques' work since `t = 0` (a train's output, J).
+    Work,
+    /// The kinetic energy (a train's output, J).
+    KineticEnergy,
+}
+
+/// What a unit simulates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// A transmission's shift dynamics (`ShiftStepper`).
+    Transmission,
+    /// A train without shift elements under its curves and applied torques
+    /// (`SimulationStepper`).
+    Train,
 }
 
 /// FMI causality.
@@ -78,9 +107,12 @@ pub struct RealVariable {
 }
 
 /// The unit's variables. Reals have value references `0..reals.len()`;
-/// the two integers are [`INITIAL_GEAR`] and [`LOCKED_ELEMENTS`].
+/// a transmission's two integers are [`INITIAL_GEAR`] and
+/// [`LOCKED_ELEMENTS`] (a train has none).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Variables {
+    /// What the unit simulates.
+    pub kind: Kind,
     /// Every real, its value reference its index.
     pub reals: Vec<RealVariable>,
     /// The gear states, for `initial_gear` (1-based).
@@ -108,15 +140,20 @@ impl std::error::Error for NotAUnit {}
 
 impl Variables {
     /// The variables of a transmission (a spec with shift elements and gear
-    /// states).
+    /// states), or of a train without shift elements ([`Kind::Train`]).
     ///
     /// # Errors
-    /// A spec without a transmission, or two variables with one name (an
-    /// element named like a link).
+    /// Shift elements without a valid transmission, or two variables with
+    /// one name (an element named like a link).
     pub fn of(train: &Train) -> Result<Variables, NotAUnit> {
-        let t = train
-            .checked_transmission()
-            .map_err(|e| NotAUnit(format!("an FMU needs a transmission: {e}")))?;
+        if train.transmission().is_none() && train.elements().is_empty() {
+            return Variables::of_train(train);
+        }
+        let t = train.checked_transmission().map_err(|e| {
+            NotAUnit(format!(
+                "a spec with shift elements is a unit as a transmission: {e}"
+            ))
+        })?;
         let link = |l: egt_core::LinkId| train.link(l).name.clone();
         let (input, output) = (link(t.input), link(t.output));
         let elements: Vec<String> = train.elements().iter().map(|e| e.name.clone()).collect();
@@ -192,6 +229,16 @@ impl Variables {
             start: Some(0.0),
             description: format!("torque applied to `{input}` (held over a step)"),
         });
+        reals.push(RealVariable {
+            name: format!("{output}.load_torque"),
+            role: Role::LoadTorque,
+            causality: Causality::Input,
+            unit: Some("N.m"),
+            start: Some(0.0),
+            description: format!(
+                "torque against `{output}`'s motion whatever its direction, on top of the road load (held over a step)"
+            ),
+        });
         for (i, e) in elements.iter().enumerate() {
             let engaged = first.engaged.iter().any(|x| x.index() == i);
             reals.push(RealVariable {
@@ -256,24 +303,130 @@ impl Variables {
                 ),
             ]);
         }
-        let mut names: Vec<&str> = reals.iter().map(|r| r.name.as_str()).collect();
-        names.extend(["initial_gear", "locked_elements"]);
-        names.sort_unstable();
-        if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
-            return Err(NotAUnit(format!(
-                "two variables are named `{}` (an element named like a link?)",
-                w[0]
-            )));
-        }
+        distinct(&reals, &["initial_gear", "locked_elements"])?;
         Ok(Variables {
+            kind: Kind::Transmission,
             reals,
             gears: t.states.iter().map(|s| s.name.clone()).collect(),
             elements,
         })
     }
 
+    /// The variables of a train without shift elements: the initial speeds
+    /// of its independent links (the spec's `[analysis.simulate] initial`,
+    /// else its `speeds`, else its automatic coordinates at rest) and the
+    /// step as parameters, a torque on every moving link as inputs (on top
+    /// of the spec's curves), every moving link's speed, the work and the
+    /// kinetic energy as outputs.
+    fn of_train(train: &Train) -> Result<Variables, NotAUnit> {
+        let refuse = |e: egt_core::Error| NotAUnit(format!("the train cannot be a unit: {e}"));
+        // A unit that could not step is refused now, not at initialisation.
+        let curves =
+            egt_core::LinearCurves::new(train, &train.analysis().curves).map_err(refuse)?;
+        egt_core::ReducedDynamics::new(train, &curves).map_err(refuse)?;
+        let name = |l: LinkId| train.link(l).name.clone();
+        let sim = train.analysis().simulate.clone().unwrap_or_default();
+        let initial: Vec<(LinkId, f64)> = if !sim.initial.is_empty() {
+            sim.initial.clone()
+        } else if !train.analysis().speeds.is_empty() {
+            train.analysis().speeds.iter().map(|s| (s.0, s.1)).collect()
+        } else {
+            let links = train.automatic_coordinates().map_err(refuse)?;
+            links.into_iter().map(|l| (l, 0.0)).collect()
+        };
+        let dt = sim
+            .dt
+            .or(sim.t_end.map(|t| t / 1000.0))
+            .unwrap_or(DEFAULT_DT);
+        let mut reals: Vec<RealVariable> = initial
+            .iter()
+            .map(|&(l, w)| RealVariable {
+                name: format!("{}.initial_speed", name(l)),
+                role: Role::InitialLinkSpeed(l.index()),
+                causality: Causality::Parameter,
+                unit: Some("rad/s"),
+                start: Some(w),
+                description: format!("speed of `{}` at the start", name(l)),
+            })
+            .collect();
+        reals.push(RealVariable {
+            name: "dt".into(),
+            role: Role::Dt,
+            causality: Causality::Parameter,
+            unit: Some("s"),
+            start: Some(dt),
+            description: "the largest integration step (a communication step is cut into equal steps no longer)".into(),
+        });
+        let moving: Vec<LinkId> = (0..train.links().len())
+            .map(LinkId::from_index)
+            .filter(|&l| l != train.frame())
+            .collect();
+        for &l in &moving {
+            reals.push(RealVariable {
+                name: format!("{}.torque", name(l)),
+                role: Role::LinkTorque(l.index()),
+                causality: Causality::Input,
+                unit: Some("N.m"),
+                start: Some(0.0),
+                description: format!(
+                    "torque applied to `{}` on top of the spec's curves (held over a step)",
+                    name(l)
+                ),
+            });
+        }
+        let out = |name: String, role, unit, description: String| RealVariable {
+            name,
+            role,
+            causality: Causality::Output,
+            unit: Some(unit),
+            start: None,
+            description,
+        };
+        for &l in &moving {
+            reals.push(out(
+                format!("{}.speed", name(l)),
+                Role::LinkSpeed(l.index()),
+                "rad/s",
+                format!("speed of `{}`", name(l)),
+            ));
+        }
+        reals.push(out(
+            "work".into(),
+            Role::Work,
+            "J",
+            "work of the applied torques (the curves' and the inputs') since the start".into(),
+        ));
+        reals.push(out(
+            "kinetic_energy".into(),
+            Role::KineticEnergy,
+            "J",
+            "the train's kinetic energy".into(),
+        ));
+        distinct(&reals, &[])?;
+        Ok(Variables {
+            kind: Kind::Train,
+            reals,
+            gears: Vec::new(),
+            elements: Vec::new(),
+        })
+    }
+
     /// The value reference of the real with `role`.
     pub fn real(&self, role: Role) -> Option<u32> {
         (self.reals.iter().position(|r| r.role == role)).and_then(|i| u32::try_from(i).ok())
+    }
+}
+
+/// Refuses two variables with one name.
+fn distinct(reals: &[RealVariable], integers: &[&str]) -> Result<(), NotAUnit> {
+    let mut names: Vec<&str> = reals.iter().map(|r| r.name.as_str()).collect();
+    names.extend(integers);
+    names.sort_unstable();
+    match names.windows(2).find(|w| w[0] == w[1]) {
+        Some(w) => Err(NotAUnit(format!(
+            "two variables are named `{}` (an element named like a link?)",
+            w[0]
+        ))),
+        None => Ok(()),
     }
 }

@@ -70,6 +70,96 @@ def test_fmpy_validates_the_unit(units: Dict[str, Path], name: str) -> None:
         assert units_of[f"{e['name']}.energy"] == "J"
 
 
+def package(spec: Path, out: Path) -> Path:
+    """`egt fmu SPEC -o OUT`."""
+    subprocess.run([str(egt_binary()), "fmu", str(spec), "-o", str(out)], check=True, capture_output=True)
+    return out
+
+
+def test_a_train_without_elements_is_a_unit_that_simulates_as_egt_simulate(tmp_path: Path) -> None:
+    """The Fig. 5 drive (two motors, a load, curves on each): its links'
+    torques are the inputs, their speeds the outputs. FMPy's own loop at
+    communication steps of 10 ms gives `egt simulate`'s RK4 run (dt 1 ms) and
+    the energy balance E(t) - E(0) = W(t) holds over it."""
+    spec = EXAMPLES / "fig5_stability.toml"
+    unit = package(spec, tmp_path / "fig5.fmu")
+    assert validate_fmu(str(unit)) == []
+    md = read_model_description(str(unit))
+    var = {v.name: v for v in md.modelVariables}
+    assert var["2.torque"].causality == "input" and var["6.speed"].unit == "rad/s"
+    assert var["2.initial_speed"].start == "330" and "initial_gear" not in var
+    names = ["2.speed", "3.speed", "4.speed", "6.speed"]
+    r = fmpy.simulate_fmu(str(unit), stop_time=1.0, output_interval=1e-2, output=names + ["work", "kinetic_energy"])
+    out = subprocess.run([str(egt_binary()), "simulate", str(spec), "--format", "json"], check=True,
+                         capture_output=True, text=True)
+    ref = json.loads(out.stdout)
+    last = ref["samples"][-1]
+    for n in names:
+        w = last["speeds"][ref["links"].index(n.split(".")[0])]
+        assert r[-1][n] == pytest.approx(w, rel=1e-9)
+    assert r[-1]["work"] == pytest.approx(last["work"], rel=1e-9)
+    balance = r["kinetic_energy"] - r["kinetic_energy"][0] - r["work"]
+    assert max(abs(balance)) < 1e-6 * max(r["kinetic_energy"])
+
+
+MOTOR = """
+frame = "0"
+links = [{ name = "m", inertia = 0.5 }, { name = "o", inertia = 0.3 }]
+revolutes = [{ links = ["0", "m"], level = "a" }, { links = ["0", "o"], level = "b" }]
+gears = [{ links = ["m", "o"], ratio = -2.0 }]
+[analysis]
+curves = [{ link = "m", torque = 0.0, slope = -0.8, speed = 100.0 }]
+[analysis.simulate]
+initial = { m = 101.0 }
+"""
+
+
+def test_an_applied_torque_input_moves_a_motor_as_the_closed_form_says(tmp_path: Path) -> None:
+    """A motor (slope -0.8 through 100 rad/s) geared 2:1 to a flywheel, with
+    2 N m applied through the unit's input `m.torque`:
+    w(t) = w_ss + (w0 - w_ss) exp(-0.8 t / J), w_ss = 100 + 2 / 0.8,
+    J = 0.5 + 0.3 / 4."""
+    import numpy as np
+
+    spec = tmp_path / "motor.toml"
+    spec.write_text(MOTOR)
+    unit = package(spec, tmp_path / "motor.fmu")
+    assert validate_fmu(str(unit)) == []
+    table = np.array([(0.0, 2.0), (1.0, 2.0)], dtype=[("time", float), ("m.torque", float)])
+    r = fmpy.simulate_fmu(str(unit), start_values={"dt": 1e-4}, input=table, stop_time=1.0, output_interval=1e-2,
+                          output=["m.speed", "o.speed"])
+    j, w_ss = 0.5 + 0.3 / 4, 100 + 2 / 0.8
+    exact = w_ss + (101.0 - w_ss) * np.exp(-0.8 * r["time"] / j)
+    assert max(abs(r["m.speed"] - exact)) < 1e-9 * w_ss
+    assert max(abs(r["o.speed"] + 0.5 * r["m.speed"])) < 1e-12 * w_ss
+
+
+def test_a_load_torque_input_that_balances_the_input_holds_the_8hp_in_second(units: Dict[str, Path]) -> None:
+    """In second gear (A, B, E held), with no road load and no vehicle
+    inertia, the load i T_in at the output (i the gear's speed ratio: power
+    balance) holds every speed; the output delivers that load."""
+    import numpy as np
+
+    cols = ["input.torque", "output.load_torque"] + [f"{e}.capacity" for e in "ABCDE"]
+
+    def run(load: float) -> Any:
+        table = np.zeros(2, dtype=[("time", float)] + [(c, float) for c in cols])
+        table["time"] = [0.0, 1.0]
+        table["input.torque"] = 300.0
+        table["output.load_torque"] = load
+        table["A.capacity"] = table["B.capacity"] = table["E.capacity"] = 1e7
+        return fmpy.simulate_fmu(str(units["zf_8hp70"]), start_values={"initial_gear": 2}, input=table,
+                                 stop_time=0.1, output_interval=1e-2,
+                                 output=["input.speed", "output.speed", "output.torque"])
+
+    free = run(0.0)
+    ratio = free[0]["input.speed"] / free[0]["output.speed"]
+    assert free[-1]["input.speed"] > 101.0  # 300 N m and no load: it speeds up
+    held = run(300.0 * ratio)
+    assert max(abs(held["input.speed"] - 100.0)) < 1e-9 * 100.0
+    assert max(abs(held["output.torque"] - 300.0 * ratio)) < 1e-9 * 300.0 * ratio
+
+
 def shift_2_3() -> Dict[str, Any]:
     """The spec's `[[shift]] 2-3`."""
     spec = tomllib.loads(SPEC.read_text())

@@ -72,10 +72,12 @@ use crate::solve::reduced::{InertiaSplit, ReducedModel, num};
 mod integrate;
 mod request;
 mod results;
+mod stepping;
 mod torque;
 
 pub use request::{Method, SimulationOptions, SimulationOverrides, SimulationRequest};
 pub use results::{Divergence, Sample, Simulation};
+pub use stepping::SimulationStepper;
 pub use torque::{LinearCurves, TorqueFn, TorqueModel};
 
 /// Stop when a speed exceeds this [rad/s]: the solution has blown up.
@@ -111,6 +113,19 @@ pub struct ReducedDynamics<'a> {
     newton: usize,
 }
 
+/// [`ReducedDynamics`] without its borrows.
+#[derive(Debug, Clone)]
+struct Parts {
+    model: ReducedModel,
+    ratios: Vec<f64>,
+    split: InertiaSplit,
+    q1: DMatrix<f64>,
+    q0: DMatrix<f64>,
+    w: Vec<f64>,
+    tq: Vec<f64>,
+    jac: DMatrix<f64>,
+}
+
 impl std::fmt::Debug for ReducedDynamics<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("ReducedDynamics")
@@ -143,6 +158,39 @@ impl<'a> ReducedDynamics<'a> {
             jac: DMatrix::zeros(n, n),
             newton: 0,
         })
+    }
+
+    /// The prepared parts without the borrowed train and torque model, to
+    /// keep between pieces of a stepped simulation (`stepping.rs`).
+    fn into_parts(self) -> Parts {
+        Parts {
+            model: self.model,
+            ratios: self.ratios,
+            split: self.split,
+            q1: self.q1,
+            q0: self.q0,
+            w: self.w,
+            tq: self.tq,
+            jac: self.jac,
+        }
+    }
+
+    /// The dynamics again from [`ReducedDynamics::into_parts`], with a torque
+    /// model that may differ from the first one (the same train).
+    fn from_parts(train: &'a Train, torque: &'a dyn TorqueModel, p: Parts) -> Self {
+        ReducedDynamics {
+            train,
+            torque,
+            model: p.model,
+            ratios: p.ratios,
+            split: p.split,
+            q1: p.q1,
+            q0: p.q0,
+            w: p.w,
+            tq: p.tq,
+            jac: p.jac,
+            newton: 0,
+        }
     }
 
     /// The reduced model (without curves) for well-conditioned driving links.

@@ -420,6 +420,7 @@ impl ShiftSim {
             capacity: capacity.clone(),
             n,
             losses: self.losses.then(|| MeshLosses::new(train)).transpose()?,
+            load: 0.0,
         };
         // Start: the old gear's steady motion at the input speed.
         let start = mode_basis(train, &from.engaged)?;

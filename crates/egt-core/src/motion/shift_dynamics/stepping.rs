@@ -34,6 +34,9 @@ use crate::model::train::{ElementId, Train};
 pub struct StepInputs {
     /// Torque on the input link (N m).
     pub input_torque: f64,
+    /// Torque the surroundings apply against the output's motion, whatever
+    /// its direction (N m), on top of the road load; constant over the piece.
+    pub load_torque: f64,
     /// Each element's capacity at the piece's start (>= 0).
     pub capacity: Vec<f64>,
     /// Each element's capacity rate over the piece (1/s times N m); 0 holds it.
@@ -84,15 +87,15 @@ const MAX_AT_ONCE: usize = 8;
 
 impl ShiftStepper {
     /// The model at `t = 0` in gear `sim.from`'s steady motion at
-    /// `sim.input_speed`, with every element's capacity `capacity` (in the
-    /// order of the spec's elements) and the input torque `sim.input_torque`.
-    /// `sim`'s `to`, ramps, `t_end` and output shaft are not used (a
-    /// compliant output shaft is refused).
+    /// `sim.input_speed`, with `start`'s input torque, load torque and
+    /// capacities (in the order of the spec's elements; its rates are not
+    /// used). `sim`'s input torque, `to`, ramps, `t_end` and output shaft are
+    /// not used (a compliant output shaft is refused).
     ///
     /// # Errors
     /// A named invalid field (a capacity not finite or negative), an unknown
     /// gear, missing inertias, a tie-up.
-    pub fn new(train: &Train, sim: &ShiftSim, capacity: &[f64]) -> Result<Self> {
+    pub fn new(train: &Train, sim: &ShiftSim, start: &StepInputs) -> Result<Self> {
         sim.validate()?;
         if sim.output_shaft.is_some() {
             return Err(Error::invalid(
@@ -139,8 +142,8 @@ impl ShiftStepper {
             .iter()
             .map(|e| is_one_way(e.kind))
             .collect();
-        let start = mode_basis(train, &from.engaged)?;
-        let col = start.basis.column(0);
+        let basis = mode_basis(train, &from.engaged)?;
+        let col = basis.basis.column(0);
         let scale = sim.input_speed / col[input];
         let mut y: Vec<f64> = col.iter().map(|c| c * scale).collect();
         let k = elements.len();
@@ -170,9 +173,8 @@ impl ShiftStepper {
             },
         };
         let inputs = StepInputs {
-            input_torque: sim.input_torque.at(sim.input_speed),
-            capacity: capacity.to_vec(),
             capacity_rate: vec![0.0; k],
+            ..start.clone()
         };
         let ys = stepper.state.y.clone();
         stepper.state.phases = (0..k)
@@ -290,6 +292,7 @@ impl ShiftStepper {
             n: self.m.nrows(),
             // The stepper runs the ideal model: mesh losses are `run`'s only.
             losses: None,
+            load: inputs.load_torque,
         }
     }
 
@@ -301,11 +304,13 @@ impl ShiftStepper {
                 format!("{k} capacities and rates expected"),
             ));
         }
-        if !inputs.input_torque.is_finite() {
-            return Err(Error::invalid(
-                "input_torque",
-                format!("{} is not finite", inputs.input_torque),
-            ));
+        for (what, v) in [
+            ("input_torque", inputs.input_torque),
+            ("load_torque", inputs.load_torque),
+        ] {
+            if !v.is_finite() {
+                return Err(Error::invalid(what, format!("{v} is not finite")));
+            }
         }
         for (i, (&c, &r)) in inputs
             .capacity
@@ -604,15 +609,27 @@ mod tests {
         )
     }
 
+    /// The inputs at `t = 0`: 300 N m in, no load, capacities `c0`.
+    fn start(c0: Vec<f64>) -> StepInputs {
+        let k = c0.len();
+        StepInputs {
+            input_torque: 300.0,
+            load_torque: 0.0,
+            capacity: c0,
+            capacity_rate: vec![0.0; k],
+        }
+    }
+
     fn stepped(h: f64) -> ShiftStepper {
         let (train, sim) = (zf(), zf_2_3());
         let (c0, _) = ramps_at(&sim, 0.0);
-        let mut s = ShiftStepper::new(&train, &sim, &c0).unwrap();
+        let mut s = ShiftStepper::new(&train, &sim, &start(c0)).unwrap();
         let pieces = (sim.t_end / h).round() as usize;
         for j in 0..pieces {
             let (capacity, capacity_rate) = ramps_at(&sim, j as f64 * h);
             let inputs = StepInputs {
                 input_torque: 300.0,
+                load_torque: 0.0,
                 capacity,
                 capacity_rate,
             };
@@ -655,11 +672,12 @@ mod tests {
         let run = sim.run(&train).unwrap();
         let h = 1e-2;
         let (c0, _) = ramps_at(&sim, 0.0);
-        let mut s = ShiftStepper::new(&train, &sim, &c0).unwrap();
+        let mut s = ShiftStepper::new(&train, &sim, &start(c0)).unwrap();
         for j in 0..100 {
             let (capacity, _) = ramps_at(&sim, f64::from(j) * h);
             let inputs = StepInputs {
                 input_torque: 300.0,
+                load_torque: 0.0,
                 capacity_rate: vec![0.0; 5],
                 capacity,
             };
@@ -681,16 +699,59 @@ mod tests {
     }
 
     #[test]
+    fn a_load_torque_that_balances_the_input_holds_the_speeds_and_is_the_output_torque() {
+        // In second (A, B, E held) with no road load, the load i T_in at the
+        // output (i the gear's speed ratio, from power balance) keeps every
+        // speed where it is; the output delivers exactly that load.
+        let (train, mut sim) = (zf(), zf_2_3());
+        sim.road_load = [0.0; 3];
+        let held = vec![1e7, 1e7, 0.0, 0.0, 1e7];
+        let free = ShiftStepper::new(&train, &sim, &start(held.clone())).unwrap();
+        let ratio = free.input_speed() / free.output_speed();
+        let load = 300.0 * ratio;
+        let inputs = StepInputs {
+            load_torque: load,
+            ..start(held)
+        };
+        let mut s = ShiftStepper::new(&train, &sim, &inputs).unwrap();
+        let w0 = s.speeds().to_vec();
+        for _ in 0..10 {
+            s.advance(&inputs, 1e-2).unwrap();
+        }
+        for (w, v) in s.speeds().iter().zip(&w0) {
+            assert!((w - v).abs() < 1e-9 * w0[s.input], "{w} vs {v}");
+        }
+        assert!((s.output_torque() - load).abs() < 1e-9 * load);
+        assert!(s.locked(0) && s.locked(1) && s.locked(4));
+        // Twice the load decelerates the train at (i T_in - 2 i T_in) / J_out.
+        let braked = StepInputs {
+            load_torque: 2.0 * load,
+            ..inputs.clone()
+        };
+        s.advance(&braked, 1e-2).unwrap();
+        assert!(s.output_speed() < w0[s.output]);
+        let e = s.advance(
+            &StepInputs {
+                load_torque: f64::NAN,
+                ..inputs
+            },
+            1e-3,
+        );
+        assert!(e.unwrap_err().to_string().contains("load_torque"));
+    }
+
+    #[test]
     fn a_bad_capacity_is_refused_by_name_and_leaves_the_state() {
         let (train, sim) = (zf(), zf_2_3());
         let (c0, r0) = ramps_at(&sim, 0.0);
-        let mut s = ShiftStepper::new(&train, &sim, &c0).unwrap();
+        let mut s = ShiftStepper::new(&train, &sim, &start(c0.clone())).unwrap();
         let (w, t) = (s.input_speed(), s.time());
         for bad in [f64::NAN, -1.0] {
             let mut capacity = c0.clone();
             capacity[2] = bad;
             let inputs = StepInputs {
                 input_torque: 300.0,
+                load_torque: 0.0,
                 capacity,
                 capacity_rate: r0.clone(),
             };

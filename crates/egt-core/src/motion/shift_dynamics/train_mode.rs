@@ -61,6 +61,10 @@ pub(super) struct Setup<'a> {
     pub(super) n: usize,
     /// The meshes' efficiencies when the shift has mesh losses.
     pub(super) losses: Option<MeshLosses>,
+    /// A torque the surroundings apply against the output's motion whatever
+    /// its direction (N m; a co-simulation unit's load input), added to the
+    /// road load; 0 in `run`.
+    pub(super) load: f64,
 }
 
 impl Setup<'_> {
@@ -169,10 +173,11 @@ impl Setup<'_> {
         }
     }
 
-    /// The road load at output speed `w`, resisting motion.
+    /// The road load at output speed `w`, resisting motion, and the load
+    /// torque.
     pub(super) fn road(&self, w: f64) -> f64 {
         let [c0, c1, c2] = self.sim.road_load;
-        c0 * w.signum() * f64::from(u8::from(w != 0.0)) + c1 * w + c2 * w * w.abs()
+        c0 * w.signum() * f64::from(u8::from(w != 0.0)) + c1 * w + c2 * w * w.abs() + self.load
     }
 
     pub(super) fn slip(&self, i: usize, v: &[f64]) -> f64 {

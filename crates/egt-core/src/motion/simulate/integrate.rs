@@ -185,7 +185,7 @@ impl ReducedDynamics<'_> {
     }
 
     /// One classical RK4 step; returns the new state and the work increment.
-    fn rk4(&mut self, t: f64, x: &DVector<f64>, h: f64) -> Result<(DVector<f64>, f64)> {
+    pub(super) fn rk4(&mut self, t: f64, x: &DVector<f64>, h: f64) -> Result<(DVector<f64>, f64)> {
         let (k1, p1) = self.xdot(t, x);
         let mut x2 = x + &k1 * (h / 2.0);
         self.project(t + h / 2.0, &mut x2)?;
@@ -205,7 +205,7 @@ impl ReducedDynamics<'_> {
 
     /// One step of Alexander's 2-stage SDIRK (L-stable, stiffly accurate),
     /// halving the step when Newton fails.
-    fn sdirk(
+    pub(super) fn sdirk(
         &mut self,
         t: f64,
         x: &DVector<f64>,
