@@ -67,3 +67,46 @@ fn zf_8hp_2_3_upshift(bencher: divan::Bencher) {
             .unwrap_or(0)
     });
 }
+
+/// The 8HP70's 2-3 upshift stepped as an FMU steps it: 1000 pieces of 1 ms
+/// (`ShiftStepper::advance`), the capacities of docs/fmu.md's ramps (`A`
+/// 5000 -> 0 over 0.05..0.15 s, `C` 0 -> 9000 over 0.05..0.3 s) sent as a
+/// value and a rate per piece. The time per piece is this over 1000.
+#[divan::bench(sample_count = 20)]
+fn zf_8hp_2_3_stepped_1000_pieces_of_1ms(bencher: divan::Bencher) {
+    use egt_core::shift_dynamics::{ShiftStepper, StepInputs};
+    let (train, sim) = zf_2_3();
+    let ramp = |t: f64, t0: f64, t1: f64, c0: f64, c1: f64| {
+        let cap = Capacity::Ramp {
+            t0,
+            t1,
+            from: c0,
+            to: c1,
+        };
+        let rate = if t >= t0 && t < t1 {
+            (c1 - c0) / (t1 - t0)
+        } else {
+            0.0
+        };
+        (cap.at(t), rate)
+    };
+    let inputs = |t: f64| {
+        let (a, ra) = ramp(t, 0.05, 0.15, 5000.0, 0.0);
+        let (c, rc) = ramp(t, 0.05, 0.3, 0.0, 9000.0);
+        StepInputs {
+            input_torque: 300.0,
+            load_torque: 0.0,
+            capacity: vec![a, 1e7, c, 0.0, 1e7],
+            capacity_rate: vec![ra, 0.0, rc, 0.0, 0.0],
+        }
+    };
+    let start = ShiftStepper::new(&train, &sim, &inputs(0.0)).expect("second gear holds");
+    let all: Vec<StepInputs> = (0..1000).map(|k| inputs(f64::from(k) * 1e-3)).collect();
+    bencher.bench_local(|| {
+        let mut s = start.clone();
+        for i in &all {
+            s.advance(i, 1e-3).expect("the shift steps");
+        }
+        black_box(s.lock_time(2))
+    });
+}

@@ -58,6 +58,24 @@ pub struct ShiftStepper {
     input: usize,
     output: usize,
     state: StepState,
+    cached: Cached,
+}
+
+/// The mode the last piece ended in, for the next piece to start from: its
+/// basis and factors depend on the phases alone, and re-making them was most
+/// of a piece's time. A clone starts without it.
+struct Cached(Option<Mode>);
+
+impl Clone for Cached {
+    fn clone(&self) -> Self {
+        Cached(None)
+    }
+}
+
+impl std::fmt::Debug for Cached {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(if self.0.is_some() { "Cached(mode)" } else { "Cached(none)" })
+    }
 }
 
 /// The state kept between pieces.
@@ -171,6 +189,7 @@ impl ShiftStepper {
                 lock_time: vec![None; k],
                 observed: Vec::new(),
             },
+            cached: Cached(None),
         };
         let inputs = StepInputs {
             capacity_rate: vec![0.0; k],
@@ -410,6 +429,7 @@ impl ShiftStepper {
     }
 
     fn piece(&mut self, inputs: &StepInputs, h_piece: f64) -> Result<()> {
+        let cached = self.cached.0.take();
         let sim = &self.sim;
         let t_start = self.state.t;
         let t_end = t_start + h_piece;
@@ -423,7 +443,10 @@ impl ShiftStepper {
         // hold releases now, not never: its event function starts negative).
         // Only a violated element (an event function already below zero)
         // can change the mode here, so the settling is skipped otherwise.
-        let mut mode: Mode = setup.mode(&st.phases)?;
+        let mut mode: Mode = match cached {
+            Some(m) if m.phases == st.phases => m,
+            _ => setup.mode(&st.phases)?,
+        };
         let mut y = std::mem::take(&mut st.y);
         let d0 = setup.rhs(&mode, t_start, &y);
         if setup
@@ -584,6 +607,7 @@ impl ShiftStepper {
         st.phases = mode.phases.clone();
         st.y = y;
         self.state = st;
+        self.cached.0 = Some(mode);
         Ok(())
     }
 }
