@@ -1,11 +1,12 @@
 //! # egt-fmu
 //!
-//! A transmission of egt as an FMI 2.0 Co-Simulation unit (a `.fmu`): the
-//! shared library an importer loads (this crate built as a `cdylib`), the
-//! model description generated from the spec, and the packager `egt fmu`
-//! calls. The physics is egt-core's shift model, advanced step by step
-//! ([`egt_core::shift_dynamics::ShiftStepper`]); this crate is the boundary
-//! only. docs/fmu.md says what a unit exposes and its limits.
+//! A transmission of egt, or a train without shift elements, as an FMI 2.0
+//! Co-Simulation unit (a `.fmu`): the shared library an importer loads (this
+//! crate built as a `cdylib`), the model description generated from the
+//! spec, and the packager `egt fmu` calls. The physics is egt-core's shift
+//! model or its forward dynamics, advanced step by step
+//! ([`egt_core::shift_dynamics::ShiftStepper`],
+//! [`egt_core::SimulationStepper`]); this crate is the boundary only. docs/fmu.md says what a unit exposes and its limits.
 //!
 //! - `variables`: the unit's variables from a spec (names, value
 //!   references, causalities, units, start values).

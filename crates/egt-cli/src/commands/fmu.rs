@@ -1,5 +1,5 @@
-//! `egt fmu SPEC -o train.fmu`: a transmission as an FMI 2.0 Co-Simulation
-//! unit (egt-fmu's packager). The unit carries egt-fmu's shared library,
+//! `egt fmu SPEC -o train.fmu`: a transmission, or a train without shift
+//! elements, as an FMI 2.0 Co-Simulation unit (egt-fmu's packager). The unit carries egt-fmu's shared library,
 //! found by `--library`, else `EGT_FMU_LIBRARY`, else next to the running
 //! `egt` (`target/<profile>/`, where `cargo build --workspace` puts both) or
 //! in its `deps/` (where building egt alone leaves egt-fmu's cdylib).
@@ -16,7 +16,8 @@ use crate::input;
 /// Arguments of `egt fmu`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
-    /// The spec file (TOML or JSON) of a transmission, or `-` for standard input.
+    /// The spec file (TOML or JSON) of a transmission or of a train without
+    /// shift elements (with inertias), or `-` for standard input.
     #[arg(value_name = "SPEC")]
     pub spec: PathBuf,
     /// Spec format; by default from the extension (`.json` is JSON), or sniffed on stdin.
