@@ -74,7 +74,11 @@ impl Clone for Cached {
 
 impl std::fmt::Debug for Cached {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(if self.0.is_some() { "Cached(mode)" } else { "Cached(none)" })
+        f.write_str(if self.0.is_some() {
+            "Cached(mode)"
+        } else {
+            "Cached(none)"
+        })
     }
 }
 
@@ -287,6 +291,16 @@ impl ShiftStepper {
             .map(|(&c, &r)| {
                 if r == 0.0 {
                     Capacity::Constant(c)
+                } else if c + r * h < 0.0 {
+                    // A falling capacity stops at zero inside the piece (an
+                    // importer extrapolating past its table's end): no
+                    // negative capacity, and so no negative dissipation.
+                    Capacity::Ramp {
+                        t0,
+                        t1: t0 + c / -r,
+                        from: c,
+                        to: 0.0,
+                    }
                 } else {
                     Capacity::Ramp {
                         t0,
@@ -762,6 +776,28 @@ mod tests {
             1e-3,
         );
         assert!(e.unwrap_err().to_string().contains("load_torque"));
+    }
+
+    #[test]
+    fn a_capacity_falling_past_zero_inside_a_piece_stops_at_zero() {
+        // A's 5000 N m falls at 1e7 N m/s: zero after 0.5 ms of a 1 ms
+        // piece, then held at zero (not -5000 at the piece's end): A slips
+        // with no torque, and no element's energy goes negative.
+        let (train, sim) = (zf(), zf_2_3());
+        let (c0, _) = ramps_at(&sim, 0.0);
+        let mut s = ShiftStepper::new(&train, &sim, &start(c0.clone())).unwrap();
+        let mut rate = vec![0.0; 5];
+        rate[0] = -1e7;
+        let inputs = StepInputs {
+            capacity_rate: rate,
+            ..start(c0)
+        };
+        s.advance(&inputs, 1e-3).unwrap();
+        assert!(!s.locked(0));
+        assert!(s.element_torque(0).abs() < 1e-9, "{}", s.element_torque(0));
+        for i in 0..5 {
+            assert!(s.dissipated(i) >= 0.0, "{i}: {}", s.dissipated(i));
+        }
     }
 
     #[test]
