@@ -102,18 +102,12 @@ pub const MAX_STEPS: usize = 50_000_000;
 pub struct ReducedDynamics<'a> {
     train: &'a Train,
     torque: &'a dyn TorqueModel,
-    model: ReducedModel,
-    ratios: Vec<f64>,
-    split: InertiaSplit,
-    q1: DMatrix<f64>,
-    q0: DMatrix<f64>,
-    w: Vec<f64>,
-    tq: Vec<f64>,
-    jac: DMatrix<f64>,
+    p: Parts,
     newton: usize,
 }
 
-/// [`ReducedDynamics`] without its borrows.
+/// What [`ReducedDynamics`] prepares once and owns: the model, the inertia
+/// split and buffers sized once (kept between pieces by `stepping.rs`).
 #[derive(Debug, Clone)]
 struct Parts {
     model: ReducedModel,
@@ -129,8 +123,8 @@ struct Parts {
 impl std::fmt::Debug for ReducedDynamics<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("ReducedDynamics")
-            .field("dof", &self.model.dof())
-            .field("inertial_directions", &self.split.r)
+            .field("dof", &self.p.model.dof())
+            .field("inertial_directions", &self.p.split.r)
             .finish_non_exhaustive()
     }
 }
@@ -145,9 +139,7 @@ impl<'a> ReducedDynamics<'a> {
         let model = train.reduced_model(&coordinates, &[])?;
         let split = InertiaSplit::new(&model.basis_mass)?;
         let n = train.links().len();
-        Ok(ReducedDynamics {
-            train,
-            torque,
+        let p = Parts {
             ratios: train.ratios()?,
             q1: split.q1(),
             q0: split.q0(),
@@ -156,23 +148,14 @@ impl<'a> ReducedDynamics<'a> {
             w: vec![0.0; n],
             tq: vec![0.0; n],
             jac: DMatrix::zeros(n, n),
-            newton: 0,
-        })
+        };
+        Ok(ReducedDynamics::from_parts(train, torque, p))
     }
 
     /// The prepared parts without the borrowed train and torque model, to
     /// keep between pieces of a stepped simulation (`stepping.rs`).
     fn into_parts(self) -> Parts {
-        Parts {
-            model: self.model,
-            ratios: self.ratios,
-            split: self.split,
-            q1: self.q1,
-            q0: self.q0,
-            w: self.w,
-            tq: self.tq,
-            jac: self.jac,
-        }
+        self.p
     }
 
     /// The dynamics again from [`ReducedDynamics::into_parts`], with a torque
@@ -181,31 +164,24 @@ impl<'a> ReducedDynamics<'a> {
         ReducedDynamics {
             train,
             torque,
-            model: p.model,
-            ratios: p.ratios,
-            split: p.split,
-            q1: p.q1,
-            q0: p.q0,
-            w: p.w,
-            tq: p.tq,
-            jac: p.jac,
+            p,
             newton: 0,
         }
     }
 
     /// The reduced model (without curves) for well-conditioned driving links.
     pub fn model(&self) -> &ReducedModel {
-        &self.model
+        &self.p.model
     }
 
     /// Number of massless directions (algebraic equations).
     pub fn massless(&self) -> usize {
-        self.model.dof() - self.split.r
+        self.p.model.dof() - self.p.split.r
     }
 
     fn links_of(&mut self, x: &DVector<f64>) {
-        let v = &self.model.basis;
-        for (l, w) in self.w.iter_mut().enumerate() {
+        let v = &self.p.model.basis;
+        for (l, w) in self.p.w.iter_mut().enumerate() {
             *w = (0..x.len()).map(|k| v[(l, k)] * x[k]).sum();
         }
     }
@@ -213,34 +189,35 @@ impl<'a> ReducedDynamics<'a> {
     /// g(x) = V^T T(t, V x), and the power w . T.
     fn g(&mut self, t: f64, x: &DVector<f64>) -> (DVector<f64>, f64) {
         self.links_of(x);
-        self.torque.torques(t, &self.w, &mut self.tq);
-        let v = &self.model.basis;
+        self.torque.torques(t, &self.p.w, &mut self.p.tq);
+        let v = &self.p.model.basis;
         let g = DVector::from_iterator(
             x.len(),
-            (0..x.len()).map(|k| (0..self.w.len()).map(|l| v[(l, k)] * self.tq[l]).sum()),
+            (0..x.len()).map(|k| (0..self.p.w.len()).map(|l| v[(l, k)] * self.p.tq[l]).sum()),
         );
-        let p = self.w.iter().zip(&self.tq).map(|(a, b)| a * b).sum();
+        let p = self.p.w.iter().zip(&self.p.tq).map(|(a, b)| a * b).sum();
         (g, p)
     }
 
     /// J = V^T (dT/dw) V at x.
     fn jr(&mut self, t: f64, x: &DVector<f64>) -> DMatrix<f64> {
         self.links_of(x);
-        self.torque.jacobian(t, &self.w, &mut self.jac);
-        let v = &self.model.basis;
-        v.transpose() * &self.jac * v
+        self.torque.jacobian(t, &self.p.w, &mut self.p.jac);
+        let v = &self.p.model.basis;
+        v.transpose() * &self.p.jac * v
     }
 
     /// Solve the massless directions: Q0^T g(Q1 y + Q0 z) = 0 for z (Newton).
     fn project(&mut self, t: f64, x: &mut DVector<f64>) -> Result<()> {
-        if self.split.r == self.model.dof() {
+        if self.p.split.r == self.p.model.dof() {
             return Ok(());
         }
-        let q0 = self.q0.clone();
+        let q0 = self.p.q0.clone();
         for _ in 0..NEWTON_MAX {
             let (g, _) = self.g(t, x);
             let res = q0.tr_mul(&g);
             let scale = self
+                .p
                 .tq
                 .iter()
                 .fold(0.0_f64, |m, v| m.max(v.abs()))
@@ -267,9 +244,9 @@ impl<'a> ReducedDynamics<'a> {
     /// x' for a consistent state x (explicit form): M^+ g along the inertial directions.
     fn xdot(&mut self, t: f64, x: &DVector<f64>) -> (DVector<f64>, f64) {
         let (g, p) = self.g(t, x);
-        let y = self.q1.tr_mul(&g);
-        let y = DVector::from_iterator(y.len(), y.iter().zip(&self.split.mu).map(|(a, m)| a / m));
-        (&self.q1 * y, p)
+        let y = self.p.q1.tr_mul(&g);
+        let y = DVector::from_iterator(y.len(), y.iter().zip(&self.p.split.mu).map(|(a, m)| a / m));
+        (&self.p.q1 * y, p)
     }
 
     /// Every link's acceleration at time `t` and link speeds `speed` (which
@@ -279,19 +256,23 @@ impl<'a> ReducedDynamics<'a> {
     /// # Errors
     /// Singular massless block.
     pub fn acceleration(&mut self, t: f64, speed: &[f64]) -> Result<Vec<f64>> {
-        let x = self.model.basis.tr_mul(&DVector::from_column_slice(speed));
+        let x = self
+            .p
+            .model
+            .basis
+            .tr_mul(&DVector::from_column_slice(speed));
         let (mut xd, _) = self.xdot(t, &x);
-        if self.split.r < self.model.dof() {
+        if self.p.split.r < self.p.model.dof() {
             let j = self.jr(t, &x);
-            let a = self.q0.tr_mul(&j) * &self.q0;
-            let b = -(self.q0.tr_mul(&j) * &xd);
+            let a = self.p.q0.tr_mul(&j) * &self.p.q0;
+            let b = -(self.p.q0.tr_mul(&j) * &xd);
             let zd = a.lu().solve(&b).ok_or_else(|| AnalysisError::Singular {
                 what: "the massless directions of the reduced model".into(),
                 detail: "their torques do not depend on their speeds".into(),
             })?;
-            xd += &self.q0 * zd;
+            xd += &self.p.q0 * zd;
         }
-        Ok((&self.model.basis * xd).iter().copied().collect())
+        Ok((&self.p.model.basis * xd).iter().copied().collect())
     }
 
     /// The constraint torques at an instant: inverse dynamics (eq. 6-11) with
@@ -303,8 +284,9 @@ impl<'a> ReducedDynamics<'a> {
     /// As [`ReducedDynamics::acceleration`] and [`Train::inverse_dynamics`].
     pub fn reactions(&mut self, t: f64, speed: &[f64]) -> Result<InverseDynamics> {
         let acc = self.acceleration(t, speed)?;
-        self.torque.torques(t, speed, &mut self.tq);
+        self.torque.torques(t, speed, &mut self.p.tq);
         let torques: Vec<(LinkId, f64)> = self
+            .p
             .tq
             .iter()
             .enumerate()
@@ -314,12 +296,13 @@ impl<'a> ReducedDynamics<'a> {
         let req = DynamicsRequest {
             torques,
             accelerations: self
+                .p
                 .model
                 .coordinates
                 .iter()
                 .map(|&l| (l, acc[l.index()]))
                 .collect(),
-            driving: self.model.coordinates.clone(),
+            driving: self.p.model.coordinates.clone(),
             extras: vec![],
         };
         let mass = self.train.constant_mass_matrix("the simulation")?;
@@ -334,7 +317,7 @@ impl<'a> ReducedDynamics<'a> {
         x: &DVector<f64>,
     ) -> Option<crate::analysis::stability::Stability> {
         let j = self.jr(t, x);
-        let mut lin = self.model.clone();
+        let mut lin = self.p.model.clone();
         lin.basis_slope = (&j + j.transpose()) * 0.5;
         lin.stability().ok()
     }

@@ -50,18 +50,18 @@ impl ReducedDynamics<'_> {
             every
         };
         let w0 = self.train.speeds_from(initial)?;
-        let mut x = self.model.basis.tr_mul(&DVector::from_vec(w0));
-        let mut warnings = self.model.warnings.clone();
-        if self.split.nearly_massless {
+        let mut x = self.p.model.basis.tr_mul(&DVector::from_vec(w0));
+        let mut warnings = self.p.model.warnings.clone();
+        if self.p.split.nearly_massless {
             warnings.push("a direction is nearly massless: the model is stiff".into());
         }
-        if self.split.r < self.model.dof() {
+        if self.p.split.r < self.p.model.dof() {
             let before = x.clone();
             self.project(0.0, &mut x)?;
             if (&x - &before).amax() > 1e-12 * before.amax().max(1.0) {
                 warnings.push(format!(
                     "{} massless direction(s): the initial speeds were moved onto their torque balance",
-                    self.model.dof() - self.split.r
+                    self.p.model.dof() - self.p.split.r
                 ));
             }
         }
@@ -173,10 +173,10 @@ impl ReducedDynamics<'_> {
         power: f64,
         mass: &MassMatrix,
     ) -> Sample {
-        let speed: Vec<f64> = (&self.model.basis * x).iter().copied().collect();
+        let speed: Vec<f64> = (&self.p.model.basis * x).iter().copied().collect();
         Sample {
             t,
-            drift: willis_residual(self.train, &self.ratios, &speed),
+            drift: willis_residual(self.train, &self.p.ratios, &speed),
             energy: self.train.kinetic_energy(mass, &speed),
             speed,
             work,
@@ -227,8 +227,8 @@ impl ReducedDynamics<'_> {
 
     fn sdirk_once(&mut self, t: f64, x: &DVector<f64>, h: f64) -> Result<(DVector<f64>, f64)> {
         let gamma = 1.0 - std::f64::consts::FRAC_1_SQRT_2;
-        let f = self.model.dof();
-        let m = self.model.basis_mass.clone();
+        let f = self.p.model.dof();
+        let m = self.p.model.basis_mass.clone();
         let j = self.jr(t, x);
         let mut lu = Lu::new(f);
         let fill = |lu: &mut Lu, j: &DMatrix<f64>| -> Result<()> {

@@ -72,9 +72,9 @@ impl SimulationStepper {
         };
         let mut rd = ReducedDynamics::new(train, &applied)?;
         let w0 = train.speeds_from(initial)?;
-        let mut x = rd.model.basis.tr_mul(&DVector::from_vec(w0));
+        let mut x = rd.p.model.basis.tr_mul(&DVector::from_vec(w0));
         rd.project(0.0, &mut x)?;
-        let speeds = (&rd.model.basis * &x).iter().copied().collect();
+        let speeds = (&rd.p.model.basis * &x).iter().copied().collect();
         let parts = rd.into_parts();
         let mass = train.constant_mass_matrix("the stepped simulation")?;
         Ok(SimulationStepper {
@@ -196,7 +196,7 @@ impl SimulationStepper {
             work += dw;
             t += sub;
         }
-        let speeds: Vec<f64> = (&rd.model.basis * &x).iter().copied().collect();
+        let speeds: Vec<f64> = (&rd.p.model.basis * &x).iter().copied().collect();
         self.parts = Some(rd.into_parts());
         done?;
         self.x = x;
