@@ -1,7 +1,7 @@
-"""Dask scale-out (issue 16): the design search's partitions and a batch's
-row chunks as tasks on a 2-worker LocalCluster give exactly the
-single-process results, also when a worker dies mid-run; plans and trains
-pickle to the workers through their specs."""
+"""Dask scale-out (issues 16, 46): the design search's partitions, a batch's
+row chunks and the atlas's parts as tasks on a 2-worker LocalCluster give
+exactly the single-process results, also when a worker dies mid-run; plans
+and trains pickle to the workers through their specs."""
 
 from __future__ import annotations
 
@@ -63,3 +63,18 @@ def test_batch_monte_carlo_over_tooth_tolerances_runs_distributed(fig3: egt.Trai
     # The plan pickles through its train's spec and the batch arguments.
     again = pickle.loads(pickle.dumps(plan))
     np.testing.assert_array_equal(again.run(params[0][:10]).values, local.values[:10])
+
+
+@pytest.mark.parametrize("links, level", [(7, "rotation"), (8, "displacement")])
+def test_the_atlas_in_parts_on_a_cluster_is_the_single_process_atlas(client: object, links: int,
+                                                                    level: str) -> None:
+    """Issue 46: 7 parts (not a divisor of anything in particular) over two
+    workers give every member once (8 links displacement: the published
+    6 360)."""
+    one = egt.atlas(links, level=level)
+    parts = egt.atlas_distributed(links, level=level, parts=7, client=client)
+    assert sorted(m["code"] for m in parts) == sorted(m["code"] for m in one)
+    assert len({m["code"] for m in parts}) == len(one) == {(7, "rotation"): 152, (8, "displacement"): 6360}[
+        (links, level)]
+    with pytest.raises(egt.SpecError, match="level"):
+        egt.atlas_distributed(6, level="other", parts=2, client=client)

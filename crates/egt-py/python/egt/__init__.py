@@ -20,7 +20,7 @@ Pythonic surface. Every error is an :class:`EgtError`.
 from __future__ import annotations
 
 from ._args import ArgumentError, ArgumentKeyError, ArgumentTypeError
-from ._atlas import atlas
+from ._atlas import atlas, atlas_distributed
 from ._batch import BatchDynamics, BatchKinematics, BatchPlan, BatchResult, RowError
 from ._egt import (
     AnalysisError,
@@ -81,6 +81,7 @@ from ._vibration import Crossing, DampedMode, MeshCheck, Modes, NaturalMode, Sta
 __all__ = [
     "__version__",
     "atlas",
+    "atlas_distributed",
     "synth",
     "synth_distributed",
     "SynthResult",
