@@ -569,6 +569,8 @@ impl ShiftSim {
         let mut attempts = 0usize;
         // Events in a row at one instant (each changes the mode; a few at most).
         let mut at_once = 0usize;
+        // The event functions at the last accepted step's end, for the next.
+        let mut g_end: Option<Vec<f64>> = None;
         while t_now < self.t_end {
             attempts += 1;
             if attempts > self.max_steps {
@@ -663,7 +665,13 @@ impl ShiftSim {
             } else {
                 t_now + h
             };
-            let g0 = setup.events(&mode, t_now, &y, &f0);
+            // The event functions at the step's start are the last accepted
+            // step's end (same mode, state and derivative) unless an event
+            // or a new mode came between.
+            let g0 = match g_end.take() {
+                Some(g) => g,
+                None => setup.events(&mode, t_now, &y, &f0),
+            };
             let g1 = setup.events(&mode, t1, &y1, &f1);
             // The earliest crossing, located on the dense output. An element
             // that entered its phase at the crossing (g = 0) and heads the
@@ -735,6 +743,7 @@ impl ShiftSim {
             }
             let q1 = record(&mut out, &mut extremes, t1, &y1, &f1, &mode, lock_loss);
             extremes.within(dense, t_now, t1, &q0, &q1, &slip_rates(&setup, &f0, &f1));
+            g_end = Some(g1);
             t_now = t1;
             y = y1;
             f0 = f1;

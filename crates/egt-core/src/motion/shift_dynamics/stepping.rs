@@ -482,6 +482,7 @@ impl ShiftStepper {
         let mut h = st.h;
         let mut attempts = 0usize;
         let mut at_once = 0usize;
+        let mut g_end: Option<Vec<f64>> = None;
         while t_now < t_end {
             attempts += 1;
             if attempts > sim.max_steps {
@@ -560,7 +561,11 @@ impl ShiftStepper {
             } else {
                 t_now + hs
             };
-            let g0 = setup.events(&mode, t_now, &y, &f0);
+            // The last accepted step's end, unless an event came between.
+            let g0 = match g_end.take() {
+                Some(g) => g,
+                None => setup.events(&mode, t_now, &y, &f0),
+            };
             let g1 = setup.events(&mode, t1, &y1, &f1);
             let mut first: Option<(f64, usize)> = None;
             for i in 0..k {
@@ -605,6 +610,7 @@ impl ShiftStepper {
                 f0 = setup.rhs(&mode, t_now, &y);
                 continue;
             }
+            g_end = Some(g1);
             t_now = t1;
             y = y1;
             f0 = f1;
