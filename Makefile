@@ -46,7 +46,15 @@ python-dev: venv ## Build and install the egt Python module into the virtualenv
 		$(VENV)/bin/maturin develop --release --quiet -m crates/egt-py/Cargo.toml; \
 	fi
 
-wheel: venv ## Build the abi3 manylinux2014 wheel (stripped, with the licences and the egt command) into target/wheels; zig (from PyPI) links it
+# The wheel carries egt-fmu's shared library (`Train.export_fmu`, the wheel's
+# `egt fmu`; docs/fmu.md). egt-py depends on egt-fmu, so maturin's own cargo
+# build also writes egt-fmu's cdylib to deps/, linked by the same zig for
+# glibc 2.17 and stripped (the release profile): no second build. The
+# package gets a symbolic link to it before maturin runs, which resolves
+# once cargo has built it and which pyproject.toml's `include` packs.
+WHEEL_DEPS := $(abspath $(or $(CARGO_TARGET_DIR),target))/x86_64-unknown-linux-gnu/release/deps
+wheel: venv ## Build the abi3 manylinux2014 wheel (stripped, with the licences, the egt command and egt-fmu's library) into target/wheels; zig (from PyPI) links it
+	ln -sfn $(WHEEL_DEPS)/libegt_fmu.so crates/egt-py/python/egt/libegt_fmu.so
 	PATH=$(abspath $(VENV))/bin:$$PATH $(VENV)/bin/maturin build --release --zig --compatibility manylinux2014 --strip -m crates/egt-py/Cargo.toml -o target/wheels
 
 test-wheel: wheel ## Install the wheel into a fresh virtualenv with no Rust on PATH; run the egt command and the README's Python block

@@ -133,6 +133,12 @@ pub enum Error {
     Py(PyErr),
     /// A caught panic, with its message.
     Panic(String),
+    /// egt-fmu's shared library cannot be read (`Train.export_fmu`):
+    /// `EgtError` of kind `io`, as the CLI's code for a file it cannot read.
+    Library(String),
+    /// egt-fmu's packager refused after the core's checks passed (two unit
+    /// variables with one name, the archive writer): `EgtError` of kind `fmu`.
+    Unit(String),
 }
 
 impl From<egt_core::Error> for Error {
@@ -161,6 +167,8 @@ impl From<Error> for PyErr {
                     &[],
                 )
             }),
+            Error::Library(msg) => Python::attach(|py| build::<EgtError>(py, msg, "io", &[], &[])),
+            Error::Unit(msg) => Python::attach(|py| build::<EgtError>(py, msg, "fmu", &[], &[])),
         }
     }
 }

@@ -10,6 +10,7 @@ mod batch;
 mod convert;
 mod design;
 mod errors;
+mod fmu;
 mod motion;
 mod structure;
 mod train;
@@ -46,6 +47,7 @@ fn _egt(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(transmission::shift_table, m)?)?;
     #[cfg(feature = "command")]
     m.add_function(wrap_pyfunction!(cli, m)?)?;
+    m.add_function(wrap_pyfunction!(fmu::fmu_package, m)?)?;
     m.add_function(wrap_pyfunction!(atlas::atlas, m)?)?;
     m.add_function(wrap_pyfunction!(atlas::atlas_member, m)?)?;
     m.add_class::<design::SearchCore>()?;

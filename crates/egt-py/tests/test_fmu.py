@@ -3,7 +3,9 @@ imported by FMPy, an FMI implementation that shares no code with egt.
 
 The unit is packaged by the cargo-built `egt` (its shared library beside it,
 docs/fmu.md); FMPy validates its model description, and FMPy's FMU2Slave
-drives it step by step against `egt shift-sim` of the same shift."""
+drives it step by step against `egt shift-sim` of the same shift. The last
+tests package with the library the wheel carries: `Train.export_fmu` and the
+wheel's `python -m egt fmu`."""
 
 from __future__ import annotations
 
@@ -399,3 +401,99 @@ def test_the_fmpy_example_of_the_docs_runs(units: Dict[str, Path], tmp_path: Pat
     monkeypatch.chdir(tmp_path)
     exec(compile(block[0], "docs/fmu.md", "exec"), {})
     assert (tmp_path / "shift.svg").stat().st_size > 0
+
+
+# -- the wheel's own library: Train.export_fmu and `python -m egt fmu` -------
+
+C4 = EXAMPLES / "ford_c4_simpson.toml"
+
+
+def step_c4(path: Path, steps: int = 20, h: float = 1e-3) -> List[float]:
+    """Instantiate the C4 unit at `path` in FMPy, drive its input with a
+    constant torque in its first gear (the unit's defaults) and return every
+    link's speed after `steps` steps."""
+    directory = extract(str(path))
+    md = read_model_description(directory)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=directory, modelIdentifier=md.coSimulation.modelIdentifier,
+                    instanceName="c4")
+    fmu.instantiate()
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.setReal([vr["input.torque"]], [200.0])
+    fmu.exitInitializationMode()
+    for k in range(steps):
+        fmu.doStep(currentCommunicationPoint=k * h, communicationStepSize=h)
+    speeds: List[float] = fmu.getReal([vr[n] for n in vr if n.endswith(".speed")])
+    fmu.terminate()
+    fmu.freeInstance()
+    return speeds
+
+
+def test_export_fmu_writes_a_unit_fmpy_validates_and_steps(tmp_path: Path,
+                                                           monkeypatch: pytest.MonkeyPatch) -> None:
+    """The wheel's library (EGT_FMU_LIBRARY unset) in a unit of the C4."""
+    import egt
+
+    monkeypatch.delenv("EGT_FMU_LIBRARY", raising=False)
+    out = egt.load(C4).export_fmu(tmp_path / "ford c4.fmu")
+    assert out == tmp_path / "ford c4.fmu"
+    assert validate_fmu(str(out)) == []
+    md = read_model_description(str(out))
+    assert md.coSimulation.modelIdentifier == "ford_c4"
+    speeds = step_c4(out)
+    assert speeds and all(math.isfinite(w) for w in speeds) and any(w != 0.0 for w in speeds)
+    named = egt.load(C4).export_fmu(str(tmp_path / "c4.fmu"), model_identifier="gearbox")
+    assert read_model_description(str(named)).coSimulation.modelIdentifier == "gearbox"
+    assert step_c4(named) == speeds
+
+
+def test_the_wheels_egt_command_packages_the_same_unit(tmp_path: Path) -> None:
+    """`python -m egt fmu` (the wheel's `egt`) finds the library the wheel
+    carries without EGT_FMU_LIBRARY, and its unit is export_fmu's: the same
+    description (GUID included) and the same steps."""
+    import zipfile
+
+    import egt
+
+    env = {k: v for k, v in os.environ.items() if k != "EGT_FMU_LIBRARY"}
+    (tmp_path / "cli").mkdir()
+    cli = tmp_path / "cli" / "c4.fmu"
+    r = subprocess.run([sys.executable, "-m", "egt", "fmu", str(C4), "-o", str(cli)],
+                       capture_output=True, text=True, env=env)
+    assert r.returncode == 0, r.stderr
+    assert f"library {Path(egt.__file__).parent / 'libegt_fmu.so'}" in r.stdout
+    assert validate_fmu(str(cli)) == []
+    py = egt.load(C4).export_fmu(tmp_path / "c4.fmu")
+    with zipfile.ZipFile(cli) as a, zipfile.ZipFile(py) as b:
+        assert sorted(a.namelist()) == sorted(b.namelist())
+        for name in a.namelist():
+            assert a.read(name) == b.read(name), name
+    assert step_c4(cli) == step_c4(py)
+
+
+def test_export_fmu_refusals_are_egt_errors_or_os_errors(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import egt
+
+    c4 = egt.load(C4)
+    missing = tmp_path / "nowhere" / "libegt_fmu.so"
+    monkeypatch.setenv("EGT_FMU_LIBRARY", str(missing))
+    with pytest.raises(egt.EgtError, match="EGT_FMU_LIBRARY") as info:
+        c4.export_fmu(tmp_path / "c4.fmu")
+    assert info.value.kind == "io" and str(missing) in str(info.value)
+    assert not (tmp_path / "c4.fmu").exists()
+    monkeypatch.delenv("EGT_FMU_LIBRARY")
+    import egt._fmu
+
+    with monkeypatch.context() as m:  # a package without the library (a `maturin develop` build)
+        m.setattr(egt._fmu, "BUNDLED", tmp_path / "libegt_fmu.so")
+        with pytest.raises(egt.EgtError, match="carries no libegt_fmu.so: set EGT_FMU_LIBRARY"):
+            c4.export_fmu(tmp_path / "c4.fmu")
+    with pytest.raises(FileNotFoundError):
+        c4.export_fmu(tmp_path / "no such directory" / "c4.fmu")
+    with pytest.raises(egt.ArgumentError, match="not a C identifier"):
+        c4.export_fmu(tmp_path / "c4.fmu", model_identifier="4speed")
+    with pytest.raises(egt.TransmissionError) as no_states:
+        egt.load(EXAMPLES / "fig3_example61.toml").export_fmu(tmp_path / "fig3.fmu")
+    assert no_states.value.kind == "no_states"
+    assert not list(tmp_path.glob("*.fmu"))

@@ -1,6 +1,7 @@
 # Hand-written stub of the native module `egt._egt` (crates/egt-py/src).
 # Checked against the built module by `python -m mypy.stubtest egt`.
 
+from os import PathLike
 from typing import Any, Callable, Dict, List, Optional, Tuple, final
 
 import numpy as np
@@ -188,6 +189,14 @@ def search_inputs(
 def gear(core: TrainCore, state: str) -> _Documented: ...
 def shift_table(core: TrainCore) -> _Documented: ...
 def cli(args: List[str]) -> int: ...
+def fmu_package(
+    core: TrainCore,
+    text: str,
+    format: str,
+    stem: str,
+    model_identifier: Optional[str],
+    bundled: Optional[PathLike[str]],
+) -> bytes: ...
 
 class EgtError(Exception):
     kind: Optional[str]

@@ -13,6 +13,7 @@ import math
 import os
 from fractions import Fraction
 from numbers import Rational, Real
+from pathlib import Path
 from typing import (
     TYPE_CHECKING,
     Any,
@@ -29,11 +30,12 @@ from typing import (
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import _batch
+from . import _batch, _fmu
 from ._batch import BatchDynamics, BatchKinematics, BatchPlan
 from ._args import ArgumentError, ArgumentKeyError, ArgumentTypeError, count, mapping, number
 from ._egt import TrainCore, batch_plan
 from ._egt import atlas_member as _atlas_member
+from ._egt import fmu_package as _fmu_package
 from ._egt import gear as _gear
 from ._egt import modes as _modes
 from ._egt import shift_table as _shift_table
@@ -692,6 +694,29 @@ class Train(ShiftMethods):
         """Every gear state (ratios, element torques, power flow) and the
         table across them: steps, spread, shifts."""
         return ShiftTable._from_core(self._names(), _shift_table(self._core))
+
+    def export_fmu(self, path: PathLike, *, model_identifier: Optional[str] = None) -> Path:
+        """Write the transmission as an FMI 2.0 Co-Simulation unit (a
+        ``.fmu``) at ``path`` and return that path, as ``egt fmu`` does
+        (docs/fmu.md).
+
+        The unit carries egt-fmu's shared library: ``EGT_FMU_LIBRARY`` when
+        set, else the one the wheel carries. ``model_identifier`` (a C
+        identifier) names the library inside the unit; by default the file's
+        stem made one. Raises :class:`TransmissionError` for a spec without
+        gear states, :class:`EgtError` of kind ``"io"`` naming
+        ``EGT_FMU_LIBRARY`` when there is no library to read,
+        :class:`ArgumentError` for a model identifier that is not a C
+        identifier, and ``OSError`` when ``path`` cannot be written.
+        """
+        if self._spec is None:
+            raise ArgumentTypeError("this Train was not built from a spec text and has none to package")
+        if model_identifier is not None and not isinstance(model_identifier, str):
+            raise ArgumentTypeError(f"model_identifier must be a str, got {type(model_identifier).__name__}")
+        out = Path(os.fspath(path))
+        text, fmt, _ = self._spec
+        out.write_bytes(_fmu_package(self._core, text, fmt, out.stem, model_identifier, _fmu.bundled()))
+        return out
 
     # -- computer algebra --------------------------------------------------
 
