@@ -60,7 +60,12 @@ pub fn fmu_package<'py>(
     })?;
     let unit = guard(|| {
         py.detach(|| {
-            core.train.checked_transmission()?;
+            // Shift elements make a transmission unit, which needs gear
+            // states (the core's own error); a train without elements is a
+            // unit of its links.
+            if !core.train.elements().is_empty() {
+                core.train.checked_transmission()?;
+            }
             egt_fmu::package(&core.train, text, json, &id, &bytes).map_err(|e| Error::Unit(e.0))
         })
     })?;

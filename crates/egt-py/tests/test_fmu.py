@@ -493,7 +493,12 @@ def test_export_fmu_refusals_are_egt_errors_or_os_errors(tmp_path: Path, monkeyp
         c4.export_fmu(tmp_path / "no such directory" / "c4.fmu")
     with pytest.raises(egt.ArgumentError, match="not a C identifier"):
         c4.export_fmu(tmp_path / "c4.fmu", model_identifier="4speed")
-    with pytest.raises(egt.TransmissionError) as no_states:
-        egt.load(EXAMPLES / "fig3_example61.toml").export_fmu(tmp_path / "fig3.fmu")
+    zf = (EXAMPLES / "zf_8hp70.toml").read_text()
+    with pytest.raises(egt.TransmissionError) as no_states:  # shift elements, no [transmission]
+        egt.loads(zf[: zf.index("[transmission]")]).export_fmu(tmp_path / "cut.fmu")
     assert no_states.value.kind == "no_states"
     assert not list(tmp_path.glob("*.fmu"))
+    # A train without elements is a unit of its links.
+    fig5 = egt.load(EXAMPLES / "fig5_stability.toml").export_fmu(tmp_path / "fig5.fmu")
+    assert validate_fmu(str(fig5)) == []
+    assert {"2.torque", "6.speed"} <= {v.name for v in read_model_description(str(fig5)).modelVariables}

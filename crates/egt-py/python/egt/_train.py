@@ -696,15 +696,16 @@ class Train(ShiftMethods):
         return ShiftTable._from_core(self._names(), _shift_table(self._core))
 
     def export_fmu(self, path: PathLike, *, model_identifier: Optional[str] = None) -> Path:
-        """Write the transmission as an FMI 2.0 Co-Simulation unit (a
-        ``.fmu``) at ``path`` and return that path, as ``egt fmu`` does
-        (docs/fmu.md).
+        """Write the train as an FMI 2.0 Co-Simulation unit (a ``.fmu``) at
+        ``path`` and return that path, as ``egt fmu`` does (docs/fmu.md): a
+        transmission's shift dynamics, or a train without shift elements
+        under its curves and applied torques.
 
         The unit carries egt-fmu's shared library: ``EGT_FMU_LIBRARY`` when
         set, else the one the wheel carries. ``model_identifier`` (a C
         identifier) names the library inside the unit; by default the file's
-        stem made one. Raises :class:`TransmissionError` for a spec without
-        gear states, :class:`EgtError` of kind ``"io"`` naming
+        stem made one. Raises :class:`TransmissionError` for shift elements
+        without gear states, :class:`EgtError` of kind ``"io"`` naming
         ``EGT_FMU_LIBRARY`` when there is no library to read,
         :class:`ArgumentError` for a model identifier that is not a C
         identifier, and ``OSError`` when ``path`` cannot be written.
