@@ -518,10 +518,11 @@ impl ShiftSim {
                       y: &[f64],
                       dy: &[f64],
                       mode: &Mode,
-                      loss: f64|
+                      loss: f64,
+                      observed: Option<Observed>|
          -> Observed {
             let v = &y[..n];
-            let q = setup.observe(mode, t, y, dy);
+            let q = observed.unwrap_or_else(|| setup.observe(mode, t, y, dy));
             ext.add(&q);
             // W_applied - dKE - each element's friction work - E_lock, in that order
             let mesh = setup.mesh_at().map(|at| y[at]);
@@ -563,7 +564,7 @@ impl ShiftSim {
         let mut implicit = self.method == ShiftMethod::Implicit;
         let mut limited = 0usize;
         let mut f0 = setup.rhs(&mode, t_now, &y);
-        let mut q0 = record(&mut out, &mut extremes, t_now, &y, &f0, &mode, lock_loss);
+        let mut q0 = record(&mut out, &mut extremes, t_now, &y, &f0, &mode, lock_loss, None);
         let breaks: Vec<f64> = capacity.iter().flat_map(Capacity::breakpoints).collect();
         let mut h = (self.t_end * 1e-4).min(1e-4);
         let mut attempts = 0usize;
@@ -672,7 +673,10 @@ impl ShiftSim {
                 Some(g) => g,
                 None => setup.events(&mode, t_now, &y, &f0),
             };
-            let g1 = setup.events(&mode, t1, &y1, &f1);
+            // The quantities at the step's end, which the sample there records
+            // (if no event comes first), give its event functions too.
+            let q_end = setup.observe(&mode, t1, &y1, &f1);
+            let g1 = setup.events_observed(&mode, t1, &y1, &f1, &q_end);
             // The earliest crossing, located on the dense output. An element
             // that entered its phase at the crossing (g = 0) and heads the
             // wrong way fires at once.
@@ -706,7 +710,7 @@ impl ShiftSim {
                 if te > t_now {
                     // The left limit: the old mode's state at the event.
                     let fe = setup.rhs(&mode, te, &ye);
-                    let qe = record(&mut out, &mut extremes, te, &ye, &fe, &mode, lock_loss);
+                    let qe = record(&mut out, &mut extremes, te, &ye, &fe, &mode, lock_loss, None);
                     extremes.within(dense, t_now, te, &q0, &qe, &slip_rates(&setup, &f0, &fe));
                     at_once = 0;
                 } else {
@@ -738,10 +742,10 @@ impl ShiftSim {
                 (mode, y) = (s.mode, s.y);
                 t_now = te;
                 f0 = setup.rhs(&mode, t_now, &y);
-                q0 = record(&mut out, &mut extremes, t_now, &y, &f0, &mode, lock_loss);
+                q0 = record(&mut out, &mut extremes, t_now, &y, &f0, &mode, lock_loss, None);
                 continue;
             }
-            let q1 = record(&mut out, &mut extremes, t1, &y1, &f1, &mode, lock_loss);
+            let q1 = record(&mut out, &mut extremes, t1, &y1, &f1, &mode, lock_loss, Some(q_end));
             extremes.within(dense, t_now, t1, &q0, &q1, &slip_rates(&setup, &f0, &f1));
             g_end = Some(g1);
             t_now = t1;

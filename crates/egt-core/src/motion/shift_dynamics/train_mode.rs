@@ -333,6 +333,31 @@ impl Setup<'_> {
         g
     }
 
+    /// [`Setup::events`] from `q`, [`Setup::observe`]'s quantities at the
+    /// same point (each element's torque and slip are the ones `events`
+    /// computes): no multiplier solve of its own for an ideal mode that is
+    /// not parked (the others take `events`).
+    pub(super) fn events_observed(
+        &self,
+        mode: &Mode,
+        t: f64,
+        y: &[f64],
+        dy: &[f64],
+        q: &Observed,
+    ) -> Vec<f64> {
+        if mode.lossy.is_some() || mode.park_row.is_some() {
+            return self.events(mode, t, y, dy);
+        }
+        let k = mode.phases.len();
+        (mode.phases.iter().enumerate())
+            .map(|(i, p)| match *p {
+                Phase::Slipping(dir) => dir * q[1 + k + i],
+                Phase::Locked if self.one_way[i] => q[1 + i],
+                Phase::Locked => self.sim.law.static_limit(self.capacity[i].at(t)) - q[1 + i].abs(),
+            })
+            .collect()
+    }
+
     /// The lock-up: `v` projected onto `mode`'s speeds in the metric of
     /// \[M\] (the speeds a constraint impulse leaves: `M (v+ - v)` lies in the
     /// row space of the mode's rows), and the kinetic energy it removes. The
