@@ -564,7 +564,16 @@ impl ShiftSim {
         let mut implicit = self.method == ShiftMethod::Implicit;
         let mut limited = 0usize;
         let mut f0 = setup.rhs(&mode, t_now, &y);
-        let mut q0 = record(&mut out, &mut extremes, t_now, &y, &f0, &mode, lock_loss, None);
+        let mut q0 = record(
+            &mut out,
+            &mut extremes,
+            t_now,
+            &y,
+            &f0,
+            &mode,
+            lock_loss,
+            None,
+        );
         let breaks: Vec<f64> = capacity.iter().flat_map(Capacity::breakpoints).collect();
         let mut h = (self.t_end * 1e-4).min(1e-4);
         let mut attempts = 0usize;
@@ -710,7 +719,16 @@ impl ShiftSim {
                 if te > t_now {
                     // The left limit: the old mode's state at the event.
                     let fe = setup.rhs(&mode, te, &ye);
-                    let qe = record(&mut out, &mut extremes, te, &ye, &fe, &mode, lock_loss, None);
+                    let qe = record(
+                        &mut out,
+                        &mut extremes,
+                        te,
+                        &ye,
+                        &fe,
+                        &mode,
+                        lock_loss,
+                        None,
+                    );
                     extremes.within(dense, t_now, te, &q0, &qe, &slip_rates(&setup, &f0, &fe));
                     at_once = 0;
                 } else {
@@ -742,10 +760,28 @@ impl ShiftSim {
                 (mode, y) = (s.mode, s.y);
                 t_now = te;
                 f0 = setup.rhs(&mode, t_now, &y);
-                q0 = record(&mut out, &mut extremes, t_now, &y, &f0, &mode, lock_loss, None);
+                q0 = record(
+                    &mut out,
+                    &mut extremes,
+                    t_now,
+                    &y,
+                    &f0,
+                    &mode,
+                    lock_loss,
+                    None,
+                );
                 continue;
             }
-            let q1 = record(&mut out, &mut extremes, t1, &y1, &f1, &mode, lock_loss, Some(q_end));
+            let q1 = record(
+                &mut out,
+                &mut extremes,
+                t1,
+                &y1,
+                &f1,
+                &mode,
+                lock_loss,
+                Some(q_end),
+            );
             extremes.within(dense, t_now, t1, &q0, &q1, &slip_rates(&setup, &f0, &f1));
             g_end = Some(g1);
             t_now = t1;
