@@ -54,6 +54,7 @@ pub mod ode;
 pub mod quality;
 mod request;
 mod rest;
+mod result;
 pub mod shift;
 pub mod stepping;
 mod train_mode;
