@@ -313,14 +313,12 @@ impl Setup<'_> {
     pub(super) fn events(&self, mode: &Mode, t: f64, y: &[f64], dy: &[f64]) -> Vec<f64> {
         let phases = &mode.phases;
         let (lam, _) = self.locked_torques(mode, t, y, dy);
-        let mut g = vec![f64::INFINITY; phases.len()];
-        for i in 0..phases.len() {
-            g[i] = match phases[i] {
-                Phase::Slipping(dir) => dir * self.slip(i, &y[..self.n]),
-                Phase::Locked if self.one_way[i] => lam[i],
-                Phase::Locked => self.sim.law.static_limit(self.capacity[i].at(t)) - lam[i].abs(),
-            };
-        }
+        let mut g: Vec<f64> = (phases.iter().enumerate())
+            .map(|(i, &p)| match p {
+                Phase::Slipping(_) => self.element_event(i, p, t, 0.0, self.slip(i, &y[..self.n])),
+                Phase::Locked => self.element_event(i, p, t, lam[i], 0.0),
+            })
+            .collect();
         // With losses, then each mesh's rolling power in its driver's sense.
         if let (Some(lossy), Some(losses)) = (&mode.lossy, &self.losses) {
             let mu = self.multipliers(mode, t, y, dy);
@@ -350,12 +348,20 @@ impl Setup<'_> {
         }
         let k = mode.phases.len();
         (mode.phases.iter().enumerate())
-            .map(|(i, p)| match *p {
-                Phase::Slipping(dir) => dir * q[1 + k + i],
-                Phase::Locked if self.one_way[i] => q[1 + i],
-                Phase::Locked => self.sim.law.static_limit(self.capacity[i].at(t)) - q[1 + i].abs(),
-            })
+            .map(|(i, &p)| self.element_event(i, p, t, q[1 + i], q[1 + k + i]))
             .collect()
+    }
+
+    /// Element `i`'s event function in phase `p` from its torque on its
+    /// first link and its slip: the slip in its direction while slipping; a
+    /// locked one-way element's torque; a locked element's margin to its
+    /// static limit.
+    fn element_event(&self, i: usize, p: Phase, t: f64, torque: f64, slip: f64) -> f64 {
+        match p {
+            Phase::Slipping(dir) => dir * slip,
+            Phase::Locked if self.one_way[i] => torque,
+            Phase::Locked => self.sim.law.static_limit(self.capacity[i].at(t)) - torque.abs(),
+        }
     }
 
     /// The lock-up: `v` projected onto `mode`'s speeds in the metric of
