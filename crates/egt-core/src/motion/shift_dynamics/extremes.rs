@@ -24,6 +24,11 @@ pub(super) struct Extremes {
     /// order found (the shift quality takes the output torque's as candidates
     /// for its dip and overshoot, `quality.rs`).
     pub(super) turns: Vec<Turn>,
+    /// The quantities' rates (per second) just before the last step's end,
+    /// and that end's time: the next step's rates just after its start when
+    /// the step joins on smoothly (the same mode, no capacity corner), which
+    /// saves one probe of the dense output per step.
+    end_rates: Option<(f64, Vec<f64>)>,
 }
 
 /// A turning point between samples, found on a step's dense output.
@@ -49,7 +54,14 @@ impl Extremes {
             max: vec![f64::NEG_INFINITY; len],
             min: vec![f64::INFINITY; len],
             turns: Vec::new(),
+            end_rates: None,
         }
+    }
+
+    /// The next step does not join the last one smoothly (a mode change, a
+    /// capacity ramp's corner): its rates at the start are probed again.
+    pub(super) fn break_here(&mut self) {
+        self.end_rates = None;
     }
 
     /// Takes a value seen (a sample, or a turning point).
@@ -88,12 +100,23 @@ impl Extremes {
             }
         }
         if rates.iter().all(Option::is_some) {
+            self.end_rates = None;
             return;
         }
         let delta = 1e-3 * h;
-        let (qa, qb) = (at(t0 + delta), at(t1 - delta));
+        // The slopes just after t0: the last step's at its end when this
+        // step joins on there, else a probe.
+        let start: Vec<f64> = match self.end_rates.take() {
+            Some((t, r)) if t == t0 => r.iter().map(|x| x * delta).collect(),
+            _ => at(t0 + delta).iter().zip(q0).map(|(a, b)| a - b).collect(),
+        };
+        let qb = at(t1 - delta);
+        self.end_rates = Some((
+            t1,
+            q1.iter().zip(&qb).map(|(a, b)| (a - b) / delta).collect(),
+        ));
         for k in (0..q0.len()).filter(|&k| rates[k].is_none()) {
-            let (s0, s1) = (qa[k] - q0[k], q1[k] - qb[k]);
+            let (s0, s1) = (start[k], q1[k] - qb[k]);
             let sign = if s0 > 0.0 && s1 < 0.0 {
                 1.0 // a maximum
             } else if s0 < 0.0 && s1 > 0.0 {

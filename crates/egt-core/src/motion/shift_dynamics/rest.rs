@@ -70,7 +70,7 @@ impl Setup<'_> {
         }
         let mut rows = mode.rows.clone().insert_row(r, 0.0);
         rows[(r, self.output)] = 1.0;
-        mode.gram_inverse = (&rows * rows.transpose()).try_inverse()?;
+        mode.lambda_map = (&rows * rows.transpose()).try_inverse()? * &rows;
         mode.rows = rows;
         mode.basis = DMatrix::zeros(n, 0);
         mode.reduced = Cholesky::new(DMatrix::zeros(0, 0))?;

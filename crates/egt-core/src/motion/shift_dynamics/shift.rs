@@ -607,7 +607,9 @@ impl ShiftSim {
                     );
                     extremes.within(dense, t_now, te, &q0, &qe, &slip_rates(&setup, &f0, &fe));
                     at_once = 0;
-                } else {
+                }
+                extremes.break_here();
+                if te <= t_now {
                     at_once += 1;
                     if at_once > MAX_AT_ONCE {
                         return Err(refuse(format!(
@@ -659,6 +661,10 @@ impl ShiftSim {
                 Some(q_end),
             );
             extremes.within(dense, t_now, t1, &q0, &q1, &slip_rates(&setup, &f0, &f1));
+            if t1 == stop {
+                // a capacity ramp's corner (or the end): the slopes jump
+                extremes.break_here();
+            }
             g_end = Some(g1);
             t_now = t1;
             y = y1;

@@ -4,7 +4,7 @@
 //! forces, the accelerations, the locked elements' torques (Lagrange
 //! multipliers), the event functions and the lock-up projection.
 
-use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
+use nalgebra::{Cholesky, DMatrix, DVector, DVectorView, Dyn};
 
 use super::compliance::OutputShaft;
 use super::friction::Capacity;
@@ -29,8 +29,8 @@ pub(super) struct Mode {
     /// Cholesky of `N^T M N`.
     pub(super) reduced: Cholesky<f64, Dyn>,
     pub(super) rows: DMatrix<f64>,
-    /// `(A A^T)^-1`, for the multipliers.
-    pub(super) gram_inverse: DMatrix<f64>,
+    /// `(A A^T)^-1 A`: the multipliers are this map of `M v' - f`.
+    pub(super) lambda_map: DMatrix<f64>,
     /// Row index of each changing element when locked.
     pub(super) row_of: Vec<Option<usize>>,
     /// Row index of the first kept element (held rigidly, always locked):
@@ -115,8 +115,9 @@ impl Setup<'_> {
                 hint: "give `inertia` to the links (and planets) of the gear sets".into(),
             })
         })?;
-        let gram_inverse = (&mb.rows * mb.rows.transpose())
+        let lambda_map = (&mb.rows * mb.rows.transpose())
             .try_inverse()
+            .map(|g| g * &mb.rows)
             .ok_or_else(|| {
                 refuse(format!(
                     "the rows of the mode with {} locked are dependent (an element that repeats another's constraint), so its torques are not determined",
@@ -128,7 +129,7 @@ impl Setup<'_> {
             basis,
             reduced,
             rows: mb.rows,
-            gram_inverse,
+            lambda_map,
             row_of,
             kept_row0: willis,
             lossy: None,
@@ -280,12 +281,22 @@ impl Setup<'_> {
     /// `M v' - f = A^T lambda`.
     pub(super) fn multipliers(&self, mode: &Mode, t: f64, y: &[f64], dy: &[f64]) -> Vec<f64> {
         let (f, _) = self.forces(&mode.phases, t, y);
+        self.multipliers_of(mode, f, dy)
+    }
+
+    /// [`Setup::multipliers`] from the generalised forces `f` at the state.
+    fn multipliers_of(&self, mode: &Mode, mut f: DVector<f64>, dy: &[f64]) -> Vec<f64> {
         if let Some(lossy) = &mode.lossy {
             return self.lossy_solve(lossy, mode, &f).1;
         }
-        let a = DVector::from_column_slice(&dy[..self.n]);
-        let r = &self.m * a - f;
-        (&mode.gram_inverse * (&mode.rows * r)).as_slice().to_vec()
+        // f <- M v' - f in place, then one product with the mode's map
+        f.gemv(
+            1.0,
+            &self.m,
+            &DVectorView::from_slice(&dy[..self.n], self.n),
+            -1.0,
+        );
+        (&mode.lambda_map * f).data.into()
     }
 
     /// The locked elements' torques on their first links: each changing
@@ -391,21 +402,25 @@ impl Setup<'_> {
     /// then each kept element's torque (its multiplier).
     pub(super) fn observe(&self, mode: &Mode, t: f64, y: &[f64], dy: &[f64]) -> Observed {
         let (v, phases) = (&y[..self.n], &mode.phases);
-        let (lam, kept) = self.locked_torques(mode, t, y, dy);
+        // One evaluation of the forces serves the multipliers and the
+        // slipping elements' torques.
+        let (f, friction) = self.forces(phases, t, y);
+        let lambda = self.multipliers_of(mode, f, dy);
         let k = phases.len();
-        let mut q = Vec::with_capacity(1 + 2 * k + kept.len());
+        let mut q = Vec::with_capacity(1 + 2 * k + self.kept.len());
         q.push(match (self.shaft_state(y), mode.park_row) {
             (Some((shaft, w_v, phi)), _) => shaft.torque(v[self.output], w_v, phi),
             // Parked: the road load's static reaction holds the vehicle.
-            (None, Some(r)) => -self.multipliers(mode, t, y, dy)[r],
+            (None, Some(r)) => -lambda[r],
             (None, None) => self.sim.vehicle_inertia * dy[self.output] + self.road(v[self.output]),
         });
-        q.extend((0..k).map(|i| match phases[i] {
-            Phase::Locked => lam[i],
-            Phase::Slipping(dir) => self.friction(i, dir, t, v),
+        q.extend((0..k).map(|i| match (phases[i], mode.row_of[i]) {
+            (Phase::Locked, Some(r)) => lambda[r],
+            (Phase::Locked, None) => 0.0,
+            (Phase::Slipping(_), _) => friction[i],
         }));
         q.extend((0..k).map(|i| self.slip(i, v)));
-        q.extend(kept);
+        q.extend((0..self.kept.len()).map(|j| lambda[mode.kept_row0 + j]));
         q
     }
 
