@@ -67,6 +67,18 @@ fn bad_requests_exit_non_zero_naming_the_field() {
         (vec!["enumerate", "--links", "2"], "links"),
         (vec!["enumerate", "--links", "5", "--dof", "4"], "dof"),
         (vec!["enumerate", "--links", "5", "--part", "3/3"], "part"),
+        (
+            vec![
+                "enumerate",
+                "--links",
+                "6",
+                "--search",
+                "levels",
+                "--part",
+                "0/2",
+            ],
+            "part",
+        ),
     ] {
         let (code, _, err) = egt(&args, None);
         assert_ne!(code, 0, "{args:?}");
@@ -76,15 +88,91 @@ fn bad_requests_exit_non_zero_naming_the_field() {
 
 #[test]
 fn seven_link_counts_equal_the_published_atlas() {
-    // Yang & Ding, ASME J. Mech. Des. 141(4):043301 (2019): 152 r-graphs, 647 d-graphs.
-    for (level, want) in [("rotation", 152), ("displacement", 647)] {
-        let (code, out, err) = egt(
-            &["enumerate", "--links", "7", "--level", level, "--count"],
-            None,
-        );
-        assert_eq!(code, 0, "{err}");
-        assert_eq!(out.trim(), want.to_string(), "{level}");
+    // Yang & Ding, ASME J. Mech. Des. 141(4):043301 (2019): 152 r-graphs,
+    // 647 d-graphs; by either search.
+    for search in ["trees", "levels"] {
+        for (level, want) in [("rotation", 152), ("displacement", 647)] {
+            let (code, out, err) = egt(
+                &[
+                    "enumerate",
+                    "--links",
+                    "7",
+                    "--level",
+                    level,
+                    "--search",
+                    search,
+                    "--count",
+                ],
+                None,
+            );
+            assert_eq!(code, 0, "{err}");
+            assert_eq!(out.trim(), want.to_string(), "{level}, {search}");
+        }
     }
+}
+
+#[test]
+fn the_levels_first_search_prints_the_same_lines_and_splits_the_displacement_level() {
+    let lines = |args: &[&str]| {
+        let (code, out, err) = egt(args, None);
+        assert_eq!(code, 0, "{err}");
+        let mut v: Vec<String> = out.lines().map(str::to_string).collect();
+        v.sort();
+        v
+    };
+    let whole = lines(&[
+        "enumerate",
+        "--links",
+        "7",
+        "--level",
+        "displacement",
+        "--search",
+        "levels",
+        "--jsonl",
+    ]);
+    let trees = lines(&[
+        "enumerate",
+        "--links",
+        "7",
+        "--level",
+        "displacement",
+        "--jsonl",
+    ]);
+    let code = |l: &String| serde_json::from_str::<Value>(l).expect("json")["code"].clone();
+    let codes = |v: &[String]| {
+        let mut c: Vec<String> = v.iter().map(|l| code(l).to_string()).collect();
+        c.sort();
+        c
+    };
+    assert_eq!(codes(&whole), codes(&trees));
+    // The parts' lines (a part's JSON counts only its own displacement
+    // graphs of a rotation graph, so the plain lines are compared).
+    let plain = lines(&[
+        "enumerate",
+        "--links",
+        "7",
+        "--level",
+        "displacement",
+        "--search",
+        "levels",
+    ]);
+    assert_eq!(plain.len(), 647);
+    let mut parts = Vec::new();
+    for p in ["0/3", "1/3", "2/3"] {
+        parts.extend(lines(&[
+            "enumerate",
+            "--links",
+            "7",
+            "--level",
+            "displacement",
+            "--search",
+            "levels",
+            "--part",
+            p,
+        ]));
+    }
+    parts.sort();
+    assert_eq!(parts, plain);
 }
 
 #[test]

@@ -113,6 +113,7 @@ const RUNS: &[(&str, &str, Base, &[&str])] = &[
     ("enumerate", "count", Base::Bare, &["--links", "6", "--count"]),
     ("enumerate", "max-links", Base::Bare, &["--links", "5", "--max-links", "5"]),
     ("enumerate", "progress", Base::Bare, &["--links", "5", "--progress"]),
+    ("enumerate", "search", Base::Bare, &["--links", "5", "--search", "levels"]),
     ("synth", "spec-format", C4_SEARCH, &["--spec-format", "toml"]),
     ("synth", "format", C4_SEARCH, &["--format", "json"]),
     ("synth", "top", C4_SEARCH, &["--top", "2"]),

@@ -6,11 +6,14 @@
 //! `--identify SPEC` prints the member a given train is instead. Ctrl-C
 //! stops it after the last whole tree: the lines written are every member of
 //! the trees done (`--count` then prints nothing), and it exits with 130.
+//! `--search levels` finds the same atlas levels first
+//! (`egt_core::synthesis::hypertree`) and prints it at the end.
 
 use std::io::Write;
-
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
+use egt_core::synthesis::hypertree::{enumerate_by_levels_until, hypertrees};
 use egt_core::synthesis::{
     AtlasRequest, Fractionation, GraphLevel, enumerate_until, member, units,
 };
@@ -53,8 +56,8 @@ pub struct Args {
     #[arg(long)]
     pub count: bool,
     /// The most links asked for without a refusal: 9 links take about 10 s
-    /// on 2 cores, 10 did not finish in 20 minutes (docs/atlas.md). Raise it
-    /// to go further on purpose.
+    /// on 2 cores; 10 take about 16 minutes with `--search levels` and many
+    /// hours by trees (docs/atlas.md). Raise it to go further on purpose.
     #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_LINKS)]
     pub max_links: usize,
     /// Show a progress line on stderr (trees done / all, rate, members found)
@@ -62,6 +65,21 @@ pub struct Args {
     /// Ctrl-C stops the run after the last whole tree and exits with 130.
     #[arg(long)]
     pub progress: bool,
+    /// The search: `trees` (bearing trees first, streamed tree by tree, with
+    /// progress and Ctrl-C) or `levels` (hypertrees of axis levels first:
+    /// the same atlas, far faster from 9 links on, held in memory until the
+    /// end; `--part` splits it at the displacement level only).
+    #[arg(long, value_enum, default_value_t = Search::Trees)]
+    pub search: Search,
+}
+
+/// Which search finds the atlas (the same members either way).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Search {
+    /// Bearing trees first (`egt_core::synthesis::enumerate_until`).
+    Trees,
+    /// Hypertrees of axis levels first (`egt_core::synthesis::hypertree`).
+    Levels,
 }
 
 /// The default of `--max-links`: the largest atlas measured to finish.
@@ -117,7 +135,8 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
             egt_core::SpecErrorKind::Invalid {
                 message: format!(
                     "{links} links is past the budget of {} (9 links take about 10 s on 2 cores, \
-                     10 did not finish in 20 minutes); raise it with --max-links {links} if that is meant",
+                     10 about 16 minutes with --search levels and many hours by trees); \
+                     raise it with --max-links {links} if that is meant",
                     args.max_links
                 ),
             },
@@ -134,6 +153,40 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
             FractionationArg::Kinematic => Fractionation::Kinematic,
         },
     };
+    if args.search == Search::Levels {
+        let bar = Progress::new(
+            args.progress,
+            "hypertrees",
+            Some(hypertrees(links.clamp(3, 12)).len() as u64),
+        );
+        let found = AtomicUsize::new(0);
+        let members = enumerate_by_levels_until(&req, &interrupt::flag(), &|valid| {
+            let total = found.fetch_add(valid, Ordering::Relaxed) + valid;
+            bar.add(1);
+            bar.note(format!("{total} displacement graphs"));
+        })?;
+        drop(bar);
+        let Some(members) = members else {
+            return Err(Interrupted(
+                "the levels-first search stopped before the end; it prints only at the end, so nothing was written"
+                    .to_string(),
+            )
+            .into());
+        };
+        if args.count {
+            writeln!(out, "{}", members.len())?;
+            return Ok(());
+        }
+        for m in members {
+            let line = if args.jsonl {
+                serde_json::to_string(&m)?
+            } else {
+                m.adjacency
+            };
+            writeln!(out, "{line}")?;
+        }
+        return Ok(());
+    }
     // The trees this run covers (a partition's share of them).
     let trees = units(links.clamp(3, 12));
     let trees = match req.part {

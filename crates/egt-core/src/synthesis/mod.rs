@@ -15,6 +15,7 @@
 
 pub mod canon;
 pub mod graph;
+pub mod hypertree;
 pub mod levels;
 pub mod trees;
 
@@ -230,25 +231,8 @@ pub fn enumerate_with(req: &AtlasRequest, sink: impl FnMut(usize, Vec<AtlasMembe
     enumerate_until(req, &NEVER, sink).map(|_| ())
 }
 
-/// A flag nothing sets: the search of a caller that does not cancel.
-static NEVER: AtomicBool = AtomicBool::new(false);
-
-/// Like [`enumerate_with`], but stops soon after `cancel` is set (by another
-/// thread: a Ctrl-C handler, a time limit): it is read between units and,
-/// within a unit, once per level partition and per candidate graph, never in
-/// the canonical labelling itself. The units handed to `sink` before the stop
-/// are whole and in order; the unit in progress is dropped, never handed on
-/// in part. Returns `Ok(true)` when every unit was handed on, `Ok(false)`
-/// when `cancel` stopped the enumeration first. The library sets no signal
-/// handler: the flag is the caller's.
-///
-/// # Errors
-/// As [`enumerate`].
-pub fn enumerate_until(
-    req: &AtlasRequest,
-    cancel: &AtomicBool,
-    mut sink: impl FnMut(usize, Vec<AtlasMember>),
-) -> Result<bool> {
+/// The request's fields, each in range, or an error that names the field.
+fn validate(req: &AtlasRequest) -> Result<()> {
     if req.links < 3 || req.links > MAX_LINKS {
         return Err(Error::invalid(
             "links",
@@ -273,6 +257,29 @@ pub fn enumerate_until(
             format!("part {i} of {k}: need 0 <= part < parts"),
         ));
     }
+    Ok(())
+}
+
+/// A flag nothing sets: the search of a caller that does not cancel.
+static NEVER: AtomicBool = AtomicBool::new(false);
+
+/// Like [`enumerate_with`], but stops soon after `cancel` is set (by another
+/// thread: a Ctrl-C handler, a time limit): it is read between units and,
+/// within a unit, once per level partition and per candidate graph, never in
+/// the canonical labelling itself. The units handed to `sink` before the stop
+/// are whole and in order; the unit in progress is dropped, never handed on
+/// in part. Returns `Ok(true)` when every unit was handed on, `Ok(false)`
+/// when `cancel` stopped the enumeration first. The library sets no signal
+/// handler: the flag is the caller's.
+///
+/// # Errors
+/// As [`enumerate`].
+pub fn enumerate_until(
+    req: &AtlasRequest,
+    cancel: &AtomicBool,
+    mut sink: impl FnMut(usize, Vec<AtlasMember>),
+) -> Result<bool> {
+    validate(req)?;
     let all = trees::trees(req.links);
     let chosen: Vec<(usize, &ChainGraph)> = all
         .iter()
@@ -464,16 +471,25 @@ fn members_of_tree(
     req: &AtlasRequest,
     cancel: &AtomicBool,
 ) -> Option<Vec<AtlasMember>> {
-    let n = req.links;
-    let gears = n - 1 - req.dof;
-    // r-code -> its valid displacement graphs (d-code, emitted form)
-    let mut by_rotation: BTreeMap<Code, Vec<(Code, Emitted)>> = BTreeMap::new();
     let found = found_in_tree(tree, req, cancel);
+    // Also right after the search: a cancelled search's map is partial.
+    if cancel.load(Ordering::Relaxed) {
+        return None;
+    }
+    let out = members_from(checked_members(found, req), req);
+    // Set at any point, the flag drops the tree (even one just finished).
+    (!cancel.load(Ordering::Relaxed)).then_some(out)
+}
+
+/// The displacement graphs `found` that pass egt's checks (and the
+/// kinematic sense of fractionation when asked), by rotation graph: r-code
+/// to its valid displacement graphs (d-code, emitted form), in d-code order.
+fn checked_members(
+    found: BTreeMap<Code, Found>,
+    req: &AtlasRequest,
+) -> BTreeMap<Code, Vec<(Code, Emitted)>> {
+    let mut by_rotation: BTreeMap<Code, Vec<(Code, Emitted)>> = BTreeMap::new();
     for (dcode, f) in found {
-        // Also right after the search: a cancelled search's map is partial.
-        if cancel.load(Ordering::Relaxed) {
-            return None;
-        }
         if req.fractionation == Fractionation::Kinematic && has_cut_link(&f.graph) {
             continue;
         }
@@ -484,6 +500,18 @@ fn members_of_tree(
                 .push((dcode, emitted));
         }
     }
+    by_rotation
+}
+
+/// The members at `req.level` of the valid displacement graphs grouped by
+/// rotation graph: a rotation graph once (its first displacement graph's
+/// form) or every displacement graph.
+fn members_from(
+    by_rotation: BTreeMap<Code, Vec<(Code, Emitted)>>,
+    req: &AtlasRequest,
+) -> Vec<AtlasMember> {
+    let n = req.links;
+    let gears = n - 1 - req.dof;
     let mut out = Vec::new();
     for (rcode, ds) in by_rotation {
         let count = ds.len();
@@ -512,8 +540,7 @@ fn members_of_tree(
             }
         }
     }
-    // Set at any point, the flag drops the tree (even one just finished).
-    (!cancel.load(Ordering::Relaxed)).then_some(out)
+    out
 }
 
 /// A displacement graph as egt prints it.
@@ -659,9 +686,11 @@ fn checked_form(g: &ChainGraph, levels: &[usize]) -> Option<Emitted> {
     let first = Emitted::new(g, levels, &bfs);
     match egt_check(&first.adjacency) {
         Ok(_) => return Some(first),
+        // A rigid sub-chain fails egt's generic-rank check (locked or
+        // redundant) whatever the bearings: no other layout can pass.
         Err(Error::Topology(
             TopologyError::NonPlanar { .. } | TopologyError::Fractionated { .. },
-        )) => {}
+        )) if !has_rigid_subchain(g, levels) => {}
         Err(_) => return None,
     }
     let classes = level_links(&g.pairs(Joint::Turning), levels);
@@ -699,6 +728,33 @@ fn checked_form(g: &ChainGraph, levels: &[usize]) -> Option<Emitted> {
             *x = 0;
         }
     }
+}
+
+/// Whether some `k >= 3` links hold `k - 1` or more gear pairs with both
+/// gears and the carrier among them: a sub-chain whose Gruebler count
+/// (paper eq. (1)) leaves it no motion relative to itself. The carrier of a
+/// gear pair is the link joined to both gears by turning pairs of two
+/// different levels (`levels` of `g`'s turning pairs, in order).
+fn has_rigid_subchain(g: &ChainGraph, levels: &[usize]) -> bool {
+    let n = g.links();
+    let turning = g.pairs(Joint::Turning);
+    let level = |a: usize, b: usize| {
+        let e = (a.min(b), a.max(b));
+        turning.iter().position(|&x| x == e).map(|i| levels[i])
+    };
+    let masks: Vec<u32> = g
+        .pairs(Joint::Gear)
+        .iter()
+        .filter_map(|&(a, b)| {
+            let k = (0..n)
+                .find(|&k| matches!((level(a, k), level(b, k)), (Some(x), Some(y)) if x != y))?;
+            Some((1u32 << a) | (1 << b) | (1 << k))
+        })
+        .collect();
+    (1u32..1 << n).any(|s| {
+        let k = s.count_ones() as usize;
+        k >= 3 && masks.iter().filter(|&&m| m & s == m).count() + 1 >= k
+    })
 }
 
 /// The labelled tree on `0..m` with Prüfer sequence `code` (length `m - 2`).

@@ -564,7 +564,7 @@ fn candidates_with_reasons() {
             // sub-chain that the gear pairs inside it cannot let move.
             assert_eq!(
                 reason == "member",
-                !has_rigid_subchain(&f.graph),
+                !has_rigid_subchain(&f.graph, &f.levels),
                 "{}",
                 bfs.adjacency
             );
@@ -594,25 +594,4 @@ fn candidates_with_reasons() {
         "{n} links: {} candidates, {members} members, in {path}",
         rows.len()
     );
-}
-
-/// Whether some `k >= 3` links hold `k - 1` or more gear pairs with both
-/// gears and the carrier among them: a sub-chain whose Gruebler count
-/// (paper eq. (1)) leaves it no motion relative to itself.
-fn has_rigid_subchain(g: &ChainGraph) -> bool {
-    let n = g.links();
-    let masks: Vec<u32> = g
-        .pairs(Joint::Gear)
-        .iter()
-        .map(|&(a, b)| {
-            let k = (0..n)
-                .find(|&k| g.joint(a, k) == Joint::Turning && g.joint(b, k) == Joint::Turning)
-                .expect("a carrier");
-            (1u32 << a) | (1 << b) | (1 << k)
-        })
-        .collect();
-    (1u32..1 << n).any(|s| {
-        let k = s.count_ones() as usize;
-        k >= 3 && masks.iter().filter(|&&m| m & s == m).count() + 1 >= k
-    })
 }
