@@ -1,7 +1,8 @@
-//! `egt.atlas(links, dof, level, part)`: the atlas of non-isomorphic gear-train
+//! `egt.atlas(links, dof, level, part, fractionation, search)`: the atlas of non-isomorphic gear-train
 //! graphs (egt_core::synthesis) as a list of dicts, one per member; and
 //! `atlas_member(train, level)`, the member a train is.
 
+use egt_core::synthesis::hypertree::enumerate_by_levels;
 use egt_core::synthesis::{
     AtlasMember, AtlasRequest, Fractionation, GraphLevel, enumerate, member,
 };
@@ -41,7 +42,7 @@ fn to_dict<'py>(py: Python<'py>, m: AtlasMember) -> Result<Bound<'py, PyDict>> {
 /// Every member with `links` links and `dof` DOF, at level `rotation` or
 /// `displacement`. Its defaults are `egt.atlas`'s, which checks the numbers.
 #[pyfunction]
-#[pyo3(signature = (links, dof, level, part, fractionation))]
+#[pyo3(signature = (links, dof, level, part, fractionation, search = "trees"))]
 pub fn atlas<'py>(
     py: Python<'py>,
     links: usize,
@@ -49,7 +50,19 @@ pub fn atlas<'py>(
     level: &str,
     part: Option<(usize, usize)>,
     fractionation: &str,
+    search: &str,
 ) -> Result<Vec<Bound<'py, PyDict>>> {
+    let by_levels = match search {
+        "trees" => false,
+        "levels" => true,
+        other => {
+            return Err(egt_core::Error::invalid(
+                "search",
+                format!("`{other}`: expected `trees` or `levels`"),
+            )
+            .into());
+        }
+    };
     let level = level_of(level)?;
     let fractionation = match fractionation {
         "layout" => Fractionation::Layout,
@@ -62,14 +75,19 @@ pub fn atlas<'py>(
             .into());
         }
     };
+    let req = AtlasRequest {
+        links,
+        dof,
+        level,
+        part,
+        fractionation,
+    };
     let members = guard(|| {
-        Ok(enumerate(&AtlasRequest {
-            links,
-            dof,
-            level,
-            part,
-            fractionation,
-        })?)
+        Ok(if by_levels {
+            enumerate_by_levels(&req)?
+        } else {
+            enumerate(&req)?
+        })
     })?;
     members.into_iter().map(|m| to_dict(py, m)).collect()
 }

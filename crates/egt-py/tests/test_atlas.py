@@ -1,5 +1,7 @@
 """egt.atlas: the enumerated gear-train graphs load back as trains."""
 
+from pathlib import Path
+
 import pytest
 
 import egt
@@ -62,3 +64,22 @@ def test_the_kinematic_sense_of_fractionation_is_stricter_for_two_dof() -> None:
     assert kinematic < layout and len(kinematic) == 3
     with pytest.raises(egt.EgtError, match="fractionation"):
         egt.atlas(6, fractionation="other")
+
+
+def test_the_ten_link_atlas_file_holds_a_recounted_part() -> None:
+    """Issue 46: data/atlas10_dof1_displacement.txt.gz is the ten-link
+    one-DOF atlas (docs/atlas.md: 903 812 displacement graphs, the sha256 of
+    its text pinned there); a part recounted now is in it, line for line."""
+    import gzip
+    import hashlib
+
+    path = Path(__file__).resolve().parents[3] / "data" / "atlas10_dof1_displacement.txt.gz"
+    text = gzip.decompress(path.read_bytes())
+    assert hashlib.sha256(text).hexdigest() == "66440f7db01e166cb7387a2195a8afae5ad8e7d046c91e8fc1b623227a3b889f"
+    lines = text.decode().splitlines()
+    assert len(lines) == len(set(lines)) == 903_812
+    part = egt.atlas(10, level="displacement", part=(7, 400), search="levels")
+    assert len(part) == 9455
+    assert {m["adjacency"] for m in part} <= set(lines)
+    # each line reads back as a ten-link train with eight gear pairs
+    assert all(line.count(":G") == 8 for line in lines[::10_000])

@@ -78,3 +78,20 @@ def test_the_atlas_in_parts_on_a_cluster_is_the_single_process_atlas(client: obj
         (links, level)]
     with pytest.raises(egt.SpecError, match="level"):
         egt.atlas_distributed(6, level="other", parts=2, client=client)
+
+
+def test_the_levels_first_atlas_in_parts_on_a_cluster_is_the_tree_first_atlas(client: object) -> None:
+    """Issue 46: the levels-first search (`egt enumerate --search levels`)
+    split over two workers gives the tree-first atlas at the displacement
+    level, each member once; its parts cannot split rotation graphs."""
+    one = egt.atlas(8, level="displacement")
+    parts = egt.atlas_distributed(8, level="displacement", parts=7, client=client, search="levels")
+    assert sorted(m["code"] for m in parts) == sorted(m["code"] for m in one)
+    assert len(parts) == 6360
+    # one process, rotation level: the same rotation graphs and counts
+    assert sorted((m["code"], m["displacement_graphs"]) for m in egt.atlas(7, search="levels")) == sorted(
+        (m["code"], m["displacement_graphs"]) for m in egt.atlas(7))
+    with pytest.raises(egt.SpecError, match="part"):
+        egt.atlas(7, part=(0, 2), search="levels")
+    with pytest.raises(egt.SpecError, match="search"):
+        egt.atlas(7, search="other")

@@ -686,8 +686,10 @@ fn checked_form(g: &ChainGraph, levels: &[usize]) -> Option<Emitted> {
     let first = Emitted::new(g, levels, &bfs);
     match egt_check(&first.adjacency) {
         Ok(_) => return Some(first),
-        // A rigid sub-chain fails egt's generic-rank check (locked or
-        // redundant) whatever the bearings: no other layout can pass.
+        // A rigid sub-chain (eq. 1 leaves it no motion) is not tried in
+        // other layouts: its Willis rows are dependent (redundant) or hold
+        // its links together (locked), and at 6-9 links egt's checks reject
+        // every such candidate in every layout (docs/atlas.md).
         Err(Error::Topology(
             TopologyError::NonPlanar { .. } | TopologyError::Fractionated { .. },
         )) if !has_rigid_subchain(g, levels) => {}

@@ -21,20 +21,25 @@ def atlas(
     level: str = "rotation",
     part: Optional[Tuple[int, int]] = None,
     fractionation: str = "layout",
+    search: str = "trees",
 ) -> List[Dict[str, Any]]:
     """Every member with ``links`` links and ``dof`` DOF at ``level``
     (``"rotation"`` or ``"displacement"``), as dicts (adjacency, links, dof,
     gears, carriers, axes, ...); ``part=(i, k)`` gives one of ``k`` disjoint
-    parts, as ``egt enumerate --part i/k`` does."""
+    parts, as ``egt enumerate --part i/k`` does. ``search="levels"`` finds
+    the same atlas levels first (``egt enumerate --search levels``: faster
+    from 9 links on; its parts split the displacement level only)."""
     if part is not None:
         i, k = part
         part = (count(i, "part[0]", _MAX), count(k, "part[1]", _MAX))
-    return _atlas(count(links, "links", _MAX), count(dof, "dof", _MAX), level, part, fractionation)
+    return _atlas(count(links, "links", _MAX), count(dof, "dof", _MAX), level, part, fractionation, search)
 
 
-def _part(links: int, dof: int, level: str, i: int, k: int, fractionation: str) -> List[Dict[str, Any]]:
+def _part(
+    links: int, dof: int, level: str, i: int, k: int, fractionation: str, search: str
+) -> List[Dict[str, Any]]:
     """One part on a worker."""
-    return _atlas(links, dof, level, (i, k), fractionation)
+    return _atlas(links, dof, level, (i, k), fractionation, search)
 
 
 def atlas_distributed(
@@ -45,6 +50,7 @@ def atlas_distributed(
     parts: Optional[int] = None,
     client: Any = None,
     fractionation: str = "layout",
+    search: str = "trees",
 ) -> List[Dict[str, Any]]:
     """The same atlas as :func:`atlas`, as ``parts`` disjoint parts (``egt
     enumerate --part i/k``) run as tasks on a Dask cluster: ``client`` (a
@@ -62,7 +68,7 @@ def atlas_distributed(
 
     def run(c: Any) -> List[Dict[str, Any]]:
         futures = c.map(_part, [links] * n, [dof] * n, [level] * n, range(n), [n] * n, [fractionation] * n,
-                        retries=2, pure=False)
+                        [search] * n, retries=2, pure=False)
         return [m for part in c.gather(futures) for m in part]
 
     return _dask.on_cluster(client, run)
