@@ -5,6 +5,8 @@
 use std::collections::BTreeSet;
 
 use super::*;
+use crate::Format;
+use crate::error::TopologyError;
 
 fn atlas(
     links: usize,
