@@ -567,6 +567,18 @@ fn generic_mobility(
             locked.extend([a, b]);
         }
     }
+    // A gear pair whose gear turns with its carrier for every motion never
+    // meshes (Willis then stops the other gear too): gears and carrier are a
+    // locked sub-chain even when no bearing joins two of them directly (a
+    // level may join them through other coaxial links).
+    for c in circuits {
+        if null
+            .iter()
+            .all(|v| speed(v, c.gear_i) == speed(v, c.carrier))
+        {
+            locked.extend([c.gear_i, c.gear_j, c.carrier]);
+        }
+    }
     if !locked.is_empty() {
         locked.sort();
         locked.dedup();

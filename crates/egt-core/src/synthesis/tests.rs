@@ -597,3 +597,22 @@ fn candidates_with_reasons() {
         rows.len()
     );
 }
+
+/// Found at ten links (docs/atlas.md): three gears 5, 8, 9 meshing in a loop
+/// on carrier 10, each joined to it only through another coaxial link (7, 4,
+/// 6), so no bearing joins two of them. No turning pair is locked, yet the
+/// gear loop cannot turn: `egt check` must call it locked, in this layout as
+/// in any, naming the four links.
+#[test]
+fn a_gear_loop_on_one_carrier_is_locked_whatever_the_bearings() {
+    let line = "1-7:a 2-8:b 3-9:c 4-8:d 4-10:d 5-7:e 7-10:e 6-9:f 6-10:f \
+                1-5:G 2-4:G 3-6:G 4-6:G 5-8:G 5-9:G 6-7:G 8-9:G";
+    match egt_check(line) {
+        Err(Error::Topology(TopologyError::Locked { links })) => {
+            let mut l = links;
+            l.sort();
+            assert_eq!(l, ["10", "5", "8", "9"]);
+        }
+        other => panic!("expected a locked sub-chain, got {other:?}"),
+    }
+}
