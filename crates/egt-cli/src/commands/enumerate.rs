@@ -15,7 +15,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use egt_core::synthesis::hypertree::{enumerate_by_levels_until, hypertrees};
 use egt_core::synthesis::{
-    AtlasRequest, Fractionation, GraphLevel, enumerate_until, member, units,
+    AtlasMember, AtlasRequest, Fractionation, GraphLevel, enumerate_until, member, units,
 };
 
 use crate::args::parse_part;
@@ -120,12 +120,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         })?;
         let m = member(&loaded.train, level)
             .map_err(|e| anyhow::Error::new(e).context(loaded.source))?;
-        let line = if args.jsonl {
-            serde_json::to_string(&m)?
-        } else {
-            m.adjacency
-        };
-        writeln!(out, "{line}")?;
+        writeln!(out, "{}", printed(m, args.jsonl)?)?;
         return Ok(());
     }
     let links = args.links.unwrap_or_default();
@@ -178,12 +173,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
             return Ok(());
         }
         for m in members {
-            let line = if args.jsonl {
-                serde_json::to_string(&m)?
-            } else {
-                m.adjacency
-            };
-            writeln!(out, "{line}")?;
+            writeln!(out, "{}", printed(m, args.jsonl)?)?;
         }
         return Ok(());
     }
@@ -205,11 +195,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
             return;
         }
         for m in members {
-            let line = if args.jsonl {
-                serde_json::to_string(&m).unwrap_or_default()
-            } else {
-                m.adjacency
-            };
+            let line = printed(m, args.jsonl).unwrap_or_default();
             if let Err(e) = writeln!(out, "{line}") {
                 failed = Some(e);
                 return;
@@ -232,4 +218,13 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         writeln!(out, "{total}")?;
     }
     Ok(())
+}
+
+/// A member as printed: its JSON line, or its adjacency line.
+fn printed(m: AtlasMember, jsonl: bool) -> serde_json::Result<String> {
+    if jsonl {
+        serde_json::to_string(&m)
+    } else {
+        Ok(m.adjacency)
+    }
 }
