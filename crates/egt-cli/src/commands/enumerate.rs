@@ -56,7 +56,7 @@ pub struct Args {
     #[arg(long)]
     pub count: bool,
     /// The most links asked for without a refusal: 9 links take about 10 s
-    /// on 2 cores; 10 take about 16 minutes with `--search levels` and many
+    /// on 2 cores; 10 take about 5 minutes with `--search levels` and many
     /// hours by trees (docs/atlas.md). Raise it to go further on purpose.
     #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_LINKS)]
     pub max_links: usize,
@@ -130,7 +130,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
             egt_core::SpecErrorKind::Invalid {
                 message: format!(
                     "{links} links is past the budget of {} (9 links take about 10 s on 2 cores, \
-                     10 about 16 minutes with --search levels and many hours by trees); \
+                     10 about 5 minutes with --search levels and many hours by trees); \
                      raise it with --max-links {links} if that is meant",
                     args.max_links
                 ),

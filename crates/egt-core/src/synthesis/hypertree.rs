@@ -100,8 +100,8 @@ fn level_of(h: &[u16], a: usize, b: usize) -> Option<usize> {
     h.iter().position(|&m| m & both == both)
 }
 
-/// A gear pair a hypertree allows: gears `i < j`, carrier `k`, the levels
-/// of the legs `i-k` and `j-k`, and the (link, level) incidences they touch.
+/// A gear pair a hypertree allows: gears `i < j`, carrier `k`, and the
+/// (link, level) incidences its legs `i-k` and `j-k` touch.
 #[derive(Debug, Clone, Copy)]
 struct Allowed {
     i: usize,

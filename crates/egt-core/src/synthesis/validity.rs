@@ -56,9 +56,11 @@ pub(super) fn checked_form(g: &ChainGraph, levels: &[usize]) -> Option<Emitted> 
     match egt_check(&first.adjacency) {
         Ok(_) => return Some(first),
         // A rigid sub-chain (eq. 1 leaves it no motion) is not tried in
-        // other layouts: its Willis rows are dependent (redundant) or hold
-        // its links together (locked), and at 6-9 links egt's checks reject
-        // every such candidate in every layout (docs/atlas.md).
+        // other layouts, a saving only: its Willis rows are dependent
+        // (redundant) or hold its links together (locked). At 6-9 links
+        // egt's checks reject every such candidate in every layout; at 10,
+        // the 9 that another layout let through are refused by the locked
+        // test of a gear pair that never turns (docs/atlas.md).
         Err(Error::Topology(
             TopologyError::NonPlanar { .. } | TopologyError::Fractionated { .. },
         )) if !has_rigid_subchain(g, levels) => {}
