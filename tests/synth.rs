@@ -433,3 +433,74 @@ fn a_layout_that_leaves_nothing_exits_2_and_a_brake_beside_a_one_way_is_found() 
     });
     assert!(found, "{}", r.stdout);
 }
+
+/// A concept search (`[concept]`): the structure, layout and teeth of a
+/// transmission from its ratios. Every candidate's written train passes
+/// `egt shift` with exactly the reported ratios, and the parts of the
+/// structure space merge to the whole search.
+#[test]
+fn a_concept_search_finds_trains_egt_shift_confirms_and_its_parts_merge() {
+    let dir = std::env::temp_dir().join(format!("egt-concept-{}", std::process::id()));
+    let dir_s = dir.display().to_string();
+    let spec = "examples/synth/concept_ford_c4.toml";
+    let v = synth(&["synth", spec, "--format", "json", "--write-specs", &dir_s]);
+    let found = v["candidates"].as_array().unwrap();
+    assert_eq!(found.len(), 10);
+    assert!(v["stats"]["structures"].as_u64().unwrap() > 100);
+    for c in found {
+        let concept = &c["concept"];
+        assert!(
+            concept["shafts"].as_array().unwrap().len() >= 5,
+            "{concept}"
+        );
+        let shift = synth(&["shift", c["spec"].as_str().unwrap(), "--format", "json"]);
+        assert_gear_ratios(&shift, c);
+    }
+    let whole: Vec<Value> = found.iter().map(|c| c["ratios"].clone()).collect();
+    let mut parts = Vec::new();
+    for i in 0..3 {
+        let part = format!("{i}/3");
+        let p = synth(&["synth", spec, "--format", "json", "--part", &part]);
+        parts.extend(p["candidates"].as_array().unwrap().iter().cloned());
+    }
+    // The best of the parts' candidates are the whole search's (scores
+    // equal, in order).
+    let mut scores: Vec<f64> = parts.iter().map(|c| c["score"].as_f64().unwrap()).collect();
+    scores.sort_by(f64::total_cmp);
+    let want: Vec<f64> = found.iter().map(|c| c["score"].as_f64().unwrap()).collect();
+    assert_eq!(&scores[..want.len()], &want[..]);
+    assert_eq!(whole.len(), 10);
+    // A table names the structure.
+    let table = stdout(&["synth", spec]);
+    assert!(
+        table.contains("concept search over the whole space"),
+        "{table}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_concept_specs_are_refused_by_field() {
+    let bad = |(from, to): (&str, &str), field: &str| {
+        let text = std::fs::read_to_string(root().join("examples/synth/concept_ford_c4.toml"))
+            .unwrap()
+            .replace(from, to);
+        let extra = to;
+        let out = egt(&["synth", "-", "--spec-format", "toml"], Some(&text));
+        assert_eq!(out.code, 2, "{extra}: {}", out.stderr);
+        assert!(out.stderr.contains(field), "{extra}: {}", out.stderr);
+    };
+    bad(("held = [0, 1]", "held = [2, 1]"), "concept.held");
+    bad(("input = \"any\"", "input = \"wheel\""), "input");
+    let text = std::fs::read_to_string(root().join("examples/synth/concept_ford_c4.toml")).unwrap();
+    let r = "\"R\" = [\"reverse_high_clutch\", \"low_reverse_band\"]";
+    let changed = text.replace(r, "\"R\" = [\"reverse_high_clutch\"]");
+    let out = egt(&["synth", "-", "--spec-format", "toml"], Some(&changed));
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("concept.states.R"), "{}", out.stderr);
+    let one = "\"1\" = [\"forward_clutch\", \"low_one_way\"]";
+    let changed = text.replace(one, "\"1\" = [\"forward_clutch\", \"band\"]");
+    let out = egt(&["synth", "-", "--spec-format", "toml"], Some(&changed));
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("concept.states.1"), "{}", out.stderr);
+}

@@ -3,7 +3,7 @@
 //! process can rebuild it from strings), run whole or by partition with the
 //! GIL released; results cross through the one conversion (`convert::to_py`).
 
-use egt_core::design::{Search, SynthSpec};
+use egt_core::design::{SynthSpec, Synthesis};
 use egt_core::{Format, parse_spec};
 use pyo3::prelude::*;
 use std::path::Path;
@@ -16,7 +16,7 @@ use crate::train::format_of;
 #[pyclass(frozen, module = "egt._egt", name = "SearchCore")]
 #[derive(Debug)]
 pub struct SearchCore {
-    search: Search,
+    search: Synthesis,
 }
 
 #[pymethods]
@@ -40,8 +40,13 @@ impl SearchCore {
             if let Some(top) = top {
                 spec.top = top;
             }
-            let base = parse_spec(base_text, base_format, base_source)?;
-            let search = Search::new(spec, base).map_err(egt_core::Error::from)?;
+            // A concept search (`[concept]`) has no base train.
+            let base = if Synthesis::is_concept(&spec) {
+                None
+            } else {
+                Some(parse_spec(base_text, base_format, base_source)?)
+            };
+            let search = Synthesis::new(spec, base).map_err(egt_core::Error::from)?;
             Ok(SearchCore { search })
         })
     }
@@ -49,7 +54,7 @@ impl SearchCore {
     /// The unknown sets, in the order of each candidate's lists.
     #[getter]
     fn sets(&self) -> Vec<String> {
-        self.search.set_names().to_vec()
+        self.search.set_names()
     }
 
     /// How many of the best candidates a run keeps.
@@ -83,8 +88,13 @@ impl SearchCore {
     fn candidate_spec(&self, candidate: &str) -> Result<String> {
         let c: egt_core::design::Candidate =
             serde_json::from_str(candidate).map_err(|e| value_error(format!("candidate: {e}")))?;
-        serde_json::to_string(&self.search.candidate_spec(&c.teeth, &c.layout))
-            .map_err(|e| value_error(e.to_string()))
+        let spec = guard(|| {
+            Ok(self
+                .search
+                .candidate_spec(&c)
+                .map_err(egt_core::Error::from)?)
+        })?;
+        serde_json::to_string(&spec).map_err(|e| value_error(e.to_string()))
     }
 
     /// Partitions' results (`run`'s, as JSON text) merged as one search's by
@@ -145,6 +155,17 @@ pub fn search_inputs(
             None => Format::sniff(&text),
         };
         let spec = SynthSpec::from_str(&text, format, &source)?;
+        if Synthesis::is_concept(&spec) {
+            // A concept search builds its trains: no base to read.
+            return Ok((
+                text,
+                name(format),
+                source,
+                String::new(),
+                "toml".into(),
+                String::new(),
+            ));
+        }
         let base = spec.base_path(file);
         let base_source = base.display().to_string();
         let base_text = std::fs::read_to_string(&base)

@@ -15,7 +15,7 @@ use std::time::Instant;
 use std::io::IsTerminal;
 
 use anyhow::Context;
-use egt_core::design::{Candidate, Search, Stats, SynthSpec};
+use egt_core::design::{Candidate, ConceptInfo, Stats, SynthSpec, Synthesis};
 use egt_core::{Format, parse_spec};
 use serde::Serialize;
 
@@ -110,6 +110,19 @@ struct Row {
     /// The freed elements' links (`[layout]`), element -> links.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     layout: Vec<(String, Vec<String>)>,
+    /// A concept search: the candidate's shafts, held members, input,
+    /// output and the equivalent positions and layouts.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    concept: Option<ConceptInfo>,
+    /// Per set, every admissible tooth set with the same basic ratios.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    same_ratio_teeth: Vec<Vec<egt_core::design::Teeth>>,
+    /// Lowest efficiency and largest element torque per unit input torque
+    /// over the targeted states.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    efficiency: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    element_torque: Option<f64>,
     ratios: Vec<RatioRow>,
     spec: Option<String>,
     /// `--tables`: the candidate's `egt shift --format json` document.
@@ -142,17 +155,23 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
         spec.max_leaves = n;
     }
     let file = (!is_stdin(&args.spec)).then_some(args.spec.as_path());
-    let base_path = spec.base_path(file);
-    let base_text = std::fs::read_to_string(&base_path).with_context(|| {
-        format!(
-            "{source}: base = {:?}: reading {}",
-            spec.base,
-            base_path.display()
-        )
-    })?;
-    let base_name = base_path.display().to_string();
-    let base = parse_spec(&base_text, Format::from_path(&base_name), &base_name)?;
-    let search = Search::new(spec, base)
+    // A concept search builds its own trains: no base to read.
+    let (base, base_name) = if Synthesis::is_concept(&spec) {
+        (None, String::new())
+    } else {
+        let base_path = spec.base_path(file);
+        let base_text = std::fs::read_to_string(&base_path).with_context(|| {
+            format!(
+                "{source}: base = {:?}: reading {}",
+                spec.base,
+                base_path.display()
+            )
+        })?;
+        let base_name = base_path.display().to_string();
+        let base = parse_spec(&base_text, Format::from_path(&base_name), &base_name)?;
+        (Some(base), base_name)
+    };
+    let search = Synthesis::new(spec, base)
         .map_err(egt_core::Error::from)
         .with_context(|| source.clone())?
         .with_cancel(interrupt::flag());
@@ -206,7 +225,9 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
                 .spec
                 .clone()
                 .unwrap_or_else(|| format!("candidate-{}", k + 1));
-            let train = egt_core::Train::from_spec(&search.candidate_spec(&c.teeth, &c.layout))?;
+            let train = egt_core::Train::from_spec(
+                &search.candidate_spec(c).map_err(egt_core::Error::from)?,
+            )?;
             let table = train
                 .shift_table()
                 .with_context(|| format!("{name}: gear table"))?;
@@ -247,7 +268,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn row(search: &Search, c: &Candidate, rank: usize, spec: Option<String>) -> Row {
+fn row(search: &Synthesis, c: &Candidate, rank: usize, spec: Option<String>) -> Row {
     Row {
         rank,
         score: c.score,
@@ -280,6 +301,10 @@ fn row(search: &Search, c: &Candidate, rank: usize, spec: Option<String>) -> Row
             })
             .collect(),
         layout: c.layout.clone(),
+        concept: c.concept.clone(),
+        same_ratio_teeth: c.same_ratio_teeth.clone(),
+        efficiency: c.efficiency,
+        element_torque: c.element_torque,
         spec,
         shift: None,
     }
@@ -287,32 +312,44 @@ fn row(search: &Search, c: &Candidate, rank: usize, spec: Option<String>) -> Row
 
 /// The candidate's train spec as JSON, for every other egt command.
 fn write_spec(
-    search: &Search,
+    search: &Synthesis,
     c: &Candidate,
     dir: &std::path::Path,
     rank: usize,
 ) -> anyhow::Result<String> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let path = dir.join(format!("candidate-{rank}.json"));
-    let text = serde_json::to_string_pretty(&search.candidate_spec(&c.teeth, &c.layout))?;
+    let spec = search.candidate_spec(c).map_err(egt_core::Error::from)?;
+    let text = serde_json::to_string_pretty(&spec)?;
     std::fs::write(&path, text + "\n").with_context(|| format!("writing {}", path.display()))?;
     Ok(path.display().to_string())
 }
 
 fn write_table(out: &mut dyn Write, r: &Report) -> anyhow::Result<()> {
-    writeln!(
-        out,
-        "{}: design search over {} (base {})",
-        r.source,
-        match (r.part, r.stats.interrupted) {
-            (Some([i, k]), false) => format!("partition {i} of {k}"),
-            (Some([i, k]), true) => format!("part of partition {i} of {k} (interrupted)"),
-            (None, false) => "the whole space".into(),
-            (None, true) => "part of the space (interrupted)".into(),
-        },
-        r.base
-    )?;
-    if r.stats.layouts > 1 || r.stats.skipped_layouts > 0 {
+    let over = match (r.part, r.stats.interrupted) {
+        (Some([i, k]), false) => format!("partition {i} of {k}"),
+        (Some([i, k]), true) => format!("part of partition {i} of {k} (interrupted)"),
+        (None, false) => "the whole space".into(),
+        (None, true) => "part of the space (interrupted)".into(),
+    };
+    if r.base.is_empty() {
+        writeln!(out, "{}: concept search over {over}", r.source)?;
+        writeln!(
+            out,
+            "{} structures, {} with layouts left after the gear states were checked over the whole box ({} state systems), {} element layouts searched",
+            r.stats.structures,
+            r.stats.structures_searched,
+            r.stats.states_checked,
+            r.stats.layouts
+        )?;
+    } else {
+        writeln!(
+            out,
+            "{}: design search over {over} (base {})",
+            r.source, r.base
+        )?;
+    }
+    if !r.base.is_empty() && (r.stats.layouts > 1 || r.stats.skipped_layouts > 0) {
         writeln!(
             out,
             "{} element layouts searched, {} skipped (an element doubled, a state not one DOF or singular for any teeth)",
@@ -331,7 +368,14 @@ fn write_table(out: &mut dyn Write, r: &Report) -> anyhow::Result<()> {
         r.candidates.len()
     )?;
     let Some(first) = r.candidates.first() else {
-        writeln!(out, "no tooth counts meet the targets within the tolerance")?;
+        if r.base.is_empty() {
+            writeln!(
+                out,
+                "no concept (structure, layout and teeth) meets the targets within the tolerance"
+            )?;
+        } else {
+            writeln!(out, "no tooth counts meet the targets within the tolerance")?;
+        }
         return Ok(());
     };
     let mut headers: Vec<String> = vec!["rank".into(), "score".into()];
@@ -345,6 +389,9 @@ fn write_table(out: &mut dyn Write, r: &Report) -> anyhow::Result<()> {
     headers.extend(first.ratios.iter().map(|x| format!("i{}", x.state)));
     if !first.layout.is_empty() {
         headers.push("layout".into());
+    }
+    if first.concept.is_some() {
+        headers.push("input, output, held; shafts".into());
     }
     let refs: Vec<&str> = headers.iter().map(String::as_str).collect();
     let mut t = Table::new(&refs).right(&[0, 1]);
@@ -372,6 +419,19 @@ fn write_table(out: &mut dyn Write, r: &Report) -> anyhow::Result<()> {
                 .map(|(e, links)| format!("{e}={}", links.join("+")))
                 .collect();
             cells.push(placed.join(" "));
+        }
+        if let Some(k) = &c.concept {
+            let held = if k.held.is_empty() {
+                "-".to_string()
+            } else {
+                k.held.join(" ")
+            };
+            cells.push(format!(
+                "{}, {}, {held}; {}",
+                k.input,
+                k.output,
+                k.shafts.join(" ")
+            ));
         }
         t.row(cells);
     }

@@ -13,7 +13,13 @@ use crate::spec::{exactly_two, optional_two};
 #[serde(deny_unknown_fields)]
 pub struct SynthSpec {
     /// Path of the base train spec, relative to the search spec's file.
+    /// Absent in a concept search (`[concept]`), which builds its trains.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
     pub base: String,
+    /// A concept search: the sets, elements and gear states are given, the
+    /// permanent connections between the sets' members are searched too.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub concept: Option<ConceptSpec>,
     /// Unknown sets: planetary set name -> tooth ranges. Sets not listed keep
     /// the base train's teeth.
     pub sets: IndexMap<String, SetRange>,
@@ -46,6 +52,61 @@ pub const DEFAULT_MAX_LEAVES: u64 = 10_000;
 
 fn default_max_leaves() -> u64 {
     DEFAULT_MAX_LEAVES
+}
+
+/// A concept search's fixed parts (`[concept]`, docs/synth.md "Concept
+/// search"): the kinds of the sets and elements and the gear states; the
+/// permanent connections, the input and output members and the elements'
+/// positions are searched.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConceptSpec {
+    /// Set name -> kind: `simple`, `double_pinion` or `ravigneaux`. Each
+    /// needs its tooth ranges under `[sets]`.
+    pub sets: IndexMap<String, crate::spec::PlanetaryKind>,
+    /// Element name -> kind: `brake`, `clutch`, `one_way_brake`, `one_way_clutch`.
+    pub elements: IndexMap<String, crate::spec::ElementKind>,
+    /// Gear state name -> the elements engaged in it (the same number in every state).
+    pub states: IndexMap<String, Vec<String>>,
+    /// Where the input is: `member` (on a member of a set, default),
+    /// `shaft` (a shaft of its own, reaching the sets through clutches) or `any`.
+    #[serde(default)]
+    pub input: InputRule,
+    /// How many members the case holds permanently, `[min, max]` (default `[0, 0]`).
+    #[serde(default = "no_held", deserialize_with = "exactly_two")]
+    pub held: [usize; 2],
+    /// Most structures the search may list (default 1 000 000).
+    #[serde(default = "default_max_structures")]
+    pub max_structures: u64,
+    /// Most nodes one structure's tooth search may visit (default 20 000);
+    /// a structure stopped there is counted in the report's `cut`.
+    #[serde(default = "default_max_nodes")]
+    pub max_nodes: u64,
+}
+
+/// Where a concept's input may be.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InputRule {
+    /// On a member of a set (a shaft that may join two members).
+    #[default]
+    Member,
+    /// A shaft of its own that reaches the sets only through clutches.
+    Shaft,
+    /// Either.
+    Any,
+}
+
+fn no_held() -> [usize; 2] {
+    [0, 0]
+}
+
+fn default_max_nodes() -> u64 {
+    20_000
+}
+
+fn default_max_structures() -> u64 {
+    1_000_000
 }
 
 /// Where a freed shift element may sit.

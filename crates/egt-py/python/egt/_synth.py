@@ -65,6 +65,17 @@ class Candidate:
     spec: str = field(default="", repr=False)
     """The candidate's train spec (JSON text): the base train with these
     teeth and this layout."""
+    concept: Optional[Dict[str, Any]] = None
+    """A concept search's structure: ``shafts`` (each named by its members,
+    ``P1.carrier=P4.ring``), ``held``, ``input``, ``output``,
+    ``equivalent_positions`` and ``equivalent_layouts`` (the same
+    transmission), ``structure`` (member ids)."""
+    same_ratio_teeth: Dict[str, Tuple[Dict[str, Any], ...]] = field(default_factory=dict)
+    """Per set, every admissible tooth set with the same basic ratios."""
+    efficiency: Optional[float] = None
+    """Lowest efficiency over the targeted states."""
+    element_torque: Optional[float] = None
+    """Largest engaged element torque per unit input torque over the targeted states."""
 
     def train(self) -> "Train":
         """The candidate's train, for every analysis (e.g. ``.shift_table()``)."""
@@ -95,6 +106,9 @@ class SynthResult:
                     row.update({f"{name}.sun2": t.sun2, f"{name}.planet2": t.planet2})
             row.update({f"ratio.{s}": float(x) for s, x in c.ratios.items()})
             row.update({f"layout.{e}": "+".join(links) for e, links in c.layout.items()})
+            if c.concept is not None:
+                row.update({"input": c.concept["input"], "output": c.concept["output"],
+                            "shafts": " ".join(c.concept["shafts"])})
             rows.append(row)
         return pd.DataFrame(rows).set_index("rank") if rows else pd.DataFrame()
 
@@ -161,6 +175,10 @@ def _candidate(core: SearchCore, rank: int, sets: Sequence[str], c: Mapping[str,
         },
         ratios={state: Fraction(exact) for state, _, exact in c["ratios"]},
         layout={e: tuple(links) for e, links in c.get("layout", [])},
+        concept=c.get("concept"),
+        same_ratio_teeth={name: tuple(ts) for name, ts in zip(sets, c.get("same_ratio_teeth", []))},
+        efficiency=c.get("efficiency"),
+        element_torque=c.get("element_torque"),
     )
 
 

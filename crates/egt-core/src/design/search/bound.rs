@@ -41,11 +41,56 @@ impl Search {
         Some((lo, hi))
     }
 
-    /// Does the box possibly hold a solution? (false = every state's window missed by some state.)
+    /// The Cramer numerator N and denominator D = det A of w_out = N / D
+    /// at every vertex of a box; None when A is singular at a vertex.
+    pub(super) fn state_vertices(
+        &self,
+        st: &StateSystem,
+        bounds: &[(usize, usize)],
+    ) -> Option<Vec<(f64, f64)>> {
+        let m = bounds.len();
+        let mut a = st.matrix.clone();
+        let mut out = Vec::with_capacity(1 << m);
+        for v in 0..(1usize << m) {
+            for (u, &(row, s, r, c)) in st.rows.iter().enumerate() {
+                let (b0, b1) = bounds[u];
+                let idx = if v >> u & 1 == 1 { b1 - 1 } else { b0 };
+                let k = self.dims[u].sign * self.dims[u].ks[idx];
+                willis_into(&mut a, (row, s, r, c), k);
+            }
+            let lu = a.clone().lu();
+            let det = lu.determinant();
+            let mut e = DVector::zeros(a.nrows());
+            e[st.input_row] = 1.0;
+            match lu.solve(&e) {
+                Some(w) if det != 0.0 && w[st.output].is_finite() => {
+                    out.push((w[st.output] * det, det));
+                }
+                // Singular here: N is the determinant with w_out's column
+                // replaced by the right-hand side (Cramer), D is 0.
+                _ => {
+                    let mut b = a.clone();
+                    b.set_column(st.output, &e);
+                    out.push((b.lu().determinant(), 0.0));
+                }
+            }
+        }
+        Some(out)
+    }
+
+    /// Does the box possibly hold a solution? (false = some state's window
+    /// missed.) N and D are affine in each k, so are f_lo = N - w_lo D and
+    /// f_hi = N - w_hi D, which take their extremes at the vertices; w_out =
+    /// N / D lies in [w_lo, w_hi] only where f_lo and f_hi differ in sign
+    /// (or vanish), whatever the sign of D. So a box where both are
+    /// positive at every vertex, or both negative, is dropped: this bounds
+    /// boxes where det A changes sign too.
     pub(super) fn feasible(&self, states: &[StateSystem], bounds: &[(usize, usize)]) -> bool {
         let tol = self.spec.targets.tolerance;
+        let narrow = self.narrowed();
         for st in states {
             let Some(t) = st.target else { continue };
+            let tol = tol.min(t.abs() * narrow);
             let (a, b) = (t - tol, t + tol);
             if a <= 0.0 && b >= 0.0 {
                 continue;
@@ -53,8 +98,8 @@ impl Search {
             // Output speed window 1/ratio.
             let (wlo, whi) = (1.0 / b, 1.0 / a);
             let (wlo, whi) = (wlo.min(whi), wlo.max(whi));
-            if let Some((lo, hi)) = self.state_range(st, bounds)
-                && (hi < wlo || lo > whi)
+            if let Some(v) = self.state_vertices(st, bounds)
+                && misses(&v, wlo, whi)
             {
                 return false;
             }
@@ -75,6 +120,7 @@ impl Search {
         // Stopped by the caller (`with_cancel`): stop too.
         if leaves.load(Relaxed) > self.spec.max_leaves
             || self.cancelled()
+            || self.node_limit.is_some_and(|m| nodes.load(Relaxed) > m)
             || !self.feasible(states, bounds)
         {
             return Vec::new();
@@ -90,8 +136,10 @@ impl Search {
             if self.teeth_of(bounds).is_none() {
                 return Vec::new();
             }
-            leaves.fetch_add(1, Relaxed);
+            // Counted (against the budget) when it passes the float check:
+            // each such leaf costs an exact confirmation.
             return if self.leaf_ok(states, bounds) {
+                leaves.fetch_add(1, Relaxed);
                 vec![bounds.iter().map(|b| b.0).collect()]
             } else {
                 Vec::new()
@@ -110,22 +158,40 @@ impl Search {
         l
     }
 
+    /// The relative error each targeted state may have for a candidate to
+    /// beat the shared incumbent (infinite without one): RMS <= s over n
+    /// states bounds each by s sqrt(n).
+    fn narrowed(&self) -> f64 {
+        self.incumbent.as_ref().map_or(f64::INFINITY, |inc| {
+            inc.threshold() * (self.spec.targets.ratios.len() as f64).sqrt()
+        })
+    }
+
     pub(super) fn leaf_ok(&self, states: &[StateSystem], bounds: &[(usize, usize)]) -> bool {
         let tol = self.spec.targets.tolerance;
         let mut fwd = Vec::new();
+        let (mut err2, mut nt) = (0.0, 0);
         for st in states {
             let Some((w, _)) = self.state_range(st, bounds) else {
                 return false;
             };
             let ratio = 1.0 / w;
-            if let Some(t) = st.target
-                && (ratio - t).abs() > tol
-            {
-                return false;
+            if let Some(t) = st.target {
+                if (ratio - t).abs() > tol {
+                    return false;
+                }
+                err2 += ((ratio - t) / t).powi(2);
+                nt += 1;
             }
             if ratio > 0.0 && ratio.is_finite() {
                 fwd.push(ratio);
             }
+        }
+        if let Some(inc) = &self.incumbent
+            && nt > 0
+            && (err2 / f64::from(nt)).sqrt() > inc.threshold()
+        {
+            return false;
         }
         if let Some([lo, hi]) = self.spec.targets.spread {
             let mx = fwd.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -149,4 +215,16 @@ impl Search {
             })
             .collect()
     }
+}
+
+/// Whether N / D misses [w_lo, w_hi] over a box, from (N, D) at its
+/// vertices: f_lo = N - w_lo D and f_hi = N - w_hi D both positive at every
+/// vertex, or both negative (see [`Search::feasible`]).
+pub(crate) fn misses(vertices: &[(f64, f64)], wlo: f64, whi: f64) -> bool {
+    let all = |f: &dyn Fn(f64) -> bool| {
+        vertices
+            .iter()
+            .all(|&(n, d)| f(n - wlo * d) && f(n - whi * d))
+    };
+    !vertices.is_empty() && (all(&|x| x > 0.0) || all(&|x| x < 0.0))
 }

@@ -27,6 +27,21 @@ pub struct Candidate {
     pub layout: Vec<(String, Vec<String>)>,
     /// Score: root mean square of (ratio - target) / target over the targeted states. Lower is better.
     pub score: f64,
+    /// Per unknown set: every admissible tooth set with the same basic
+    /// ratios (the first is `teeth`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub same_ratio_teeth: Vec<Vec<Teeth>>,
+    /// Lowest efficiency over the targeted states (the mesh efficiencies
+    /// given; 1 where none), from the exact analysis.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub efficiency: Option<f64>,
+    /// Largest |engaged element torque| per unit input torque over the
+    /// targeted states, from the exact analysis.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub element_torque: Option<f64>,
+    /// A concept search's structure of this candidate (None in a tooth search).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub concept: Option<crate::design::concept::ConceptInfo>,
 }
 
 /// Counts of a finished search.
@@ -39,7 +54,8 @@ pub struct Stats {
     pub ratio_space: f64,
     /// Branch-and-bound nodes visited.
     pub nodes: u64,
-    /// Leaves (full ratio vectors) evaluated.
+    /// Leaves (full ratio vectors) that passed the float check, each then
+    /// confirmed by an exact analysis (what `max_leaves` bounds).
     pub leaves: u64,
     /// Leaves that met the ratio targets but failed a target only the exact
     /// analysis can check (steps, progression, efficiency, element or mesh torque).
@@ -58,6 +74,26 @@ pub struct Stats {
     /// serde form when false.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub interrupted: bool,
+    /// A concept search: structures in the space (each once, up to
+    /// relabelling interchangeable sets).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub structures: u64,
+    /// A concept search: structures with a layout left to search after
+    /// the gear states were checked over the whole box of ratios.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub structures_searched: u64,
+    /// Searches stopped at their node limit (a concept search's structures
+    /// whose tooth search took more than `concept.max_nodes` nodes): their
+    /// candidates are exact, but their spaces were not all searched.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub cut: u64,
+    /// A concept search: distinct gear-state systems checked.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub states_checked: u64,
+}
+
+fn is_zero(x: &u64) -> bool {
+    *x == 0
 }
 
 /// Partitions' results as one search's: the candidates ranked together
@@ -70,8 +106,18 @@ pub fn merge(parts: Vec<(Vec<Candidate>, Stats)>, top: usize) -> (Vec<Candidate>
         // The spaces and layouts are the whole search's in every partition.
         total.tooth_space = s.tooth_space;
         total.ratio_space = s.ratio_space;
-        total.layouts = s.layouts;
-        total.skipped_layouts = s.skipped_layouts;
+        if s.structures > 0 || s.structures_searched > 0 {
+            // A concept search's parts count their own structures' layouts.
+            total.layouts += s.layouts;
+            total.skipped_layouts += s.skipped_layouts;
+        } else {
+            total.layouts = s.layouts;
+            total.skipped_layouts = s.skipped_layouts;
+        }
+        total.structures = s.structures;
+        total.structures_searched += s.structures_searched;
+        total.states_checked += s.states_checked;
+        total.cut += s.cut;
         total.nodes += s.nodes;
         total.leaves += s.leaves;
         total.rejected += s.rejected;
@@ -81,14 +127,34 @@ pub fn merge(parts: Vec<(Vec<Candidate>, Stats)>, top: usize) -> (Vec<Candidate>
     (found, total)
 }
 
-/// Sort by score (then by the teeth, so that the order is canonical) and keep `top`.
+/// Sort and keep `top`: by the ratio error (score), then the higher lowest
+/// efficiency, the smaller largest element torque, the fewer shafts (a
+/// concept), then by the teeth, layout and structure, so that the order is
+/// canonical.
 pub fn rank(c: &mut Vec<Candidate>, top: usize) {
+    let shafts = |x: &Candidate| x.concept.as_ref().map_or(0, |k| k.shafts.len());
     c.sort_by(|a, b| {
-        a.score.total_cmp(&b.score).then_with(|| {
-            let ka: Vec<_> = a.teeth.iter().map(|t| (t.sun, t.sun2, t.ring)).collect();
-            let kb: Vec<_> = b.teeth.iter().map(|t| (t.sun, t.sun2, t.ring)).collect();
-            ka.cmp(&kb).then_with(|| a.layout.cmp(&b.layout))
-        })
+        a.score
+            .total_cmp(&b.score)
+            .then_with(|| {
+                let e = |x: &Candidate| x.efficiency.unwrap_or(1.0);
+                e(b).total_cmp(&e(a))
+            })
+            .then_with(|| {
+                let t = |x: &Candidate| x.element_torque.unwrap_or(0.0);
+                t(a).total_cmp(&t(b))
+            })
+            .then_with(|| shafts(a).cmp(&shafts(b)))
+            .then_with(|| {
+                let ka: Vec<_> = a.teeth.iter().map(|t| (t.sun, t.sun2, t.ring)).collect();
+                let kb: Vec<_> = b.teeth.iter().map(|t| (t.sun, t.sun2, t.ring)).collect();
+                ka.cmp(&kb)
+            })
+            .then_with(|| a.layout.cmp(&b.layout))
+            .then_with(|| {
+                let k = |x: &Candidate| x.concept.as_ref().map(|k| k.structure.clone());
+                k(a).cmp(&k(b))
+            })
     });
     c.truncate(top);
 }

@@ -14,19 +14,7 @@ impl Search {
     /// The base spec with a candidate's layout and teeth written in.
     pub fn candidate_spec(&self, teeth: &[Teeth], layout: &[(String, Vec<String>)]) -> Spec {
         let mut spec = place(&self.base, layout);
-        for (name, t) in self.set_names.iter().zip(teeth) {
-            if let Some(p) = spec.planetary.iter_mut().find(|p| &p.name == name) {
-                p.teeth.sun = Some(t.sun);
-                p.teeth.ring = Some(t.ring);
-                p.teeth.planet = Some(t.planet);
-                if t.sun2.is_some() {
-                    p.teeth.sun2 = t.sun2;
-                }
-                if t.planet2.is_some() {
-                    p.teeth.planet2 = t.planet2;
-                }
-            }
-        }
+        write_teeth(&mut spec, &self.set_names, teeth);
         spec
     }
 
@@ -113,7 +101,23 @@ impl Search {
         let ratio = |ring: i64, sun: i64| {
             crate::numerics::exact::display(&crate::numerics::exact::frac(ring, sun))
         };
+        let targeted = || {
+            table
+                .gears
+                .iter()
+                .filter(|g| self.spec.targets.ratios.contains_key(&g.state))
+        };
+        let efficiency = targeted()
+            .filter_map(|g| g.power.as_ref().map(|p| p.efficiency))
+            .reduce(f64::min);
+        let element_torque = targeted()
+            .flat_map(|g| g.elements.iter().map(|e| e.torque.abs()))
+            .reduce(f64::max);
         Ok(Some(Candidate {
+            same_ratio_teeth: sets.iter().map(|t| (*t).clone()).collect(),
+            efficiency,
+            element_torque,
+            concept: None,
             basic: teeth.iter().map(|t| ratio(t.ring, t.sun)).collect(),
             basic2: teeth
                 .iter()
@@ -130,5 +134,22 @@ impl Search {
                 0.0
             },
         }))
+    }
+}
+
+/// Write each named set's teeth into a train spec.
+pub(crate) fn write_teeth(spec: &mut Spec, set_names: &[String], teeth: &[Teeth]) {
+    for (name, t) in set_names.iter().zip(teeth) {
+        if let Some(p) = spec.planetary.iter_mut().find(|p| &p.name == name) {
+            p.teeth.sun = Some(t.sun);
+            p.teeth.ring = Some(t.ring);
+            p.teeth.planet = Some(t.planet);
+            if t.sun2.is_some() {
+                p.teeth.sun2 = t.sun2;
+            }
+            if t.planet2.is_some() {
+                p.teeth.planet2 = t.planet2;
+            }
+        }
     }
 }

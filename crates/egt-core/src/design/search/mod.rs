@@ -20,6 +20,7 @@
 mod bound;
 mod candidates;
 mod confirm;
+mod incumbent;
 mod layouts;
 mod partitions;
 mod prepare;
@@ -27,10 +28,16 @@ mod space;
 mod systems;
 
 pub use crate::error::DesignError;
+pub(crate) use bound::misses;
 pub use candidates::{Candidate, Stats, merge, rank};
+pub(crate) use confirm::write_teeth;
+pub use incumbent::Incumbent;
 pub use layouts::MAX_LAYOUTS;
 pub use prepare::Search;
+pub(crate) use prepare::check_numbers;
+pub(crate) use space::SetSpace;
 pub use space::{MAX_SET_PAIRS, Teeth};
+pub(crate) use systems::searched_willis;
 
 #[cfg(test)]
 mod tests;

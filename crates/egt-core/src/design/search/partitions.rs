@@ -34,6 +34,23 @@ impl Search {
         self
     }
 
+    /// Share the best scores with other searches (one branch and bound over
+    /// a concept search's structures): see [`super::Incumbent`].
+    #[must_use]
+    pub fn with_incumbent(mut self, incumbent: Arc<super::Incumbent>) -> Self {
+        self.incumbent = Some(incumbent);
+        self
+    }
+
+    /// Stop a run after `nodes` nodes of the bound; the run then reports
+    /// [`Stats::cut`] (its candidates are exact, but the space was not all
+    /// searched).
+    #[must_use]
+    pub fn with_node_limit(mut self, nodes: u64) -> Self {
+        self.node_limit = Some(nodes);
+        self
+    }
+
     /// Whether the caller asked the run to stop ([`Search::with_cancel`]).
     pub(super) fn cancelled(&self) -> bool {
         self.cancel
@@ -106,7 +123,12 @@ impl Search {
                         break;
                     }
                     match self.confirm(pick, &ks)? {
-                        Some(c) => out.push(c),
+                        Some(c) => {
+                            if let Some(inc) = &self.incumbent {
+                                inc.offer(c.score);
+                            }
+                            out.push(c);
+                        }
                         None => rejected += 1,
                     }
                 }
@@ -115,6 +137,7 @@ impl Search {
             })
             .collect();
         stats.nodes = nodes.into_inner();
+        stats.cut = u64::from(self.node_limit.is_some_and(|m| stats.nodes > m));
         stats.leaves = leaves.into_inner();
         // Read once all is done: set at any point, the run was cut short.
         stats.interrupted = self.cancelled();

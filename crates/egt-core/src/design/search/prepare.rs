@@ -9,7 +9,7 @@ use crate::error::DesignError;
 use crate::spec::{PlanetaryKind, Spec};
 
 use super::layouts::{Layouts, doubled, layouts};
-use super::space::{Dim, basics, double_pinion_basics, ravigneaux};
+use super::space::{Dim, SetSpace};
 use super::systems::{Rows, Unknown, WillisRow, col, generic, states};
 
 /// A prepared search: the per-set candidate ratios and, per element layout,
@@ -31,6 +31,12 @@ pub struct Search {
     pub(super) skipped_layouts: u64,
     /// Set by the caller to stop a run early ([`Search::with_cancel`]).
     pub(super) cancel: Option<Arc<AtomicBool>>,
+    /// The best scores shared with other searches (a concept search's
+    /// structures): leaves that cannot make the top are not confirmed.
+    pub(super) incumbent: Option<Arc<super::incumbent::Incumbent>>,
+    /// Most nodes one run may visit before it stops and says so
+    /// ([`Stats::cut`](super::Stats::cut)); None: no limit.
+    pub(super) node_limit: Option<u64>,
 }
 
 impl Search {
@@ -40,6 +46,19 @@ impl Search {
     /// # Errors
     /// [`DesignError`] naming the offending field, set or state.
     pub fn new(spec: SynthSpec, base: Spec) -> Result<Search, DesignError> {
+        Search::build(spec, base, None, None)
+    }
+
+    /// [`Search::new`] with each set's ratios listed already (`cache`, by
+    /// set name) and, when `variants` is given, those layouts (an option
+    /// index per `[layout]` element) searched as they are, unjudged: a
+    /// concept search judges its layouts itself.
+    pub(crate) fn build(
+        spec: SynthSpec,
+        base: Spec,
+        cache: Option<&std::collections::HashMap<String, SetSpace>>,
+        variants: Option<Vec<Vec<u32>>>,
+    ) -> Result<Search, DesignError> {
         let tx = base
             .transmission
             .clone()
@@ -47,19 +66,6 @@ impl Search {
                 field: "base".into(),
                 message: "the base train has no [transmission] section".into(),
             })?;
-        let t = &spec.targets;
-        for (field, v) in [
-            ("tolerance", Some(t.tolerance)),
-            ("max_element_torque", t.max_element_torque),
-            ("max_mesh_torque", t.max_mesh_torque),
-        ] {
-            if v.is_some_and(|v| !(v > 0.0 && v.is_finite())) {
-                return Err(DesignError::Invalid {
-                    field: format!("targets.{field}"),
-                    message: "must be a positive number".into(),
-                });
-            }
-        }
         check_numbers(&spec)?;
         for s in spec.targets.ratios.keys() {
             if !tx.states.contains_key(s) {
@@ -124,8 +130,7 @@ impl Search {
                 .iter()
                 .find(|p| &p.name == name)
                 .map(|p| p.kind);
-            let field = |f: &str| format!("sets.{name}.{f}");
-            let unknown = match (kind, rows.as_slice()) {
+            let local = match (kind, rows.as_slice()) {
                 (None, _) if base.planetary.is_empty() => {
                     return Err(DesignError::Invalid {
                         field: format!("sets.{name}"),
@@ -135,49 +140,32 @@ impl Search {
                     });
                 }
                 (None, _) => return Err(DesignError::UnknownSet(name.clone())),
-                (Some(kind @ (PlanetaryKind::Simple | PlanetaryKind::DoublePinion)), &[row]) => {
-                    if range.sun2.is_some() {
-                        return Err(DesignError::Invalid {
-                            field: field("sun2"),
-                            message: "a simple or double-pinion set has one sun".into(),
-                        });
-                    }
-                    let (b, sign) = if kind == PlanetaryKind::Simple {
-                        (basics(name, range, &spec.constraints)?, 1.0)
-                    } else {
-                        (double_pinion_basics(name, range, &spec.constraints)?, -1.0)
-                    };
-                    dim_of[row] = Some(dims.len());
-                    dims.push(Dim {
-                        ks: b.iter().map(|x| x.k).collect(),
-                        sign,
-                    });
-                    Unknown {
-                        dims: vec![dims.len() - 1],
-                        teeth: b
-                            .into_iter()
-                            .enumerate()
-                            .map(|(i, x)| (vec![i], x.teeth))
-                            .collect(),
-                    }
-                }
-                (Some(PlanetaryKind::Ravigneaux), &[small, large]) => {
-                    let (k1, k2, teeth) = ravigneaux(name, range, &spec.constraints)?;
-                    dim_of[small] = Some(dims.len());
-                    dims.push(Dim { ks: k1, sign: -1.0 });
-                    dim_of[large] = Some(dims.len());
-                    dims.push(Dim { ks: k2, sign: 1.0 });
-                    Unknown {
-                        dims: vec![dims.len() - 2, dims.len() - 1],
-                        teeth,
-                    }
-                }
-                _ => {
+                (Some(kind), _)
+                    if rows.len()
+                        != if kind == PlanetaryKind::Ravigneaux {
+                            2
+                        } else {
+                            1
+                        } =>
+                {
                     return Err(DesignError::Invalid {
                         field: format!("sets.{name}"),
                         message: "the search finds the teeth of simple, double-pinion and Ravigneaux sets".into(),
                     });
                 }
+                (Some(kind), _) => match cache.and_then(|c| c.get(name)) {
+                    Some(space) => space.clone(),
+                    None => SetSpace::new(name, kind, range, &spec.constraints)?,
+                },
+            };
+            let first = dims.len();
+            for (row, dim) in rows.iter().zip(local.dims) {
+                dim_of[*row] = Some(dims.len());
+                dims.push(dim);
+            }
+            let unknown = Unknown {
+                dims: (first..dims.len()).collect(),
+                teeth: local.teeth,
             };
             unknowns.push(unknown);
         }
@@ -207,9 +195,13 @@ impl Search {
             variants: Vec::new(),
             skipped_layouts: 0,
             cancel: None,
+            incumbent: None,
+            node_limit: None,
         };
         search.check_base()?;
-        if search.layouts.names.is_empty() {
+        if let Some(v) = variants {
+            search.variants = v;
+        } else if search.layouts.names.is_empty() {
             // The base layout's errors are the spec's: say them.
             search.states(&[])?;
             search.variants.push(Vec::new());
@@ -268,7 +260,7 @@ impl Search {
 /// The search spec's numbers that the bound and the confirmation trust: every
 /// target finite and non-zero, the ranges' limits positive with min <= max,
 /// an efficiency in (0, 1], the constraints' counts in range.
-fn check_numbers(spec: &SynthSpec) -> Result<(), DesignError> {
+pub(crate) fn check_numbers(spec: &SynthSpec) -> Result<(), DesignError> {
     let bad = |field: String, message: &str| {
         Err(DesignError::Invalid {
             field,
@@ -276,6 +268,15 @@ fn check_numbers(spec: &SynthSpec) -> Result<(), DesignError> {
         })
     };
     let t = &spec.targets;
+    for (field, v) in [
+        ("tolerance", Some(t.tolerance)),
+        ("max_element_torque", t.max_element_torque),
+        ("max_mesh_torque", t.max_mesh_torque),
+    ] {
+        if v.is_some_and(|v| !(v > 0.0 && v.is_finite())) {
+            return bad(format!("targets.{field}"), "must be a positive number");
+        }
+    }
     if t.ratios.is_empty() {
         return bad(
             "targets.ratios".into(),

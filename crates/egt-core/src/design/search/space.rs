@@ -38,9 +38,9 @@ pub(super) struct Basic {
 /// One searched basic ratio: its distinct values, ascending, and the sign of
 /// its Willis row w_s + sign k w_r - (1 + sign k) w_c = 0.
 #[derive(Debug, Clone)]
-pub(super) struct Dim {
-    pub(super) ks: Vec<f64>,
-    pub(super) sign: f64,
+pub(crate) struct Dim {
+    pub(crate) ks: Vec<f64>,
+    pub(crate) sign: f64,
 }
 /// Most (sun, ring) pairs one set's ranges may span (each is visited once).
 pub const MAX_SET_PAIRS: i64 = 10_000_000;
@@ -297,4 +297,60 @@ pub(super) fn ravigneaux(
         k2.iter().map(value).collect(),
         teeth,
     ))
+}
+
+/// One unknown set's searched space: its dimensions (one basic ratio, two
+/// for a Ravigneaux set) and the admissible teeth of every combination of
+/// their indices that teeth make. Listed once per set and kind; a concept
+/// search shares it between structures.
+#[derive(Debug, Clone)]
+pub(crate) struct SetSpace {
+    pub(crate) dims: Vec<Dim>,
+    pub(crate) teeth: HashMap<Vec<usize>, Vec<Teeth>>,
+}
+
+impl SetSpace {
+    /// The space of set `name` of `kind` in `range` under `c`.
+    pub(crate) fn new(
+        name: &str,
+        kind: crate::spec::PlanetaryKind,
+        range: &SetRange,
+        c: &Constraints,
+    ) -> Result<SetSpace, DesignError> {
+        use crate::spec::PlanetaryKind;
+        let one = |b: Vec<Basic>, sign: f64| SetSpace {
+            dims: vec![Dim {
+                ks: b.iter().map(|x| x.k).collect(),
+                sign,
+            }],
+            teeth: b
+                .into_iter()
+                .enumerate()
+                .map(|(i, x)| (vec![i], x.teeth))
+                .collect(),
+        };
+        let bad = |message: &str| DesignError::Invalid {
+            field: format!("sets.{name}.sun2"),
+            message: message.into(),
+        };
+        match kind {
+            PlanetaryKind::Simple | PlanetaryKind::DoublePinion if range.sun2.is_some() => {
+                Err(bad("a simple or double-pinion set has one sun"))
+            }
+            PlanetaryKind::Simple => Ok(one(basics(name, range, c)?, 1.0)),
+            PlanetaryKind::DoublePinion => Ok(one(double_pinion_basics(name, range, c)?, -1.0)),
+            PlanetaryKind::Ravigneaux => {
+                let (k1, k2, teeth) = ravigneaux(name, range, c)?;
+                Ok(SetSpace {
+                    dims: vec![Dim { ks: k1, sign: -1.0 }, Dim { ks: k2, sign: 1.0 }],
+                    teeth,
+                })
+            }
+            _ => Err(DesignError::Invalid {
+                field: format!("sets.{name}"),
+                message: "the search finds the teeth of simple, double-pinion and Ravigneaux sets"
+                    .into(),
+            }),
+        }
+    }
 }

@@ -146,7 +146,7 @@ pub(super) fn states(
 /// A searched Willis row w_s + k w_r - (1 + k) w_c = 0 (k signed): eq. (2)'s
 /// row with tau = -k (the ratio of the sun to the ring with the carrier
 /// held), the coefficients of (w_s, w_r, w_c).
-pub(super) fn searched_willis(k: f64) -> [f64; 3] {
+pub(crate) fn searched_willis(k: f64) -> [f64; 3] {
     willis_row(-k)
 }
 
