@@ -504,3 +504,23 @@ fn bad_concept_specs_are_refused_by_field() {
     assert_eq!(out.code, 2, "{}", out.stderr);
     assert!(out.stderr.contains("concept.states.1"), "{}", out.stderr);
 }
+
+/// The concept search's own budgets: too many structures is refused with
+/// the code `budget` naming how to raise it; a structure's tooth search
+/// stopped at `max_nodes` is counted in the report's `cut`.
+#[test]
+fn a_concept_search_is_bounded_and_says_where_it_was_cut() {
+    let text = std::fs::read_to_string(root().join("examples/synth/concept_ford_c4.toml")).unwrap();
+    let few = text.replace("held = [0, 1]", "held = [0, 1]\nmax_structures = 10");
+    let out = egt(&["synth", "-", "--spec-format", "toml"], Some(&few));
+    assert_eq!(out.code, 1, "{}", out.stderr);
+    assert!(out.stderr.contains("max_structures"), "{}", out.stderr);
+    let cut = text.replace("held = [0, 1]", "held = [0, 1]\nmax_nodes = 1");
+    let out = egt(
+        &["synth", "-", "--spec-format", "toml", "--format", "json"],
+        Some(&cut),
+    );
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let v: Value = serde_json::from_str(&out.stdout).unwrap();
+    assert!(v["stats"]["cut"].as_u64().unwrap() > 0, "{}", v["stats"]);
+}
