@@ -19,8 +19,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use serde::{Deserialize, Serialize};
 
 use crate::design::search::{
-    Candidate, Incumbent, MAX_LAYOUTS, Search, SetSpace, Stats, check_numbers, merge, rank,
-    write_teeth,
+    Candidate, Incumbent, MAX_LAYOUTS, Search, SetSpace, Stats, check_numbers, check_partition,
+    merge, rank, write_teeth,
 };
 use crate::design::spec::{ConceptSpec, SynthSpec};
 use crate::error::DesignError;
@@ -301,9 +301,6 @@ impl Concepts {
             set_of,
             order: Vec::new(),
             completes: Vec::new(),
-            // No halvings: on a sample of the 8HP's space, two halvings
-            // pruned no more layouts and took three times as long.
-            depth: 0,
         };
         problem.plan();
         Ok(Concepts {
@@ -346,22 +343,6 @@ impl Concepts {
         self.concept.sets.keys().cloned().collect()
     }
 
-    /// The space's canonical form of any structure (relabelled copies give
-    /// the same).
-    pub fn canonical(&self, s: &Structure) -> (Vec<u8>, (u8, u8)) {
-        structures::canonical_key(&self.space(), s)
-    }
-
-    fn space(&self) -> Space {
-        Space {
-            sets: self.sets.clone(),
-            members: self.members.len(),
-            dof: self.problem.states.first().map_or(0, |s| s.0.len()) + 1,
-            input: self.concept.input,
-            held: self.concept.held,
-        }
-    }
-
     /// The train of a candidate (its structure, layout and teeth).
     ///
     /// # Errors
@@ -385,12 +366,7 @@ impl Concepts {
         part: usize,
         parts: usize,
     ) -> Result<(Vec<Candidate>, Stats), DesignError> {
-        if parts == 0 || part >= parts {
-            return Err(DesignError::Invalid {
-                field: "partition".into(),
-                message: format!("{part} of {parts}"),
-            });
-        }
+        check_partition(part, parts)?;
         use rayon::prelude::*;
         let ids: Vec<usize> = (part..self.structures.len()).step_by(parts).collect();
         let incumbent = Arc::new(Incumbent::new(self.spec.top));

@@ -33,6 +33,7 @@ pub use candidates::{Candidate, Stats, merge, rank};
 pub(crate) use confirm::write_teeth;
 pub use incumbent::Incumbent;
 pub use layouts::MAX_LAYOUTS;
+pub(crate) use partitions::check_partition;
 pub use prepare::Search;
 pub(crate) use prepare::check_numbers;
 pub(crate) use space::SetSpace;

@@ -74,12 +74,7 @@ impl Search {
         part: usize,
         parts: usize,
     ) -> Result<(Vec<Candidate>, Stats), DesignError> {
-        if parts == 0 || part >= parts {
-            return Err(DesignError::Invalid {
-                field: "partition".into(),
-                message: format!("{part} of {parts}"),
-            });
-        }
+        check_partition(part, parts)?;
         // In u128: part and parts come from the command line and may be huge.
         let len = self.max_partitions() as u128;
         let slice =
@@ -211,4 +206,16 @@ impl Search {
     pub fn run(&self) -> Result<(Vec<Candidate>, Stats), DesignError> {
         self.run_partition(0, 1)
     }
+}
+
+/// A partition `part` of `parts` that exists (0 <= part < parts), or the
+/// `partition` error both searches give.
+pub(crate) fn check_partition(part: usize, parts: usize) -> Result<(), DesignError> {
+    if parts == 0 || part >= parts {
+        return Err(DesignError::Invalid {
+            field: "partition".into(),
+            message: format!("{part} of {parts}"),
+        });
+    }
+    Ok(())
 }
