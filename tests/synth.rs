@@ -445,8 +445,16 @@ fn a_concept_search_finds_trains_egt_shift_confirms_and_its_parts_merge() {
     let spec = "examples/synth/concept_ford_c4.toml";
     let v = synth(&["synth", spec, "--format", "json", "--write-specs", &dir_s]);
     let found = v["candidates"].as_array().unwrap();
-    assert_eq!(found.len(), 10);
+    // Eight concepts (structure and layout, each once; top = 10) meet the
+    // C4's rounded ratios, each listing its other tooth sets.
+    assert_eq!(found.len(), 8);
     assert!(v["stats"]["structures"].as_u64().unwrap() > 100);
+    assert!(
+        !found[0]["concept"]["tooth_options"]
+            .as_array()
+            .unwrap()
+            .is_empty()
+    );
     for c in found {
         let concept = &c["concept"];
         assert!(
@@ -469,7 +477,14 @@ fn a_concept_search_finds_trains_egt_shift_confirms_and_its_parts_merge() {
     scores.sort_by(f64::total_cmp);
     let want: Vec<f64> = found.iter().map(|c| c["score"].as_f64().unwrap()).collect();
     assert_eq!(&scores[..want.len()], &want[..]);
-    assert_eq!(whole.len(), 10);
+    assert_eq!(whole.len(), 8);
+    // Each concept's tooth options are the same from the parts.
+    let concepts = |v: &[Value]| {
+        let mut c: Vec<String> = v.iter().map(|c| c["concept"].to_string()).collect();
+        c.sort();
+        c
+    };
+    assert_eq!(concepts(&parts), concepts(found));
     // A table names the structure.
     let table = stdout(&["synth", spec]);
     assert!(

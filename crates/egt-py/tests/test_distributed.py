@@ -49,12 +49,14 @@ def test_synth_distributed_equals_single_process_even_when_a_worker_dies(client:
 
 def concept_key(r: egt.SynthResult) -> list:
     return [(c.score, c.concept["structure"] if c.concept else None, sorted(c.layout.items()),
-             [(t.sun, t.ring) for t in c.sets.values()]) for c in r.candidates]
+             [(t.sun, t.ring) for t in c.sets.values()],
+             c.concept.get("tooth_options") if c.concept else None) for c in r.candidates]
 
 
 def test_a_concept_search_over_dask_equals_one_process(client: object) -> None:
     """The concept search's structures split into tasks (structure i in part
-    i mod K) give the one-process candidates, structures and layouts included."""
+    i mod K) give the one-process candidates, structures, layouts and tooth
+    options included."""
     spec = ROOT / "examples" / "synth" / "concept_ford_c4.toml"
     single = egt.synth(spec, top=30)
     dist = egt.synth_distributed(spec, client=client, partitions=7, top=30)
@@ -64,6 +66,7 @@ def test_a_concept_search_over_dask_equals_one_process(client: object) -> None:
     assert dist.stats["structures_searched"] == single.stats["structures_searched"]
     best = single.candidates[0]
     assert best.concept is not None and best.concept["output"]
+    assert best.concept["tooth_options"], "the best concept lists its other teeth"
     # The candidate's train is egt's, with the ratios reported.
     table = best.train().shift_table()
     assert {g.state: g.ratio_exact for g in table.gears} == best.ratios

@@ -436,11 +436,52 @@ fn write_table(out: &mut dyn Write, r: &Report) -> anyhow::Result<()> {
         t.row(cells);
     }
     t.write(out, 2)?;
+    write_tooth_options(out, r)?;
     writeln!(
         out,
         "(k = ring/sun, k2 = ring/sun2; +N: N other tooth sets with the same k; ratios are exact, e.g. {} = {})",
         first.ratios.first().map_or("", |x| x.state.as_str()),
         first.ratios.first().map_or("", |x| x.exact.as_str()),
     )?;
+    Ok(())
+}
+
+/// A concept search's other tooth sets per concept, a line each: the basic
+/// ratios per set and the score.
+fn write_tooth_options(out: &mut dyn Write, r: &Report) -> anyhow::Result<()> {
+    let listed: Vec<(usize, &ConceptInfo)> = r
+        .candidates
+        .iter()
+        .filter_map(|c| c.concept.as_ref().map(|k| (c.rank, k)))
+        .filter(|(_, k)| !k.tooth_options.is_empty())
+        .collect();
+    if listed.is_empty() {
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "other tooth sets of each concept meeting the targets, best first (k per set, score):"
+    )?;
+    for (rank, k) in listed {
+        let options: Vec<String> = k
+            .tooth_options
+            .iter()
+            .map(|o| {
+                let ks: Vec<String> = o
+                    .basic
+                    .iter()
+                    .zip(&o.basic2)
+                    .map(|(b, b2)| b2.as_ref().map_or(b.clone(), |b2| format!("{b},{b2}")))
+                    .collect();
+                format!("{} ({:.1e})", ks.join(" "), o.score)
+            })
+            .collect();
+        let cut = if k.tooth_options_cut {
+            " (search cut at concept.max_nodes: may miss some)"
+        } else {
+            ""
+        };
+        writeln!(out, "  {rank:>4}: {}{cut}", options.join("; "))?;
+    }
     Ok(())
 }

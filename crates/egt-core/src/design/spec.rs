@@ -82,6 +82,10 @@ pub struct ConceptSpec {
     /// a structure stopped there is counted in the report's `cut`.
     #[serde(default = "default_max_nodes")]
     pub max_nodes: u64,
+    /// How many other tooth sets each reported concept lists, best first
+    /// (default 20; 0: none). `top` counts concepts, each once.
+    #[serde(default = "default_options")]
+    pub options: usize,
 }
 
 /// Where a concept's input may be.
@@ -99,6 +103,10 @@ pub enum InputRule {
 
 fn no_held() -> [usize; 2] {
     [0, 0]
+}
+
+fn default_options() -> usize {
+    20
 }
 
 fn default_max_nodes() -> u64 {

@@ -69,7 +69,11 @@ class Candidate:
     """A concept search's structure: ``shafts`` (each named by its members,
     ``P1.carrier=P4.ring``), ``held``, ``input``, ``output``,
     ``equivalent_positions`` and ``equivalent_layouts`` (the same
-    transmission), ``structure`` (member ids)."""
+    transmission), ``tooth_options`` (the concept's other tooth sets meeting
+    the targets, best first: ``basic``, ``teeth``, ``ratios``, ``score``;
+    ``tooth_options_cut`` if their search hit ``max_nodes``), ``structure``
+    (member ids). A concept search reports each concept once: ``top``
+    counts concepts."""
     same_ratio_teeth: Dict[str, Tuple[Dict[str, Any], ...]] = field(default_factory=dict)
     """Per set, every admissible tooth set with the same basic ratios."""
     efficiency: Optional[float] = None

@@ -6,6 +6,7 @@
 //! and all candidates are ranked together.
 
 mod layouts;
+mod options;
 mod structures;
 mod train;
 
@@ -27,6 +28,7 @@ use crate::error::DesignError;
 use crate::spec::{ElementKind, PlanetaryKind, Spec};
 
 use layouts::{DimBox, Layouts, Problem};
+pub use options::ToothOption;
 pub use structures::Structure;
 use structures::{SetSlot, Space, roles, willis_rows};
 
@@ -35,6 +37,9 @@ type Layout = Vec<(String, Vec<String>)>;
 
 /// Most members (of all sets together) a concept may have.
 pub const MAX_MEMBERS: usize = 24;
+
+/// Most tooth options a concept may list (`concept.options`).
+pub const MAX_OPTIONS: usize = 1000;
 
 /// Most sets a concept may have (the relabellings are tried one by one).
 pub const MAX_SETS: usize = 6;
@@ -59,6 +64,14 @@ pub struct ConceptInfo {
     /// together (or held) in every gear state: the same transmission.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub equivalent_layouts: Vec<Vec<(String, Vec<String>)>>,
+    /// This concept's other tooth sets meeting the targets (other basic
+    /// ratios), best first, at most `concept.options`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub tooth_options: Vec<ToothOption>,
+    /// The search for `tooth_options` stopped at `concept.max_nodes`: the
+    /// list may miss some.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub tooth_options_cut: bool,
     /// The structure itself (member ids), to rebuild the train.
     pub structure: Structure,
 }
@@ -103,6 +116,12 @@ impl Concepts {
             ));
         }
         check_numbers(&spec)?;
+        if concept.options > MAX_OPTIONS {
+            return Err(bad(
+                "concept.options",
+                format!("list at most {MAX_OPTIONS} tooth options per concept"),
+            ));
+        }
         if concept.sets.is_empty() || concept.sets.len() > MAX_SETS {
             return Err(bad("concept.sets", format!("give 1 to {MAX_SETS} sets")));
         }
@@ -378,7 +397,8 @@ impl Concepts {
         for r in results {
             done.push(r?);
         }
-        let (found, mut stats) = merge(done, self.spec.top);
+        let (mut found, mut stats) = merge(done, self.spec.top);
+        self.add_tooth_options(&mut found)?;
         self.space_counts(&mut stats);
         stats.interrupted = self.cancelled();
         Ok((found, stats))
@@ -435,7 +455,7 @@ impl Concepts {
     }
 
     /// One structure: its layouts judged, then the tooth search over the
-    /// layouts left.
+    /// layouts left, each layout (a concept) reporting its best teeth.
     fn run_structure(
         &self,
         i: usize,
@@ -450,57 +470,18 @@ impl Concepts {
             return Ok((Vec::new(), stats));
         }
         let s = &self.structures[i];
-        let Some(mut lay) = Layouts::new(&self.problem, s) else {
+        let Some(j) = self.judge(s, &mut stats) else {
             return Ok((Vec::new(), stats));
         };
-        let picks = lay.run(MAX_LAYOUTS);
-        stats.skipped_layouts = lay.idle;
-        stats.states_checked = lay.checked;
-        if picks.is_empty() {
-            return Ok((Vec::new(), stats));
-        }
         stats.structures_searched = 1;
-        let names = self.shaft_names(s);
-        let link = |o: &layouts::Opt| -> Vec<String> {
-            std::iter::once(o.a)
-                .chain(o.b)
-                .map(|x| names[x].clone())
-                .collect()
+        let picks = j.picks.iter().map(|(p, _)| p.clone()).collect();
+        let Some(search) = self.tooth_search(s, &j, picks, self.spec.top)? else {
+            return Ok((Vec::new(), stats));
         };
-        let choices: Vec<Vec<Vec<String>>> = (0..self.problem.elements.len())
-            .map(|e| lay.opts(e).iter().map(link).collect())
-            .collect();
-        let named = |pick: &[u32]| -> Vec<(String, Vec<String>)> {
-            self.concept
-                .elements
-                .keys()
-                .zip(pick)
-                .zip(&choices)
-                .map(|((n, &k), c)| (n.clone(), c[k as usize].clone()))
-                .collect()
-        };
-        let reps: Vec<Layout> = picks.iter().map(|(p, _)| named(p)).collect();
-        let others: Vec<Vec<Layout>> = picks
-            .iter()
-            .map(|(_, same)| same.iter().map(|p| named(p)).collect())
-            .collect();
-        let sub = self.sub_spec(choices.clone());
-        let base = self.train(s, &reps[0]);
-        let picks = picks.into_iter().map(|(p, _)| p).collect();
-        let search = match Search::build(sub, base, Some(&self.cache), Some(picks)) {
-            Ok(search) => search,
-            // A structure egt itself refuses (e.g. a locked sub-chain for
-            // every layout) has no candidates.
-            Err(DesignError::Egt(_)) => return Ok((Vec::new(), stats)),
-            Err(e) => return Err(e),
-        };
-        let search = match &self.cancel {
-            Some(f) => search.with_cancel(f.clone()),
-            None => search,
-        }
-        .with_incumbent(incumbent.clone())
-        .with_node_limit(self.concept.max_nodes);
-        let (mut found, inner) = search.run()?;
+        let (mut found, inner) = search
+            .with_incumbent(incumbent.clone())
+            .best_per_layout(i as u64)
+            .run()?;
         stats.layouts = inner.layouts;
         stats.nodes = inner.nodes;
         stats.leaves = inner.leaves;
@@ -513,7 +494,7 @@ impl Concepts {
                 let Some(placed) = c.layout.iter().find(|(n, _)| n == *name) else {
                     continue;
                 };
-                let opt = lay.opts(e).iter().find(|o| link(o) == placed.1);
+                let opt = j.lay.opts(e).iter().find(|o| j.link(o) == placed.1);
                 if let Some(o) = opt
                     && !o.variants.is_empty()
                 {
@@ -521,32 +502,85 @@ impl Concepts {
                         (*name).clone(),
                         o.variants
                             .iter()
-                            .map(|&(a, b)| vec![names[a].clone(), names[b].clone()])
+                            .map(|&(a, b)| vec![j.names[a].clone(), j.names[b].clone()])
                             .collect(),
                     ));
                 }
             }
-            let equivalent_layouts = reps
+            let equivalent_layouts = j
+                .picks
                 .iter()
-                .position(|r| *r == c.layout)
-                .map(|i| others[i].clone())
+                .find(|(p, _)| j.named(p) == c.layout)
+                .map(|(_, same)| same.iter().map(|p| j.named(p)).collect())
                 .unwrap_or_default();
             c.concept = Some(ConceptInfo {
-                shafts: names.clone(),
+                shafts: j.names.clone(),
                 held: s
                     .held
                     .iter()
                     .map(|&m| self.members[m as usize].clone())
                     .collect(),
-                input: names[s.input].clone(),
-                output: names[s.output].clone(),
+                input: j.names[s.input].clone(),
+                output: j.names[s.output].clone(),
                 equivalent_positions: equivalent,
                 equivalent_layouts,
+                tooth_options: Vec::new(),
+                tooth_options_cut: false,
                 structure: s.clone(),
             });
         }
         rank(&mut found, self.spec.top);
         Ok((found, stats))
+    }
+
+    /// A structure's layouts judged state by state (None: no layout left).
+    fn judge<'a>(&'a self, s: &'a Structure, stats: &mut Stats) -> Option<Judged<'a>> {
+        let mut lay = Layouts::new(&self.problem, s)?;
+        let picks = lay.run(MAX_LAYOUTS);
+        stats.skipped_layouts = lay.idle;
+        stats.states_checked = lay.checked;
+        if picks.is_empty() {
+            return None;
+        }
+        let names = self.shaft_names(s);
+        let choices = (0..self.problem.elements.len())
+            .map(|e| lay.opts(e).iter().map(|o| link(&names, o)).collect())
+            .collect();
+        Some(Judged {
+            lay,
+            names,
+            choices,
+            elements: self.concept.elements.keys().cloned().collect(),
+            picks,
+        })
+    }
+
+    /// The tooth search over `picks` of a judged structure, keeping `top`
+    /// (None: egt refuses the structure's train, e.g. a locked sub-chain
+    /// for every layout).
+    fn tooth_search(
+        &self,
+        s: &Structure,
+        j: &Judged<'_>,
+        picks: Vec<Vec<u32>>,
+        top: usize,
+    ) -> Result<Option<Search>, DesignError> {
+        let Some(first) = picks.first() else {
+            return Ok(None);
+        };
+        let mut sub = self.sub_spec(j.choices.clone());
+        sub.top = top;
+        let base = self.train(s, &j.named(first));
+        let search = match Search::build(sub, base, Some(&self.cache), Some(picks)) {
+            Ok(search) => search,
+            Err(DesignError::Egt(_)) => return Ok(None),
+            Err(e) => return Err(e),
+        };
+        let search = match &self.cancel {
+            Some(f) => search.with_cancel(f.clone()),
+            None => search,
+        };
+        Ok(Some(search.with_node_limit(self.concept.max_nodes)))
     }
 
     /// The search spec of one structure: the concept's sets, targets and
@@ -571,4 +605,41 @@ impl Concepts {
     fn train(&self, s: &Structure, layout: &[(String, Vec<String>)]) -> Spec {
         train::train(&self.concept, &self.sets, &self.members, s, layout)
     }
+}
+
+/// A structure's layouts left after the state checks, with their names.
+struct Judged<'a> {
+    lay: Layouts<'a>,
+    /// The shafts' names.
+    names: Vec<String>,
+    /// Per element, its options' links.
+    choices: Vec<Vec<Vec<String>>>,
+    /// The elements' names.
+    elements: Vec<String>,
+    /// Each layout kept, with the layouts equivalent to it.
+    picks: Vec<(Vec<u32>, Vec<Vec<u32>>)>,
+}
+
+impl Judged<'_> {
+    /// A layout as a candidate names it.
+    fn named(&self, pick: &[u32]) -> Layout {
+        self.elements
+            .iter()
+            .zip(pick)
+            .zip(&self.choices)
+            .map(|((n, &k), c)| (n.clone(), c[k as usize].clone()))
+            .collect()
+    }
+
+    fn link(&self, o: &layouts::Opt) -> Vec<String> {
+        link(&self.names, o)
+    }
+}
+
+/// An option's links by shaft name.
+fn link(names: &[String], o: &layouts::Opt) -> Vec<String> {
+    std::iter::once(o.a)
+        .chain(o.b)
+        .map(|x| names[x].clone())
+        .collect()
 }

@@ -239,12 +239,14 @@ fn small_structure_spaces_equal_brute_force_up_to_relabelling() {
 /// structure and layout (the suns joined, the front carrier and rear ring on
 /// the output, a separate input shaft clutched to the front ring and to the
 /// suns, the band on the suns, the low brake and one-way brake on the rear
-/// carrier; the sets' names are the search's to swap) is the best-ranked
-/// concept, and its real teeth (33/72, 33/72) are among its candidates.
+/// carrier; the sets' names are the search's to swap) is among the top 10
+/// concepts, each concept reported once, and its real teeth (33/72, 33/72)
+/// are among its tooth options. Every candidate and every option is a
+/// train egt's shift table confirms with the ratios reported.
 #[test]
 fn the_c4_concept_is_found_from_its_ratios() {
-    let mut c = load("concept_ford_c4.toml");
-    c.spec.top = 40;
+    let c = load("concept_ford_c4.toml");
+    assert_eq!(c.top(), 10);
     let (found, stats) = c.run().unwrap();
     assert_eq!(stats.structures, c.structures().len() as u64);
     assert_eq!(stats.cut, 0);
@@ -283,26 +285,57 @@ fn the_c4_concept_is_found_from_its_ratios() {
         ("low_one_way".to_string(), vec!["front.carrier".to_string()]),
     ];
     let is_c4 = |x: &Candidate| real(x.concept.as_ref().unwrap()) && x.layout == layout;
-    // The best candidate with a separate input shaft is the C4's concept.
-    let first = found
+    // Each concept (structure and layout) once.
+    let mut concepts: Vec<_> = found
         .iter()
-        .find(|x| x.concept.as_ref().unwrap().input == "input")
-        .unwrap();
-    assert!(is_c4(first), "{first:?}");
-    let teeth = found
+        .map(|x| {
+            (
+                x.concept.as_ref().unwrap().structure.clone(),
+                x.layout.clone(),
+            )
+        })
+        .collect();
+    concepts.sort();
+    concepts.dedup();
+    assert_eq!(concepts.len(), found.len());
+    let c4 = found
         .iter()
-        .filter(|x| is_c4(x))
-        .any(|x| x.basic == ["24/11", "24/11"]);
-    assert!(teeth, "the C4's 33/72 sets among its candidates");
-    // Every candidate is a train egt accepts, with the ratios reported.
-    for x in &found {
+        .find(|x| is_c4(x))
+        .expect("the C4's concept in the top 10");
+    let options = &c4.concept.as_ref().unwrap().tooth_options;
+    assert!(!c4.concept.as_ref().unwrap().tooth_options_cut);
+    let teeth =
+        c4.basic == ["24/11", "24/11"] || options.iter().any(|o| o.basic == ["24/11", "24/11"]);
+    assert!(
+        teeth,
+        "the C4's 33/72 sets among its tooth options: {options:?}"
+    );
+    // Options are the concept's other teeth, best first, each within the
+    // tolerance and no better than the concept's own.
+    for w in options.windows(2) {
+        assert!(w[0].score <= w[1].score);
+    }
+    // Every candidate and every tooth option is a train egt accepts, with
+    // the ratios reported, within the targets' tolerance.
+    let check = |x: &Candidate, ratios: &[(String, f64, String)]| {
         let table = crate::Train::from_spec(&c.candidate_spec(x).unwrap())
             .unwrap()
             .shift_table()
             .unwrap();
         for g in &table.gears {
-            let r = x.ratios.iter().find(|r| r.0 == g.state).unwrap();
+            let r = ratios.iter().find(|r| r.0 == g.state).unwrap();
             assert_eq!(r.1, g.ratio);
+            let target = c.spec.targets.ratios[&g.state];
+            assert!((g.ratio - target).abs() <= c.spec.targets.tolerance);
+        }
+    };
+    for x in &found {
+        check(x, &x.ratios);
+        for o in &x.concept.as_ref().unwrap().tooth_options {
+            assert!(o.score >= x.score && o.basic != x.basic);
+            let mut y = x.clone();
+            y.teeth = o.teeth.clone();
+            check(&y, &o.ratios);
         }
     }
 }

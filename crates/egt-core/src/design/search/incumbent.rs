@@ -4,6 +4,8 @@
 //! `top`-th can never be reported, so leaves scoring worse are not
 //! confirmed, and each targeted state's window narrows to what such a score
 //! allows: RMS of n relative errors <= s means each is <= s sqrt(n).
+//! A concept search reports each concept (structure and layout) once, so
+//! its scores are kept per concept: the best of each.
 
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -12,7 +14,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 #[derive(Debug)]
 pub struct Incumbent {
     top: usize,
-    scores: Mutex<Vec<f64>>,
+    /// (concept key, score), best first; None: a candidate of its own.
+    scores: Mutex<Vec<(Option<u64>, f64)>>,
     /// f64 bits of the threshold: infinite until `top` scores are known.
     threshold: AtomicU64,
 }
@@ -35,15 +38,49 @@ impl Incumbent {
 
     /// A confirmed candidate's score.
     pub fn offer(&self, score: f64) {
+        self.insert(None, score);
+    }
+
+    /// A confirmed candidate's score, as one of concept `key`'s: only the
+    /// best of a concept counts towards the `top`.
+    pub fn offer_best(&self, key: u64, score: f64) {
+        self.insert(Some(key), score);
+    }
+
+    fn insert(&self, key: Option<u64>, score: f64) {
         let Ok(mut s) = self.scores.lock() else {
             return;
         };
-        s.push(score);
-        s.sort_by(f64::total_cmp);
+        match s.iter_mut().find(|e| key.is_some() && e.0 == key) {
+            Some(e) => e.1 = e.1.min(score),
+            None => s.push((key, score)),
+        }
+        s.sort_by(|a, b| a.1.total_cmp(&b.1));
         s.truncate(self.top);
         if s.len() == self.top {
             self.threshold
-                .store(s[self.top - 1].to_bits(), Ordering::Relaxed);
+                .store(s[self.top - 1].1.to_bits(), Ordering::Relaxed);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Incumbent;
+
+    #[test]
+    fn a_concept_counts_once_towards_the_top() {
+        let inc = Incumbent::new(2);
+        inc.offer_best(7, 0.3);
+        inc.offer_best(7, 0.1);
+        // One concept known: no threshold yet.
+        assert_eq!(inc.threshold(), f64::INFINITY);
+        inc.offer_best(8, 0.2);
+        assert!((inc.threshold() - 0.2).abs() < 1e-8);
+        // Plain candidates each count.
+        let plain = Incumbent::new(2);
+        plain.offer(0.3);
+        plain.offer(0.1);
+        assert!((plain.threshold() - 0.3).abs() < 1e-8);
     }
 }

@@ -42,6 +42,15 @@ impl Search {
         self
     }
 
+    /// Report each layout's best teeth only, as concept `structure`'s
+    /// layouts: each counts once towards the shared incumbent's top
+    /// ([`super::Incumbent::offer_best`], keyed by structure and layout).
+    #[must_use]
+    pub fn best_per_layout(mut self, structure: u64) -> Self {
+        self.per_layout = Some(structure);
+        self
+    }
+
     /// Stop a run after `nodes` nodes of the bound; the run then reports
     /// [`Stats::cut`] (its candidates are exact, but the space was not all
     /// searched).
@@ -101,10 +110,11 @@ impl Search {
         // Every layout over the partition's box, in parallel (each bound
         // itself splits its halves with rayon::join).
         use rayon::prelude::*;
-        let per_layout: Vec<Result<(Vec<Candidate>, u64), DesignError>> = self
+        let results: Vec<Result<(Vec<Candidate>, u64), DesignError>> = self
             .variants
             .par_iter()
-            .map(|pick| {
+            .enumerate()
+            .map(|(v, pick)| {
                 let mut out = Vec::new();
                 let mut rejected = 0;
                 if self.cancelled() {
@@ -119,15 +129,24 @@ impl Search {
                     }
                     match self.confirm(pick, &ks)? {
                         Some(c) => {
-                            if let Some(inc) = &self.incumbent {
-                                inc.offer(c.score);
+                            match (&self.incumbent, self.per_layout) {
+                                (Some(inc), Some(s)) => inc.offer_best(s << 32 | v as u64, c.score),
+                                (Some(inc), None) => inc.offer(c.score),
+                                (None, _) => {}
                             }
                             out.push(c);
                         }
                         None => rejected += 1,
                     }
                 }
-                rank(&mut out, self.spec.top);
+                rank(
+                    &mut out,
+                    if self.per_layout.is_some() {
+                        1
+                    } else {
+                        self.spec.top
+                    },
+                );
                 Ok((out, rejected))
             })
             .collect();
@@ -137,7 +156,7 @@ impl Search {
         // Read once all is done: set at any point, the run was cut short.
         stats.interrupted = self.cancelled();
         let mut out = Vec::new();
-        for r in per_layout {
+        for r in results {
             let (c, rejected) = r?;
             out.extend(c);
             stats.rejected += rejected;

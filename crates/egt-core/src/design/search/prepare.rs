@@ -37,6 +37,9 @@ pub struct Search {
     /// Most nodes one run may visit before it stops and says so
     /// ([`Stats::cut`](super::Stats::cut)); None: no limit.
     pub(super) node_limit: Option<u64>,
+    /// A concept search's structure: each layout reports its best teeth
+    /// only ([`Search::best_per_layout`]).
+    pub(super) per_layout: Option<u64>,
 }
 
 impl Search {
@@ -197,6 +200,7 @@ impl Search {
             cancel: None,
             incumbent: None,
             node_limit: None,
+            per_layout: None,
         };
         search.check_base()?;
         if let Some(v) = variants {
