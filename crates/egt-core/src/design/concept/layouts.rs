@@ -6,7 +6,7 @@
 
 use std::collections::HashMap;
 
-use crate::design::search::{misses, searched_willis};
+use crate::design::search::{misses, same_speed, searched_willis};
 
 use super::structures::Structure;
 
@@ -156,6 +156,15 @@ struct Verdict {
     regular: bool,
     /// The dimensions w_out depends on (bit d), at the generic picks.
     depends: u64,
+    /// w_out where it depends on no dimension: the same for all teeth
+    /// (N = w D), so its window is met or missed whatever the teeth. The
+    /// vertex test cannot say so where D changes sign in the box, and a
+    /// tooth search of such a state would follow D's zero surface.
+    constant: Option<f64>,
+    /// w_out at all the first picks and at all the second: two states
+    /// with the same are taken to have the same ratio for all teeth (their
+    /// difference, a rational function, vanishing at generic points).
+    sig: Option<[f64; 2]>,
     /// (N, D) of w_out = N / D at the vertices of the whole box of ratios
     /// (halving the box was tried: on a sample of the 8HP's space two
     /// halvings pruned no more layouts and took three times as long).
@@ -178,10 +187,19 @@ pub(crate) struct Layouts<'a> {
     set_masks: Vec<u64>,
     /// Per state, the dimensions its ratio depends on (targeted states).
     depends: Vec<u64>,
+    /// The targeted states passed under the current picks, with their
+    /// signatures and windows: a state with the same ratio as one of them
+    /// must share part of its window.
+    live: Vec<([f64; 2], (f64, f64))>,
     /// Layouts dropped because some basic ratio moves no targeted ratio.
     pub(crate) idle: u64,
     /// States checked (memo misses), for the counts.
     pub(crate) checked: u64,
+    /// Picks refused because a state's ratio, the same for all teeth,
+    /// misses its target, or because a state has another's ratio for all
+    /// teeth and a window apart from it.
+    pub(crate) constant_missed: u64,
+    pub(crate) shared_apart: u64,
 }
 
 impl<'a> Layouts<'a> {
@@ -218,8 +236,11 @@ impl<'a> Layouts<'a> {
             seen: HashMap::new(),
             set_masks,
             depends: vec![0; p.states.len()],
+            live: Vec::new(),
             idle: 0,
             checked: 0,
+            constant_missed: 0,
+            shared_apart: 0,
         })
     }
 
@@ -317,13 +338,16 @@ impl<'a> Layouts<'a> {
                 }
             }
             self.pick[e] = o as u32;
+            let live = self.live.len();
             for si in 0..self.p.completes[e].len() {
                 let s = self.p.completes[e][si];
                 if !self.state_ok(s) {
+                    self.live.truncate(live);
                     continue 'next;
                 }
             }
             self.place(depth + 1, out, limit);
+            self.live.truncate(live);
         }
     }
 
@@ -346,10 +370,37 @@ impl<'a> Layouts<'a> {
         if window.is_some() {
             self.depends[s] = v.depends;
         }
-        match window {
-            None => true,
-            Some((lo, hi)) => !misses(&v.vertices, *lo, *hi),
+        let Some((lo, hi)) = *window else {
+            return true;
+        };
+        let eps = 1e-9 * lo.abs().max(hi.abs());
+        let ok = match v.constant {
+            Some(w) => {
+                let met = w >= lo - eps && w <= hi + eps;
+                self.constant_missed += u64::from(!met);
+                met
+            }
+            None => !misses(&v.vertices, lo, hi),
+        };
+        if !ok {
+            return false;
         }
+        // A state with another's ratio for all teeth needs a window that
+        // meets the other's (the 8HP space has layouts where five states
+        // of five targets share one ratio).
+        if let Some(sig) = v.sig {
+            let apart = self.live.iter().any(|&(other, (olo, ohi))| {
+                same_speed(sig[0], other[0])
+                    && same_speed(sig[1], other[1])
+                    && (lo > ohi + eps || olo > hi + eps)
+            });
+            if apart {
+                self.shared_apart += 1;
+                return false;
+            }
+            self.live.push((sig, (lo, hi)));
+        }
+        true
     }
 
     /// The state's system without its Willis coefficients: element rows and
@@ -372,6 +423,8 @@ impl<'a> Layouts<'a> {
             return Verdict {
                 regular: false,
                 depends: 0,
+                constant: None,
+                sig: None,
                 vertices: Vec::new(),
             };
         }
@@ -384,6 +437,8 @@ impl<'a> Layouts<'a> {
             return Verdict {
                 regular,
                 depends: 0,
+                constant: None,
+                sig: None,
                 vertices: Vec::new(),
             };
         }
@@ -396,15 +451,34 @@ impl<'a> Layouts<'a> {
             let mut k = k0.clone();
             k[d] = dims[d].picks[1];
             let w = at(&k);
-            let same = (w - w0).abs() <= 1e-9 * w0.abs().max(w.abs());
+            let same = same_speed(w, w0);
             if !same {
                 depends |= 1 << d;
             }
         }
-        let bx: Vec<(f64, f64)> = dims.iter().map(|d| (d.lo, d.hi)).collect();
+        // The box of the dimensions w_out depends on; the others at their
+        // generic pick (N and D may share a factor in them that changes
+        // sign inside the box, which the vertex test cannot see past).
+        let bx: Vec<(f64, f64)> = dims
+            .iter()
+            .enumerate()
+            .map(|(i, d)| {
+                if depends >> i & 1 == 1 {
+                    (d.lo, d.hi)
+                } else {
+                    (d.picks[0], d.picks[0])
+                }
+            })
+            .collect();
         Verdict {
             regular,
             depends,
+            constant: (depends == 0 && w0.is_finite()).then_some(w0),
+            sig: {
+                let k1: Vec<f64> = dims.iter().map(|d| d.picks[1]).collect();
+                let w1 = at(&k1);
+                (w0.is_finite() && w1.is_finite()).then_some([w0, w1])
+            },
             vertices: self.vertices(&base, input_row, &bx),
         }
     }

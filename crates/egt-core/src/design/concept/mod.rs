@@ -258,11 +258,16 @@ impl Concepts {
                         "no tooth set in these ranges meets the constraints".into(),
                     ));
                 }
+                // Two generic values per dimension, different for each
+                // (sets of one range must not get equal ratios: k_a = k_b
+                // is where some states are singular), no tooth ratio.
+                let at = |f: f64| lo + (0.2 + 0.6 * f.fract()) * (hi - lo);
+                let i = dims.len() as f64;
                 dims.push(DimBox {
                     lo,
                     hi,
                     sign: dim.sign,
-                    picks: [ks[ks.len() / 4], ks[(3 * ks.len() / 4).min(ks.len() - 1)]],
+                    picks: [at(0.381_966 + 0.618_034 * i), at(0.723_607 + 0.414_214 * i)],
                 });
             }
             if slot.kind == PlanetaryKind::Ravigneaux {

@@ -48,14 +48,24 @@ impl Search {
         st: &StateSystem,
         bounds: &[(usize, usize)],
     ) -> Option<Vec<(f64, f64)>> {
-        let m = bounds.len();
+        // Only the dimensions w_out depends on span vertices; the others
+        // take their generic value (`StateSystem::fixed`).
+        let free: Vec<usize> = (0..bounds.len())
+            .filter(|&u| st.fixed.get(u).is_none_or(Option::is_none))
+            .collect();
         let mut a = st.matrix.clone();
-        let mut out = Vec::with_capacity(1 << m);
-        for v in 0..(1usize << m) {
+        let mut out = Vec::with_capacity(1 << free.len());
+        for v in 0..(1usize << free.len()) {
             for (u, &(row, s, r, c)) in st.rows.iter().enumerate() {
-                let (b0, b1) = bounds[u];
-                let idx = if v >> u & 1 == 1 { b1 - 1 } else { b0 };
-                let k = self.dims[u].sign * self.dims[u].ks[idx];
+                let k = match st.fixed.get(u).copied().flatten() {
+                    Some(k) => k,
+                    None => {
+                        let bit = free.iter().position(|&f| f == u).unwrap_or(0);
+                        let (b0, b1) = bounds[u];
+                        let idx = if v >> bit & 1 == 1 { b1 - 1 } else { b0 };
+                        self.dims[u].sign * self.dims[u].ks[idx]
+                    }
+                };
                 willis_into(&mut a, (row, s, r, c), k);
             }
             let lu = a.clone().lu();

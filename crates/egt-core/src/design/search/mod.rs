@@ -38,7 +38,7 @@ pub use prepare::Search;
 pub(crate) use prepare::check_numbers;
 pub(crate) use space::SetSpace;
 pub use space::{MAX_SET_PAIRS, Teeth};
-pub(crate) use systems::searched_willis;
+pub(crate) use systems::{same_speed, searched_willis};
 
 #[cfg(test)]
 mod tests;

@@ -29,6 +29,12 @@ pub(super) struct StateSystem {
     pub(super) output: usize,
     pub(super) input_row: usize,
     pub(super) target: Option<f64>,
+    /// Per dimension: Some(signed k) where w_out does not depend on it
+    /// ([`Search::states`]); the bound then takes that one generic value
+    /// for it at every vertex. N and D may still both depend on it through
+    /// a common factor, which changes sign inside boxes and would keep the
+    /// vertex test from ever dropping them.
+    pub(super) fixed: Vec<Option<f64>>,
 }
 
 /// What the gear states' systems are built from (kept so that each layout's
@@ -138,6 +144,7 @@ pub(super) fn states(
             output,
             input_row,
             target: targets.ratios.get(name).copied(),
+            fixed: Vec::new(),
         });
     }
     Ok(states)
@@ -185,13 +192,65 @@ pub(super) fn generic(states: &[StateSystem], dims: &[Dim]) -> bool {
 }
 
 impl Search {
-    /// The gear states' systems of a layout.
+    /// The gear states' systems of a layout, each targeted state with the
+    /// dimensions its w_out does not depend on marked (`fixed`).
     pub(super) fn states(&self, pick: &[u32]) -> Result<Vec<StateSystem>, DesignError> {
-        states(
+        let mut states = states(
             &self.elements(pick),
             &self.base.frame,
             &self.rows,
             &self.spec.targets,
-        )
+        )?;
+        for st in &mut states {
+            if st.target.is_some() {
+                st.fixed = independent(st, &self.dims);
+            }
+        }
+        Ok(states)
     }
+}
+
+/// Per dimension, Some(signed generic k) where the state's w_out does not
+/// depend on it: w_out is a Moebius function of each k (N and D affine in
+/// it), so equal at two values with the others generic means constant in it.
+fn independent(st: &StateSystem, dims: &[Dim]) -> Vec<Option<f64>> {
+    // Two generic points of each dimension's range (no tooth ratio in
+    // particular): 0.382 and 0.724 of the way.
+    let at = |d: &Dim, f: f64| {
+        let (lo, hi) = (d.ks[0], d.ks[d.ks.len() - 1]);
+        d.sign * (lo + f * (hi - lo))
+    };
+    let g: Vec<f64> = dims.iter().map(|d| at(d, 0.381_966)).collect();
+    let w = |ks: &[f64]| -> Option<f64> {
+        let mut a = st.matrix.clone();
+        for (d, &(row, s, r, c)) in st.rows.iter().enumerate() {
+            willis_into(&mut a, (row, s, r, c), ks[d]);
+        }
+        let mut e = nalgebra::DVector::zeros(a.nrows());
+        e[st.input_row] = 1.0;
+        let w = a.lu().solve(&e)?[st.output];
+        w.is_finite().then_some(w)
+    };
+    let none = vec![None; dims.len()];
+    let Some(w0) = w(&g) else {
+        return none;
+    };
+    (0..dims.len())
+        .map(|d| {
+            if dims[d].ks.len() < 2 {
+                return None;
+            }
+            let mut h = g.clone();
+            h[d] = at(&dims[d], 0.723_607);
+            let w1 = w(&h)?;
+            same_speed(w1, w0).then_some(g[d])
+        })
+        .collect()
+}
+
+/// Two output speeds (per unit input speed) equal up to round-off: relative
+/// 1e-9, and absolute 1e-12 near zero, where a held output's speed is
+/// round-off of either sign.
+pub(crate) fn same_speed(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-9 * a.abs().max(b.abs()) + 1e-12
 }
