@@ -123,6 +123,9 @@ struct Row {
     efficiency: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     element_torque: Option<f64>,
+    /// Largest planet speed relative to its carrier per unit input speed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    planet_speed: Option<f64>,
     ratios: Vec<RatioRow>,
     spec: Option<String>,
     /// `--tables`: the candidate's `egt shift --format json` document.
@@ -305,6 +308,7 @@ fn row(search: &Synthesis, c: &Candidate, rank: usize, spec: Option<String>) -> 
         same_ratio_teeth: c.same_ratio_teeth.clone(),
         efficiency: c.efficiency,
         element_torque: c.element_torque,
+        planet_speed: c.planet_speed,
         spec,
         shift: None,
     }

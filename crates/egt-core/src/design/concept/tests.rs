@@ -322,6 +322,15 @@ fn the_c4_concept_is_found_from_its_ratios() {
             .unwrap()
             .shift_table()
             .unwrap();
+        let fastest = table
+            .gears
+            .iter()
+            .flat_map(|g| g.relative.iter().map(|r| r.speed.abs()))
+            .fold(0.0, f64::max);
+        assert!(fastest > 0.0);
+        if x.ratios == ratios {
+            assert_eq!(x.planet_speed, Some(fastest));
+        }
         for g in &table.gears {
             let r = ratios.iter().find(|r| r.0 == g.state).unwrap();
             assert_eq!(r.1, g.ratio);

@@ -39,6 +39,11 @@ pub struct Candidate {
     /// targeted states, from the exact analysis.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub element_torque: Option<f64>,
+    /// Largest |planet speed relative to its carrier| per unit input speed
+    /// over the targeted states (the planet bearings' duty), from the exact
+    /// analysis.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub planet_speed: Option<f64>,
     /// A concept search's structure of this candidate (None in a tooth search).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub concept: Option<crate::design::concept::ConceptInfo>,
@@ -128,9 +133,9 @@ pub fn merge(parts: Vec<(Vec<Candidate>, Stats)>, top: usize) -> (Vec<Candidate>
 }
 
 /// Sort and keep `top`: by the ratio error (score), then the higher lowest
-/// efficiency, the smaller largest element torque, the fewer shafts (a
-/// concept), then by the teeth, layout and structure, so that the order is
-/// canonical.
+/// efficiency, the smaller largest element torque, the slower fastest
+/// planet, the fewer shafts (a concept), then by the teeth, layout and
+/// structure, so that the order is canonical.
 pub fn rank(c: &mut Vec<Candidate>, top: usize) {
     let shafts = |x: &Candidate| x.concept.as_ref().map_or(0, |k| k.shafts.len());
     c.sort_by(|a, b| {
@@ -143,6 +148,10 @@ pub fn rank(c: &mut Vec<Candidate>, top: usize) {
             .then_with(|| {
                 let t = |x: &Candidate| x.element_torque.unwrap_or(0.0);
                 t(a).total_cmp(&t(b))
+            })
+            .then_with(|| {
+                let p = |x: &Candidate| x.planet_speed.unwrap_or(0.0);
+                p(a).total_cmp(&p(b))
             })
             .then_with(|| shafts(a).cmp(&shafts(b)))
             .then_with(|| {

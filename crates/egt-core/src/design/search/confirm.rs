@@ -113,10 +113,14 @@ impl Search {
         let element_torque = targeted()
             .flat_map(|g| g.elements.iter().map(|e| e.torque.abs()))
             .reduce(f64::max);
+        let planet_speed = targeted()
+            .flat_map(|g| g.relative.iter().map(|r| r.speed.abs()))
+            .reduce(f64::max);
         Ok(Some(Candidate {
             same_ratio_teeth: sets.iter().map(|t| (*t).clone()).collect(),
             efficiency,
             element_torque,
+            planet_speed,
             concept: None,
             basic: teeth.iter().map(|t| ratio(t.ring, t.sun)).collect(),
             basic2: teeth

@@ -434,3 +434,57 @@ fn a_double_pinion_unknown_set_is_found_again_from_its_ratio() {
         assert!((first.ratio - t.ring as f64 / t.sun as f64).abs() < 1e-12);
     }
 }
+
+/// The rank's keys in order: score, then the higher lowest efficiency, the
+/// smaller largest element torque, then the slower fastest planet.
+#[test]
+fn rank_orders_by_score_efficiency_torque_then_planet_speed() {
+    let base = Candidate {
+        basic: vec!["2".into()],
+        basic2: vec![None],
+        teeth: vec![Teeth {
+            sun: 30,
+            ring: 60,
+            planet: 15,
+            sun2: None,
+            planet2: None,
+        }],
+        alternatives: vec![1],
+        ratios: Vec::new(),
+        spread: None,
+        layout: Vec::new(),
+        score: 1e-3,
+        same_ratio_teeth: Vec::new(),
+        efficiency: Some(0.95),
+        element_torque: Some(2.0),
+        planet_speed: Some(3.0),
+        concept: None,
+    };
+    let with = |f: &dyn Fn(&mut Candidate)| {
+        let mut c = base.clone();
+        f(&mut c);
+        c
+    };
+    let mut c = vec![
+        with(&|c| c.planet_speed = Some(4.0)),
+        with(&|c| c.element_torque = Some(3.0)),
+        with(&|c| c.efficiency = Some(0.9)),
+        with(&|c| c.score = 2e-3),
+        base.clone(),
+    ];
+    rank(&mut c, 10);
+    let keys: Vec<_> = c
+        .iter()
+        .map(|c| (c.score, c.efficiency, c.element_torque, c.planet_speed))
+        .collect();
+    assert_eq!(
+        keys,
+        [
+            (1e-3, Some(0.95), Some(2.0), Some(3.0)),
+            (1e-3, Some(0.95), Some(2.0), Some(4.0)),
+            (1e-3, Some(0.95), Some(3.0), Some(3.0)),
+            (1e-3, Some(0.9), Some(2.0), Some(3.0)),
+            (2e-3, Some(0.95), Some(2.0), Some(3.0)),
+        ]
+    );
+}
