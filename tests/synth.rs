@@ -494,6 +494,25 @@ fn a_concept_search_finds_trains_egt_shift_confirms_and_its_parts_merge() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A concept search's progress counts structures (all 261 of the C4's
+/// space at the end) and says the best score so far.
+#[test]
+fn a_concept_search_reports_structures_done_and_the_best_so_far() {
+    let out = egt(
+        &["synth", "examples/synth/concept_ford_c4.toml", "--progress"],
+        None,
+    );
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let last = out
+        .stderr
+        .lines()
+        .filter(|l| l.starts_with("progress:"))
+        .last();
+    let last = last.unwrap_or_else(|| panic!("no progress line: {}", out.stderr));
+    assert!(last.starts_with("progress: 261/261 structures"), "{last}");
+    assert!(last.contains("best score 2.87"), "{last}");
+}
+
 #[test]
 fn bad_concept_specs_are_refused_by_field() {
     let bad = |(from, to): (&str, &str), field: &str| {

@@ -183,17 +183,42 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
     // Parts one after another, for a progress line (on a terminal or with
     // `--progress`) and for `--stream`; the result is the same as one run.
     // (`--part` is one run: no line.)
+    // A concept search counts structures (part i holds structures i, i + K,
+    // ...), a tooth search parts; both say the best score so far.
+    let structures = search.structures();
     let bar = if part.is_none() {
-        Progress::new(args.progress, "parts", None)
+        Progress::new(
+            args.progress,
+            if structures.is_some() {
+                "structures"
+            } else {
+                "parts"
+            },
+            None,
+        )
     } else {
         Progress::hidden()
+    };
+    let tick = |done: usize, of: usize, best: &[Candidate]| {
+        match structures {
+            Some(n) => {
+                bar.total(n as u64);
+                bar.set(structures_in_parts(n, done, of) as u64);
+            }
+            None => {
+                bar.total(of as u64);
+                bar.set(done as u64);
+            }
+        }
+        if let Some(b) = best.first() {
+            bar.note(format!("best score {:.3e}", b.score));
+        }
     };
     let (found, stats) = match part {
         Some((i, k)) => search.run_partition(i, k),
         // JSON Lines: the best so far after each part, as it is found.
         None if args.stream => search.run_in_parts(PROGRESS_PARTS, |done, of, best| {
-            bar.total(of as u64);
-            bar.set(done as u64);
+            tick(done, of, best);
             let best: Vec<Row> = best
                 .iter()
                 .enumerate()
@@ -205,10 +230,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<()> {
             let _ = writeln!(out, "{line}").and_then(|()| out.flush());
         }),
         None if args.progress || std::io::stderr().is_terminal() => {
-            search.run_in_parts(PROGRESS_PARTS, |done, of, _| {
-                bar.total(of as u64);
-                bar.set(done as u64);
-            })
+            search.run_in_parts(PROGRESS_PARTS, tick)
         }
         None => search.run(),
     }
@@ -488,4 +510,24 @@ fn write_tooth_options(out: &mut dyn Write, r: &Report) -> anyhow::Result<()> {
         writeln!(out, "  {rank:>4}: {}{cut}", options.join("; "))?;
     }
     Ok(())
+}
+
+/// Structures in the first `done` of `parts` parts of `n` (structure i in
+/// part i mod parts).
+fn structures_in_parts(n: usize, done: usize, parts: usize) -> usize {
+    (0..done.min(n)).map(|p| (n - p).div_ceil(parts)).sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::structures_in_parts;
+
+    #[test]
+    fn parts_hold_structures_i_mod_k() {
+        // 10 structures in 3 parts: {0, 3, 6, 9}, {1, 4, 7}, {2, 5, 8}.
+        let counts: Vec<usize> = (0..=3).map(|d| structures_in_parts(10, d, 3)).collect();
+        assert_eq!(counts, [0, 4, 7, 10]);
+        // More parts than structures: one each, then none.
+        assert_eq!(structures_in_parts(2, 5, 5), 2);
+    }
 }

@@ -107,6 +107,14 @@ impl Synthesis {
         }
     }
 
+    /// A concept search's number of structures (None for a tooth search).
+    pub fn structures(&self) -> Option<usize> {
+        match self {
+            Synthesis::Teeth(_) => None,
+            Synthesis::Concepts(c) => Some(c.structures().len()),
+        }
+    }
+
     /// Run the whole space on all cores.
     ///
     /// # Errors
