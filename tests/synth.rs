@@ -503,11 +503,7 @@ fn a_concept_search_reports_structures_done_and_the_best_so_far() {
         None,
     );
     assert_eq!(out.code, 0, "{}", out.stderr);
-    let last = out
-        .stderr
-        .lines()
-        .filter(|l| l.starts_with("progress:"))
-        .last();
+    let last = out.stderr.lines().rfind(|l| l.starts_with("progress:"));
     let last = last.unwrap_or_else(|| panic!("no progress line: {}", out.stderr));
     assert!(last.starts_with("progress: 261/261 structures"), "{last}");
     assert!(last.contains("best score 2.87"), "{last}");
