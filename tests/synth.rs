@@ -522,6 +522,10 @@ fn bad_concept_specs_are_refused_by_field() {
     };
     bad(("held = [0, 1]", "held = [2, 1]"), "concept.held");
     bad(("input = \"any\"", "input = \"wheel\""), "input");
+    bad(
+        ("held = [0, 1]", "held = [0, 1]\noptions = 5000"),
+        "concept.options",
+    );
     let text = std::fs::read_to_string(root().join("examples/synth/concept_ford_c4.toml")).unwrap();
     let r = "\"R\" = [\"reverse_high_clutch\", \"low_reverse_band\"]";
     let changed = text.replace(r, "\"R\" = [\"reverse_high_clutch\"]");
