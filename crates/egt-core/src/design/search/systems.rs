@@ -214,13 +214,24 @@ impl Search {
 /// depend on it: w_out is a Moebius function of each k (N and D affine in
 /// it), so equal at two values with the others generic means constant in it.
 fn independent(st: &StateSystem, dims: &[Dim]) -> Vec<Option<f64>> {
-    // Two generic points of each dimension's range (no tooth ratio in
-    // particular): 0.382 and 0.724 of the way.
-    let at = |d: &Dim, f: f64| {
+    // Two generic values of each dimension's range, no tooth ratio, and
+    // different for every dimension: sets of one range must not get equal
+    // ratios, where a factor such as k_a - k_b vanishes and w_out could
+    // look independent of a ratio it depends on.
+    let at = |i: usize, f: f64| {
+        let d = &dims[i];
         let (lo, hi) = (d.ks[0], d.ks[d.ks.len() - 1]);
-        d.sign * (lo + f * (hi - lo))
+        d.sign * (lo + (0.2 + 0.6 * f.fract()) * (hi - lo))
     };
-    let g: Vec<f64> = dims.iter().map(|d| at(d, 0.381_966)).collect();
+    let pick = |i: usize, q: usize| {
+        let i_f = i as f64;
+        if q == 0 {
+            at(i, 0.381_966 + 0.618_034 * i_f)
+        } else {
+            at(i, 0.723_607 + 0.414_214 * i_f)
+        }
+    };
+    let g: Vec<f64> = (0..dims.len()).map(|i| pick(i, 0)).collect();
     let w = |ks: &[f64]| -> Option<f64> {
         let mut a = st.matrix.clone();
         for (d, &(row, s, r, c)) in st.rows.iter().enumerate() {
@@ -241,7 +252,7 @@ fn independent(st: &StateSystem, dims: &[Dim]) -> Vec<Option<f64>> {
                 return None;
             }
             let mut h = g.clone();
-            h[d] = at(&dims[d], 0.723_607);
+            h[d] = pick(d, 1);
             let w1 = w(&h)?;
             same_speed(w1, w0).then_some(g[d])
         })
