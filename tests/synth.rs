@@ -507,6 +507,22 @@ fn a_concept_search_reports_structures_done_and_the_best_so_far() {
     let last = last.unwrap_or_else(|| panic!("no progress line: {}", out.stderr));
     assert!(last.starts_with("progress: 261/261 structures"), "{last}");
     assert!(last.contains("best score 2.87"), "{last}");
+    // Run in parts for the line, the best concepts still list their teeth
+    // options (added once, after the parts merge).
+    let out = egt(
+        &[
+            "synth",
+            "examples/synth/concept_ford_c4.toml",
+            "--progress",
+            "--format",
+            "json",
+        ],
+        None,
+    );
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let v: Value = serde_json::from_str(&out.stdout).unwrap();
+    let options = v["candidates"][0]["concept"]["tooth_options"].as_array();
+    assert_eq!(options.map(Vec::len), Some(17), "{v}");
 }
 
 #[test]

@@ -390,6 +390,13 @@ impl Concepts {
         part: usize,
         parts: usize,
     ) -> Result<(Vec<Candidate>, Stats), DesignError> {
+        let (mut found, stats) = self.run_part(part, parts)?;
+        self.add_tooth_options(&mut found)?;
+        Ok((found, stats))
+    }
+
+    /// [`Concepts::run_partition`] without the tooth options.
+    fn run_part(&self, part: usize, parts: usize) -> Result<(Vec<Candidate>, Stats), DesignError> {
         check_partition(part, parts)?;
         use rayon::prelude::*;
         let ids: Vec<usize> = (part..self.structures.len()).step_by(parts).collect();
@@ -402,8 +409,7 @@ impl Concepts {
         for r in results {
             done.push(r?);
         }
-        let (mut found, mut stats) = merge(done, self.spec.top);
-        self.add_tooth_options(&mut found)?;
+        let (found, mut stats) = merge(done, self.spec.top);
         self.space_counts(&mut stats);
         stats.interrupted = self.cancelled();
         Ok((found, stats))
@@ -423,8 +429,9 @@ impl Concepts {
         let parts = parts.clamp(1, self.structures.len().max(1));
         let mut best: Vec<Candidate> = Vec::new();
         let mut done = Vec::with_capacity(parts);
+        // The options of the merged best only, once at the end.
         for part in 0..parts {
-            let (found, stats) = self.run_partition(part, parts)?;
+            let (found, stats) = self.run_part(part, parts)?;
             let stop = stats.interrupted;
             best.extend(found.iter().cloned());
             rank(&mut best, self.spec.top);
@@ -434,7 +441,8 @@ impl Concepts {
             }
             progress(part + 1, parts, &best);
         }
-        let (found, mut stats) = merge(done, self.spec.top);
+        let (mut found, mut stats) = merge(done, self.spec.top);
+        self.add_tooth_options(&mut found)?;
         self.space_counts(&mut stats);
         Ok((found, stats))
     }
