@@ -144,6 +144,50 @@ fn finds_ravigneaux_sets_and_every_candidate_passes_egt_shift() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A stepped planet as the unknown: the bundled two-speed's 2263/437 found
+/// from 6.178, both steps in the JSON, the candidate's spec confirmed by
+/// `egt shift`; a stepped set with no first-step range is refused by field.
+#[test]
+fn finds_a_stepped_planet_and_its_candidate_passes_egt_shift() {
+    let dir = std::env::temp_dir().join(format!("egt-synth-stepped-{}", std::process::id()));
+    let out = dir.display().to_string();
+    let found = synth(&[
+        "synth",
+        "examples/synth/stepped_two_speed.toml",
+        "--format",
+        "json",
+        "--write-specs",
+        &out,
+    ]);
+    let best = &found["candidates"][0];
+    let set = &best["sets"][0];
+    assert_eq!(set["basic"], "2263/437");
+    assert_eq!(set["alternatives"], 2);
+    let (sun, ring) = (set["sun"].as_i64().unwrap(), set["ring"].as_i64().unwrap());
+    let (p1, p2) = (
+        set["planet"].as_i64().unwrap(),
+        set["planet2"].as_i64().unwrap(),
+    );
+    assert_eq!(sun + p1, ring - p2, "coaxial");
+    assert_eq!(ring * p1 * 437, sun * p2 * 2263);
+    let shift: Value = serde_json::from_str(&stdout(&[
+        "shift",
+        best["spec"].as_str().unwrap(),
+        "--format",
+        "json",
+    ]))
+    .unwrap();
+    assert_gear_ratios(&shift, best);
+    let text = std::fs::read_to_string(root().join("examples/synth/stepped_two_speed.toml"))
+        .unwrap()
+        .replace("base = \"../", "base = \"examples/")
+        .replace(" planet = [14, 34],", "");
+    let r = egt(&["synth", "-", "--spec-format", "toml"], Some(&text));
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("sets.S.planet"), "{}", r.stderr);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn partitions_merge_to_the_whole_search() {
     let whole = synth(&[

@@ -77,6 +77,19 @@ def test_synth_finds_the_6hp26_ravigneaux_teeth() -> None:
     assert list(df["RV.sun2"]) == [c.sets["RV"].sun2 for c in r.candidates]
 
 
+def test_synth_finds_a_stepped_planet() -> None:
+    r = egt.synth(ROOT / "examples" / "synth" / "stepped_two_speed.toml")
+    best = r.candidates[0]
+    s = best.sets["S"]
+    assert s.basic == Fraction(2263, 437) and s.planet2 is not None
+    assert Fraction(s.ring * s.planet, s.sun * s.planet2) == s.basic
+    assert s.sun + s.planet == s.ring - s.planet2
+    # The bundled train (23/31/19/73) has the candidate's exact ratios.
+    real = egt.load(str(ROOT / "examples" / "stepped_two_speed.toml")).shift_table()
+    assert {g.state: g.ratio_exact for g in real.gears} == best.ratios
+    assert list(r.to_pandas()["S.planet2"]) == [c.sets["S"].planet2 for c in r.candidates]
+
+
 def test_synth_with_free_element_positions_reports_the_layout() -> None:
     text = (ROOT / "examples" / "synth" / "zf_8hp70.toml").read_text()
     text = text.replace('base = "../zf_8hp70.toml"', f'base = "{ROOT / "examples" / "zf_8hp70.toml"}"')

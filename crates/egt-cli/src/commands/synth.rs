@@ -77,7 +77,8 @@ pub struct Args {
 #[derive(Debug, Serialize)]
 struct SetTeeth {
     set: String,
-    /// ring/sun (the small sun of a Ravigneaux set).
+    /// The basic ratio k: ring/sun (the small sun of a Ravigneaux set), or
+    /// ring planet/(sun planet2) for a stepped planet.
     basic: String,
     /// ring/large sun of a Ravigneaux set.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -88,7 +89,8 @@ struct SetTeeth {
     planet: i64,
     #[serde(skip_serializing_if = "Option::is_none")]
     sun2: Option<i64>,
-    /// A Ravigneaux set's long pinion.
+    /// A Ravigneaux set's long pinion, a double-pinion set's outer pinion,
+    /// or a stepped planet's wheel on the ring.
     #[serde(skip_serializing_if = "Option::is_none")]
     planet2: Option<i64>,
     alternatives: usize,
@@ -408,6 +410,8 @@ fn write_table(out: &mut dyn Write, r: &Report) -> anyhow::Result<()> {
     headers.extend(first.sets.iter().map(|s| {
         if s.sun2.is_some() {
             format!("{} sun/sun2/ring/planet/planet2 (k, k2)", s.set)
+        } else if s.planet2.is_some() {
+            format!("{} sun/ring/planet/planet2 (k)", s.set)
         } else {
             format!("{} sun/ring/planet (k)", s.set)
         }
@@ -434,6 +438,9 @@ fn write_table(out: &mut dyn Write, r: &Report) -> anyhow::Result<()> {
                     "{}/{s2}/{}/{}/{p2} ({}, {k2}){alt}",
                     s.sun, s.ring, s.planet, s.basic
                 ),
+                (None, Some(p2), _) => {
+                    format!("{}/{}/{}/{p2} ({}){alt}", s.sun, s.ring, s.planet, s.basic)
+                }
                 _ => format!("{}/{}/{} ({}){alt}", s.sun, s.ring, s.planet, s.basic),
             }
         }));
@@ -465,7 +472,7 @@ fn write_table(out: &mut dyn Write, r: &Report) -> anyhow::Result<()> {
     write_tooth_options(out, r)?;
     writeln!(
         out,
-        "(k = ring/sun, k2 = ring/sun2; +N: N other tooth sets with the same k; ratios are exact, e.g. {} = {})",
+        "(k = ring/sun, ring planet/(sun planet2) for a stepped planet, k2 = ring/sun2; +N: N other tooth sets with the same k; ratios are exact, e.g. {} = {})",
         first.ratios.first().map_or("", |x| x.state.as_str()),
         first.ratios.first().map_or("", |x| x.exact.as_str()),
     )?;

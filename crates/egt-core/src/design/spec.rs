@@ -61,7 +61,7 @@ fn default_max_leaves() -> u64 {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ConceptSpec {
-    /// Set name -> kind: `simple`, `double_pinion` or `ravigneaux`. Each
+    /// Set name -> kind: `simple`, `double_pinion`, `stepped` or `ravigneaux`. Each
     /// needs its tooth ranges under `[sets]`.
     pub sets: IndexMap<String, crate::spec::PlanetaryKind>,
     /// Element name -> kind: `brake`, `clutch`, `one_way_brake`, `one_way_clutch`.
@@ -129,7 +129,8 @@ pub enum Placement {
     Choices(Vec<Vec<String>>),
 }
 
-/// Inclusive tooth ranges of one unknown set (simple or Ravigneaux).
+/// Inclusive tooth ranges of one unknown set (simple, double-pinion,
+/// stepped or Ravigneaux).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SetRange {
@@ -147,6 +148,16 @@ pub struct SetRange {
     /// Ring teeth `[min, max]`.
     #[serde(deserialize_with = "exactly_two")]
     pub ring: [i64; 2],
+    /// Teeth `[min, max]` of a stepped planet's first step (meshing the
+    /// sun): required for a stepped set, whose second step (meshing the
+    /// ring) follows from the coaxial condition; refused for the other
+    /// kinds, whose planets follow from sun and ring.
+    #[serde(
+        default,
+        deserialize_with = "optional_two",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub planet: Option<[i64; 2]>,
     /// Number of equally spaced planets (assembly and non-interference). Default 3.
     #[serde(default = "default_planets")]
     pub planets: i64,
@@ -163,11 +174,14 @@ pub struct Constraints {
     /// Smallest planet tooth count. Default 13.
     #[serde(default = "default_min_planet")]
     pub min_planet: i64,
-    /// Profile-shift allowance in teeth: |ring - sun - 2 planet| <= this.
+    /// Profile-shift allowance in teeth: |ring - sun - 2 planet| <= this
+    /// (|ring - sun - planet - planet2| for a stepped set).
     /// 0 (default) is the coaxial condition of unshifted gears.
     #[serde(default)]
     pub profile_shift: i64,
-    /// Require (sun + ring) / planets to be an integer (equally spaced planets).
+    /// Require equally spaced planets to assemble: (sun + ring) / planets
+    /// an integer for a simple set; (sun planet2 + ring planet) /
+    /// (planets gcd(planet, planet2)) for a stepped one (docs/synth.md).
     /// Default true.
     #[serde(default = "yes")]
     pub assembly: bool,

@@ -31,8 +31,9 @@ search text, its format and name, base text, its format and name, top."""
 @dataclass(frozen=True)
 class SetTeeth:
     """One unknown set of a candidate: the smallest-sun teeth of its basic
-    ratio k = ring / sun (and k2 = ring / sun2 for a Ravigneaux set), and how
-    many tooth sets give the same basic ratios (so the same gear ratios)."""
+    ratio k = ring / sun (ring planet / (sun planet2) for a stepped planet;
+    and k2 = ring / sun2 for a Ravigneaux set), and how many tooth sets give
+    the same basic ratios (so the same gear ratios)."""
 
     sun: int
     """The sun (a Ravigneaux set's small sun)."""
@@ -44,7 +45,8 @@ class SetTeeth:
     sun2: Optional[int] = None
     """A Ravigneaux set's large sun."""
     planet2: Optional[int] = None
-    """A Ravigneaux set's long pinion."""
+    """A Ravigneaux set's long pinion, a double-pinion set's outer pinion, or
+    a stepped planet's wheel on the ring."""
     basic2: Optional[Fraction] = None
     """ring / sun2 of a Ravigneaux set."""
 
@@ -101,7 +103,8 @@ class SynthResult:
 
     def to_pandas(self) -> "pandas.DataFrame":
         """One row per candidate: score, spread, each set's sun/ring/planet
-        (and sun2/planet2 of a Ravigneaux set), each ratio."""
+        (sun2 of a Ravigneaux set; planet2 of a set whose planets have two
+        wheels), each ratio."""
         pd = _pandas()
         rows: List[Dict[str, Any]] = []
         for c in self.candidates:
@@ -109,7 +112,9 @@ class SynthResult:
             for name, t in c.sets.items():
                 row.update({f"{name}.sun": t.sun, f"{name}.ring": t.ring, f"{name}.planet": t.planet})
                 if t.sun2 is not None:
-                    row.update({f"{name}.sun2": t.sun2, f"{name}.planet2": t.planet2})
+                    row[f"{name}.sun2"] = t.sun2
+                if t.planet2 is not None:
+                    row[f"{name}.planet2"] = t.planet2
             row.update({f"ratio.{s}": float(x) for s, x in c.ratios.items()})
             row.update({f"layout.{e}": "+".join(links) for e, links in c.layout.items()})
             if c.concept is not None:

@@ -137,17 +137,20 @@ impl Concepts {
         for (name, &kind) in &concept.sets {
             if !matches!(
                 kind,
-                PlanetaryKind::Simple | PlanetaryKind::DoublePinion | PlanetaryKind::Ravigneaux
+                PlanetaryKind::Simple
+                    | PlanetaryKind::DoublePinion
+                    | PlanetaryKind::Stepped
+                    | PlanetaryKind::Ravigneaux
             ) {
                 return Err(bad(
                     &format!("concept.sets.{name}"),
-                    "a concept's sets are simple, double_pinion or ravigneaux".into(),
+                    "a concept's sets are simple, double_pinion, stepped or ravigneaux".into(),
                 ));
             }
             let range = spec.sets.get(name).ok_or_else(|| {
                 bad(
                     &format!("sets.{name}"),
-                    "give this set's tooth ranges (sun, ring; sun2 for a Ravigneaux set)".into(),
+                    "give this set's tooth ranges (sun, ring; sun2 for a Ravigneaux set, planet for a stepped one)".into(),
                 )
             })?;
             let class = classes

@@ -14,7 +14,7 @@ use super::{Concepts, Stats};
 /// One other tooth set of a concept (another basic ratio of some set).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ToothOption {
-    /// Per set: ring/sun as a fraction.
+    /// Per set: the basic ratio k as a fraction (as [`Candidate::basic`]).
     pub basic: Vec<String>,
     /// Per set: ring/large sun of a Ravigneaux set.
     pub basic2: Vec<Option<String>>,

@@ -349,6 +349,47 @@ fn the_c4_concept_is_found_from_its_ratios() {
     }
 }
 
+/// A concept with a stepped-planet set: a two-speed from its ratios (first
+/// 6.178, the 23/31/19/73 set's 1 + 2263/437 to three decimals; second
+/// direct). Sun in, carrier out, the brake on the ring is among the
+/// concepts, with 2263/437 as its basic ratio or one of its tooth options;
+/// every concept is a train whose exact analysis gives its ratios.
+#[test]
+fn a_concept_with_a_stepped_set_is_found_from_its_ratios() {
+    let text = "top = 5\n[concept]\nsets = { S = \"stepped\" }\nelements = { B = \"brake\", C = \"clutch\" }\n[concept.states]\n\"1\" = [\"B\"]\n\"2\" = [\"C\"]\n[sets]\nS = { sun = [18, 30], ring = [60, 80], planet = [14, 34], planets = 3 }\n[targets]\nratios = { \"1\" = 6.178, \"2\" = 1.0 }\n";
+    let c =
+        Concepts::new(SynthSpec::from_str(text, crate::Format::Toml, "stepped").unwrap()).unwrap();
+    let (found, stats) = c.run().unwrap();
+    assert_eq!(stats.cut, 0);
+    let real = found
+        .iter()
+        .find(|x| {
+            let k = x.concept.as_ref().unwrap();
+            k.input == "S.sun" && k.output == "S.carrier" && x.layout[0].1 == ["S.ring"]
+        })
+        .expect("sun in, carrier out, ring braked");
+    let k = real.concept.as_ref().unwrap();
+    assert!(
+        real.basic == ["2263/437"] || k.tooth_options.iter().any(|o| o.basic == ["2263/437"]),
+        "{:?} {:?}",
+        real.basic,
+        k.tooth_options
+    );
+    for x in &found {
+        let table = crate::Train::from_spec(&c.candidate_spec(x).unwrap())
+            .unwrap()
+            .shift_table()
+            .unwrap();
+        for g in &table.gears {
+            let r = x.ratios.iter().find(|r| r.0 == g.state).unwrap();
+            assert_eq!(r.1, g.ratio);
+            assert!((g.ratio - c.spec.targets.ratios[&g.state]).abs() <= c.spec.targets.tolerance);
+        }
+        let t = &x.teeth[0];
+        assert_eq!(t.sun + t.planet, t.ring - t.planet2.unwrap(), "coaxial");
+    }
+}
+
 /// Three structures of the 8HP's space whose tooth search never converged
 /// (stopped at `max_nodes`, 20 000 nodes, with no leaf): in their layouts
 /// some targeted states have a ratio no teeth change (the output held, or

@@ -9,7 +9,8 @@ use super::space::Teeth;
 /// so that partitions run elsewhere can be merged by [`merge`]).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Candidate {
-    /// Per unknown set (in spec order): the basic ratio ring/sun as a fraction.
+    /// Per unknown set (in spec order): the basic ratio k as a fraction
+    /// ([`Teeth::basic`]: ring/sun, or ring planet/(sun planet2) for a stepped planet).
     pub basic: Vec<String>,
     /// Per unknown set: ring/large sun of a Ravigneaux set (None for a simple set).
     pub basic2: Vec<Option<String>>,

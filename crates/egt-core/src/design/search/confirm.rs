@@ -122,7 +122,13 @@ impl Search {
             element_torque,
             planet_speed,
             concept: None,
-            basic: teeth.iter().map(|t| ratio(t.ring, t.sun)).collect(),
+            basic: teeth
+                .iter()
+                .map(|t| {
+                    let (n, d) = t.basic();
+                    ratio(n, d)
+                })
+                .collect(),
             basic2: teeth
                 .iter()
                 .map(|t| t.sun2.map(|s2| ratio(t.ring, s2)))

@@ -77,17 +77,23 @@ impl Search {
         }
         let mut links: Vec<String> = Vec::new();
         // The Willis rows of every set (name, sun, ring, carrier, k, sign):
-        // one for a simple or double-pinion set, two for a Ravigneaux set
+        // one for a simple, double-pinion or stepped set, two for a Ravigneaux set
         // (small sun, then large sun). Known sets get their k now.
         let mut willis: Vec<WillisRow> = Vec::new();
         for p in &base.planetary {
             let ring = p.ring.clone().ok_or_else(|| DesignError::Invalid {
                 field: format!("planetary.{}", p.name),
-                message: "synth handles sets with a ring (simple, double-pinion, Ravigneaux)"
-                    .into(),
+                message:
+                    "synth handles sets with a ring (simple, double-pinion, stepped, Ravigneaux)"
+                        .into(),
             })?;
             let k = |z: Option<i64>| match (z, p.teeth.ring) {
                 (Some(zs), Some(zr)) => zr as f64 / zs as f64,
+                _ => f64::NAN,
+            };
+            // A stepped planet: k = ring planet / (sun planet2).
+            let stepped = match (p.teeth.sun, p.teeth.ring, p.teeth.planet, p.teeth.planet2) {
+                (Some(zs), Some(zr), Some(z1), Some(z2)) => (zr * z1) as f64 / (zs * z2) as f64,
                 _ => f64::NAN,
             };
             let (s, r, c) = (
@@ -102,6 +108,7 @@ impl Search {
                 PlanetaryKind::DoublePinion => {
                     willis.push((p.name.clone(), s, r, c, k(p.teeth.sun), -1.0));
                 }
+                PlanetaryKind::Stepped => willis.push((p.name.clone(), s, r, c, stepped, 1.0)),
                 PlanetaryKind::Ravigneaux => {
                     let large = p.sun2.as_deref().ok_or_else(|| DesignError::Invalid {
                         field: format!("planetary.{}.sun2", p.name),
@@ -110,12 +117,6 @@ impl Search {
                     let s2 = col(large, &mut links);
                     willis.push((p.name.clone(), s, r, c, k(p.teeth.sun), -1.0));
                     willis.push((p.name.clone(), s2, r, c, k(p.teeth.sun2), 1.0));
-                }
-                _ => {
-                    return Err(DesignError::Invalid {
-                        field: format!("planetary.{}", p.name),
-                        message: "synth handles simple, double-pinion and Ravigneaux sets".into(),
-                    });
                 }
             }
         }
@@ -138,7 +139,7 @@ impl Search {
                     return Err(DesignError::Invalid {
                         field: format!("sets.{name}"),
                         message: format!(
-                            "the base train declares no planetary sets: synth searches the teeth of sets given as [[planetary]] entries (name, sun, ring, carrier, teeth; kind for a double-pinion or Ravigneaux set), so write the gear pairs of `{name}` as one, with `name = \"{name}\"`"
+                            "the base train declares no planetary sets: synth searches the teeth of sets given as [[planetary]] entries (name, sun, ring, carrier, teeth; kind for a double-pinion, stepped or Ravigneaux set), so write the gear pairs of `{name}` as one, with `name = \"{name}\"`"
                         ),
                     });
                 }
@@ -153,7 +154,7 @@ impl Search {
                 {
                     return Err(DesignError::Invalid {
                         field: format!("sets.{name}"),
-                        message: "the search finds the teeth of simple, double-pinion and Ravigneaux sets".into(),
+                        message: "the search finds the teeth of simple, double-pinion, stepped and Ravigneaux sets".into(),
                     });
                 }
                 (Some(kind), _) => match cache.and_then(|c| c.get(name)) {

@@ -1,5 +1,6 @@
-//! The search space: each set's admissible tooth triples (coaxial,
-//! non-interference, assembly) grouped by basic ratio, simple and Ravigneaux.
+//! The search space: each set's admissible tooth counts (coaxial,
+//! non-interference, assembly) grouped by basic ratio: simple,
+//! double-pinion, stepped-planet and Ravigneaux sets.
 
 use std::collections::HashMap;
 
@@ -10,7 +11,8 @@ use crate::design::spec::{Constraints, SetRange};
 use crate::error::DesignError;
 
 /// One way to build a set: sun, ring and planet teeth (and for a Ravigneaux
-/// set the large sun and the short pinion).
+/// set the large sun and the long pinion; for a double-pinion set the outer
+/// pinion; for a stepped set the planet's second step).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Teeth {
     /// Sun (the small, forward sun of a Ravigneaux set).
@@ -23,12 +25,27 @@ pub struct Teeth {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sun2: Option<i64>,
     /// Long pinion of a Ravigneaux set (meshing the short pinion, the large
-    /// sun and the ring), as the spec's `planet2`.
+    /// sun and the ring), outer pinion of a double-pinion set, or second step
+    /// (meshing the ring) of a stepped planet, as the spec's `planet2`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub planet2: Option<i64>,
 }
 
-/// A basic ratio k = ring / sun (reduced) and every admissible tooth triple giving it.
+impl Teeth {
+    /// The basic ratio k as (numerator, denominator), unreduced: ring / sun
+    /// (the small sun of a Ravigneaux set), or ring planet / (sun planet2)
+    /// through a planet with two wheels and one sun (a stepped planet; equal
+    /// for the two pinions of a double-pinion set).
+    pub fn basic(&self) -> (i64, i64) {
+        match (self.sun2, self.planet2) {
+            (None, Some(p2)) => (self.ring * self.planet, self.sun * p2),
+            _ => (self.ring, self.sun),
+        }
+    }
+}
+
+/// A basic ratio k (ring / sun; ring planet / (sun planet2) for a stepped
+/// set), reduced, and every admissible tooth set giving it.
 #[derive(Debug, Clone)]
 pub(super) struct Basic {
     pub(super) k: f64,
@@ -75,9 +92,10 @@ pub(super) fn coaxial_planet(sun: i64, ring: i64, planets: i64, c: &Constraints)
 /// The checks every unknown set's ranges share; `bad(field, message)` names the field.
 pub(super) fn check_ranges(
     r: &SetRange,
+    c: &Constraints,
     bad: &dyn Fn(&str, &str) -> DesignError,
 ) -> Result<(), DesignError> {
-    for (field, range) in [("sun", Some(r.sun)), ("sun2", r.sun2)] {
+    for (field, range) in [("sun", Some(r.sun)), ("sun2", r.sun2), ("planet", r.planet)] {
         if let Some([lo, hi]) = range
             && (lo < 3 || lo > hi)
         {
@@ -97,7 +115,11 @@ pub(super) fn check_ranges(
         ));
     }
     let max = crate::error::MAX_TEETH;
-    if r.sun[1] > max || r.ring[1] > max || r.sun2.is_some_and(|s| s[1] > max) {
+    if r.sun[1] > max
+        || r.ring[1] > max
+        || r.sun2.is_some_and(|s| s[1] > max)
+        || r.planet.is_some_and(|p| p[1] > max)
+    {
         return Err(bad(
             "sun",
             &format!("tooth counts above {max} are not searched"),
@@ -107,7 +129,13 @@ pub(super) fn check_ranges(
     // The bounds are 3..=MAX_TEETH here, so a span cannot overflow; i128 keeps
     // the product exact.
     let span = |x: [i64; 2]| i128::from(x[1]) - i128::from(x[0]) + 1;
-    let combos = span(r.sun) * span(r.ring) * r.sun2.map_or(1, span);
+    // A stepped set also visits every first step and, per one, the second
+    // steps the profile-shift allowance admits.
+    let combos = span(r.sun)
+        * span(r.ring)
+        * r.sun2.map_or(1, span)
+        * r.planet
+            .map_or(1, |p| span(p) * (2 * i128::from(c.profile_shift) + 1));
     if combos > i128::from(MAX_SET_PAIRS) {
         return Err(bad(
             "ring",
@@ -121,8 +149,10 @@ pub(super) fn check_ranges(
 
 /// Admissible tooth triples of one simple set, grouped by reduced ring/sun, sorted by k.
 pub(super) fn basics(name: &str, r: &SetRange, c: &Constraints) -> Result<Vec<Basic>, DesignError> {
-    by_ratio(name, r, c, &|sun, ring| {
-        coaxial_planet(sun, ring, r.planets, c).map(|p| (p, None))
+    by_ratio(name, r, c, &|sun, ring, out| {
+        out.extend(
+            coaxial_planet(sun, ring, r.planets, c).map(|p| (Ratio::new(ring, sun), p, None)),
+        );
     })
 }
 
@@ -157,49 +187,128 @@ pub(super) fn double_pinion_basics(
     r: &SetRange,
     c: &Constraints,
 ) -> Result<Vec<Basic>, DesignError> {
-    by_ratio(name, r, c, &|sun, ring| {
-        double_pinion_planet(sun, ring, r.planets, c).map(|p| (p, Some(p)))
+    by_ratio(name, r, c, &|sun, ring, out| {
+        out.extend(
+            double_pinion_planet(sun, ring, r.planets, c)
+                .map(|p| (Ratio::new(ring, sun), p, Some(p))),
+        );
     })
 }
 
-/// Every (sun, ring) of the ranges that `planets` gives pinions for, grouped
-/// by k = ring / sun, ascending.
-fn by_ratio(
+/// Whether `planets` identical stepped planets (first step `planet` on the
+/// sun, second step `planet2` on the ring), equally spaced, assemble:
+/// (sun planet2 + ring planet) / (planets gcd(planet, planet2)) an integer.
+/// Planet j sits 2 pi j / planets on from planet 0; turned by x, it meshes
+/// the sun when planet x = (sun + planet) 2 pi j / planets (mod 2 pi), and
+/// the ring when planet2 x = (planet2 - ring) 2 pi j / planets (mod 2 pi);
+/// one x meets both exactly when this holds (derivation in docs/synth.md).
+/// With planet = planet2 it is a simple set's (sun + ring) / planets.
+pub(crate) fn stepped_assembles(
+    sun: i64,
+    ring: i64,
+    planet: i64,
+    planet2: i64,
+    planets: i64,
+) -> bool {
+    let g = num_integer::Integer::gcd(&planet, &planet2);
+    (sun * planet2 + ring * planet) % (planets * g) == 0
+}
+
+/// The second steps of a stepped planet on `sun` and `ring` whose first
+/// step has `planet` teeth: one module for both meshes, so the coaxial
+/// condition sun + planet = ring - planet2 within the profile-shift
+/// allowance; `min_planet`, assembly, and neighbouring planets' larger steps
+/// clear of each other: (sun + planet) sin(pi / n) > max(planet, planet2) + 2.
+pub(super) fn stepped_planet2s(
+    sun: i64,
+    ring: i64,
+    planet: i64,
+    planets: i64,
+    c: &Constraints,
+) -> impl Iterator<Item = i64> + '_ {
+    let centre = ring - sun - planet;
+    (centre - c.profile_shift..=centre + c.profile_shift).filter(move |&planet2| {
+        planet2 >= c.min_planet
+            && planet >= c.min_planet
+            && (!c.assembly || stepped_assembles(sun, ring, planet, planet2, planets))
+            && (!c.non_interference
+                || planets == 1
+                || (sun + planet) as f64 * (std::f64::consts::PI / planets as f64).sin()
+                    > (planet.max(planet2) + 2) as f64)
+    })
+}
+
+/// Admissible teeth of one stepped-planet set (sun, ring, both steps) by
+/// basic ratio k = ring planet / (sun planet2), as [`basics`] for a simple set.
+pub(super) fn stepped_basics(
     name: &str,
     r: &SetRange,
     c: &Constraints,
-    planets: &dyn Fn(i64, i64) -> Option<(i64, Option<i64>)>,
 ) -> Result<Vec<Basic>, DesignError> {
     let bad = |f: &str, m: &str| DesignError::Invalid {
         field: format!("sets.{name}.{f}"),
         message: m.into(),
     };
-    check_ranges(r, &bad)?;
+    let Some(first) = r.planet else {
+        return Err(bad(
+            "planet",
+            "a stepped set needs its first step's range `planet = [min, max]` (the second step follows from the coaxial condition)",
+        ));
+    };
+    by_ratio(name, r, c, &|sun, ring, out| {
+        for planet in first[0]..=first[1] {
+            for planet2 in stepped_planet2s(sun, ring, planet, r.planets, c) {
+                out.push((
+                    Ratio::new(ring * planet, sun * planet2),
+                    planet,
+                    Some(planet2),
+                ));
+            }
+        }
+    })
+}
+
+/// Every (sun, ring) of the ranges that `planets` gives pinions for (each
+/// basic ratio with its pinions), grouped by basic ratio, ascending.
+#[allow(clippy::type_complexity)]
+fn by_ratio(
+    name: &str,
+    r: &SetRange,
+    c: &Constraints,
+    planets: &dyn Fn(i64, i64, &mut Vec<(Ratio<i64>, i64, Option<i64>)>),
+) -> Result<Vec<Basic>, DesignError> {
+    let bad = |f: &str, m: &str| DesignError::Invalid {
+        field: format!("sets.{name}.{f}"),
+        message: m.into(),
+    };
+    check_ranges(r, c, &bad)?;
     let mut map: HashMap<Ratio<i64>, Vec<Teeth>> = HashMap::new();
+    let mut found = Vec::new();
     for sun in r.sun[0]..=r.sun[1] {
         for ring in r.ring[0]..=r.ring[1] {
-            let Some((planet, planet2)) = planets(sun, ring) else {
-                continue;
-            };
-            let k = ring as f64 / sun as f64;
-            if let Some([lo, hi]) = c.ring_sun
-                && (k < lo || k > hi)
-            {
-                continue;
+            found.clear();
+            planets(sun, ring, &mut found);
+            for &(q, planet, planet2) in &found {
+                let k = *q.numer() as f64 / *q.denom() as f64;
+                if let Some([lo, hi]) = c.ring_sun
+                    && (k < lo || k > hi)
+                {
+                    continue;
+                }
+                map.entry(q).or_default().push(Teeth {
+                    sun,
+                    ring,
+                    planet,
+                    sun2: None,
+                    planet2,
+                });
             }
-            map.entry(Ratio::new(ring, sun)).or_default().push(Teeth {
-                sun,
-                ring,
-                planet,
-                sun2: None,
-                planet2,
-            });
         }
     }
     let mut out: Vec<Basic> = map
         .into_iter()
         .map(|(q, mut teeth)| {
-            teeth.sort_by_key(|t| (t.sun, t.ring));
+            teeth.sort_by_key(|t| (t.sun, t.ring, t.planet));
             Basic {
                 k: *q.numer() as f64 / *q.denom() as f64,
                 teeth,
@@ -237,7 +346,7 @@ pub(super) fn ravigneaux(
         field: format!("sets.{name}.{f}"),
         message: m.into(),
     };
-    check_ranges(r, &bad)?;
+    check_ranges(r, c, &bad)?;
     let large = r
         .sun2
         .ok_or_else(|| bad("sun2", "a Ravigneaux set needs the large sun's range"))?;
@@ -333,12 +442,22 @@ impl SetSpace {
             field: format!("sets.{name}.sun2"),
             message: message.into(),
         };
+        if range.planet.is_some() && kind != PlanetaryKind::Stepped {
+            return Err(DesignError::Invalid {
+                field: format!("sets.{name}.planet"),
+                message: "only a stepped set's planet has a range; the other kinds' planets follow from sun and ring".into(),
+            });
+        }
         match kind {
             PlanetaryKind::Simple | PlanetaryKind::DoublePinion if range.sun2.is_some() => {
                 Err(bad("a simple or double-pinion set has one sun"))
             }
             PlanetaryKind::Simple => Ok(one(basics(name, range, c)?, 1.0)),
             PlanetaryKind::DoublePinion => Ok(one(double_pinion_basics(name, range, c)?, -1.0)),
+            PlanetaryKind::Stepped if range.sun2.is_some() => Err(bad(
+                "the search finds stepped sets with a sun and a ring (a stepped set with two suns is analysed with its teeth given)",
+            )),
+            PlanetaryKind::Stepped => Ok(one(stepped_basics(name, range, c)?, 1.0)),
             PlanetaryKind::Ravigneaux => {
                 let (k1, k2, teeth) = ravigneaux(name, range, c)?;
                 Ok(SetSpace {
@@ -346,11 +465,6 @@ impl SetSpace {
                     teeth,
                 })
             }
-            _ => Err(DesignError::Invalid {
-                field: format!("sets.{name}"),
-                message: "the search finds the teeth of simple, double-pinion and Ravigneaux sets"
-                    .into(),
-            }),
         }
     }
 }

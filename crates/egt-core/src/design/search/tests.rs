@@ -488,3 +488,173 @@ fn rank_orders_by_score_efficiency_torque_then_planet_speed() {
         ]
     );
 }
+
+/// Whether `planets` equally spaced stepped planets assemble, tried on the
+/// meshes' tooth phases (in revolutions) rather than the closed form: planet
+/// 0 fixes where the sun's and the ring's teeth stand and the angle between
+/// the planet's two wheels; planet j, 1/planets of a turn on, must find a
+/// turn of its own (one of the first step's `planet` pitches) at which both
+/// its wheels fall into tooth gaps.
+fn assembles_by_phases(sun: i64, ring: i64, planet: i64, planet2: i64, planets: i64) -> bool {
+    let whole = |x: f64| (x - x.round()).abs() < 1e-9;
+    (1..planets).all(|j| {
+        let at = j as f64 / planets as f64;
+        // Sun mesh (external): sun (0 - at) + planet (turn - at - 1/2) = -planet / 2 (mod 1).
+        // Ring mesh (internal): ring (0 - at) - planet2 (turn - at) = 0 (mod 1).
+        (0..planet).any(|m| {
+            let turn = ((sun + planet) as f64 * at + m as f64) / planet as f64;
+            whole(-(ring as f64) * at - planet2 as f64 * (turn - at))
+        })
+    })
+}
+
+/// The stepped planets' assembly condition (sun planet2 + ring planet)
+/// divisible by planets gcd(planet, planet2) agrees with the tooth phases
+/// of every planet, and the phase model agrees with the published
+/// condition of a simple set, (sun + ring) / planets, when both wheels are
+/// one.
+#[test]
+fn stepped_planets_assemble_as_their_tooth_phases_say() {
+    let (mut yes, mut no) = (0, 0);
+    for planets in 2..=5 {
+        for sun in 12..=24 {
+            for planet in 8..=20 {
+                for planet2 in 8..=20 {
+                    let ring = sun + planet + planet2;
+                    let phases = assembles_by_phases(sun, ring, planet, planet2, planets);
+                    assert_eq!(
+                        space::stepped_assembles(sun, ring, planet, planet2, planets),
+                        phases,
+                        "sun {sun} ring {ring} planets {planet}/{planet2} n {planets}"
+                    );
+                    if planet == planet2 {
+                        assert_eq!(phases, (sun + ring) % planets == 0);
+                    }
+                    if phases { yes += 1 } else { no += 1 }
+                }
+            }
+        }
+    }
+    assert!(yes > 1000 && no > 1000, "{yes} assemble, {no} do not");
+}
+
+/// A one-set two-speed with a stepped planet: ring held, sun in, carrier
+/// out, 1 + k with k = ring planet / (sun planet2).
+const STEPPED: &str = "frame = \"H\"\n[[planetary]]\nname = \"S\"\nkind = \"stepped\"\nsun = \"sun\"\nring = \"ring\"\ncarrier = \"carrier\"\nteeth = { sun = 23, ring = 73, planet = 31, planet2 = 19 }\n[[elements]]\nname = \"B\"\nkind = \"brake\"\nlinks = [\"ring\"]\n[[elements]]\nname = \"C\"\nkind = \"clutch\"\nlinks = [\"sun\", \"carrier\"]\n[transmission]\ninput = \"sun\"\noutput = \"carrier\"\nstates = { \"1\" = [\"B\"], \"2\" = [\"C\"] }\n";
+
+fn stepped_search(sets: &str, targets: &str) -> Search {
+    let spec: SynthSpec = toml::from_str(&format!(
+        "base = \"stepped.toml\"\ntop = 100000\n[sets]\n{sets}\n[targets]\n{targets}\n"
+    ))
+    .expect("test input");
+    Search::new(
+        spec,
+        parse_spec(STEPPED, Format::Toml, "stepped").expect("test input"),
+    )
+    .expect("a stepped unknown is searched")
+}
+
+/// A stepped set as an unknown: the real 23/31/19/73 (first gear
+/// 1 + 2263/437 = 6.17849...) is found again from 6.178, and every
+/// candidate is coaxial, assembles and is a train egt's exact analysis
+/// confirms with that ratio.
+#[test]
+fn a_stepped_unknown_set_is_found_again_from_its_ratio() {
+    let s = stepped_search(
+        "S = { sun = [18, 30], ring = [60, 80], planet = [14, 34], planets = 3 }",
+        "ratios = { \"1\" = 6.178, \"2\" = 1.0 }",
+    );
+    let (found, _) = s.run().expect("test input");
+    let real = Teeth {
+        sun: 23,
+        ring: 73,
+        planet: 31,
+        sun2: None,
+        planet2: Some(19),
+    };
+    let hit = found
+        .iter()
+        .find(|c| c.same_ratio_teeth[0].contains(&real))
+        .expect("the real set is among the candidates");
+    assert_eq!(hit.basic, ["2263/437"]);
+    for c in &found {
+        for t in &c.same_ratio_teeth[0] {
+            let p2 = t.planet2.expect("a stepped planet's second wheel");
+            assert_eq!(t.sun + t.planet, t.ring - p2, "coaxial");
+            assert!(space::stepped_assembles(t.sun, t.ring, t.planet, p2, 3));
+            let table = Train::from_spec(&s.candidate_spec(&[*t], &c.layout))
+                .expect("candidate spec")
+                .shift_table()
+                .expect("analysis");
+            let first = table.gears.iter().find(|g| g.state == "1").expect("gear 1");
+            let k = (t.ring * t.planet) as f64 / (t.sun * p2) as f64;
+            assert!((first.ratio - (1.0 + k)).abs() < 1e-12, "{t:?}");
+            assert!((first.ratio - 6.178).abs() <= s.spec.targets.tolerance);
+        }
+    }
+}
+
+/// A stepped set's searched ratio: the branch and bound keeps exactly the
+/// basic ratios that the exact analysis of every admissible stepped set of
+/// the ranges accepts.
+#[test]
+fn stepped_search_equals_exhaustive_exact_analysis() {
+    let s = stepped_search(
+        "S = { sun = [18, 26], ring = [56, 72], planet = [14, 26], planets = 4 }",
+        "tolerance = 0.05\nratios = { \"1\" = 5.0 }",
+    );
+    let (found, stats) = s.run().expect("test input");
+    let mut got: Vec<String> = found.iter().map(|c| c.basic[0].clone()).collect();
+    got.sort();
+    let teeth: Vec<Teeth> = s.unknowns[0].teeth.values().flatten().copied().collect();
+    assert!(teeth.len() > 20, "{}", teeth.len());
+    assert_eq!(s.unknowns[0].teeth.len() as f64, stats.ratio_space);
+    let mut want = std::collections::BTreeSet::new();
+    for t in teeth {
+        let table = Train::from_spec(&s.candidate_spec(&[t], &[]))
+            .expect("admissible teeth make a train")
+            .shift_table()
+            .expect("every state solves");
+        let first = table.gears.iter().find(|g| g.state == "1").expect("gear 1");
+        if (first.ratio - 5.0).abs() <= 0.05 {
+            let (n, d) = t.basic();
+            want.insert(crate::numerics::exact::display(
+                &crate::numerics::exact::frac(n, d),
+            ));
+        }
+    }
+    let want: Vec<String> = want.into_iter().collect();
+    assert!(
+        want.len() > 3,
+        "a loose tolerance admits several ratios: {want:?}"
+    );
+    assert_eq!(got, want);
+}
+
+/// A stepped set needs its first step's range, which no other kind takes.
+#[test]
+fn a_planet_range_belongs_to_a_stepped_set() {
+    let spec: SynthSpec = toml::from_str(
+        "base = \"stepped.toml\"\n[sets]\nS = { sun = [18, 30], ring = [60, 80] }\n[targets]\nratios = { \"1\" = 6.178 }\n",
+    )
+    .expect("test input");
+    let base = parse_spec(STEPPED, Format::Toml, "stepped").expect("test input");
+    let Err(err) = Search::new(spec, base) else {
+        panic!("a stepped set without a planet range");
+    };
+    assert!(err.to_string().starts_with("sets.S.planet:"), "{err}");
+    let spec: SynthSpec = toml::from_str(
+        "base = \"dp.toml\"\n[sets]\nD = { sun = [26, 38], ring = [66, 88], planet = [14, 20] }\n[targets]\nratios = { \"1\" = 2.406 }\n",
+    )
+    .expect("test input");
+    let base = STEPPED
+        .replace("kind = \"stepped\"", "kind = \"double_pinion\"")
+        .replace("name = \"S\"", "name = \"D\"");
+    let Err(err) = Search::new(
+        spec,
+        parse_spec(&base, Format::Toml, "dp").expect("test input"),
+    ) else {
+        panic!("a planet range on a double-pinion set");
+    };
+    assert!(err.to_string().starts_with("sets.D.planet:"), "{err}");
+}
