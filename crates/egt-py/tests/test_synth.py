@@ -88,6 +88,13 @@ def test_synth_finds_a_stepped_planet() -> None:
     real = egt.load(str(ROOT / "examples" / "stepped_two_speed.toml")).shift_table()
     assert {g.state: g.ratio_exact for g in real.gears} == best.ratios
     assert list(r.to_pandas()["S.planet2"]) == [c.sets["S"].planet2 for c in r.candidates]
+    # Statics and kinematics of the stepped planet in low (ring held, unit
+    # sun torque and speed): the planet's ring wheel carries the sun mesh's
+    # torque times planet / sun, and the planet turns at (1 - w_carrier)
+    # sun / planet relative to its carrier.
+    assert best.mesh_torque == pytest.approx(s.planet / s.sun, rel=1e-12)
+    carrier = 1 / float(best.ratios["low"])
+    assert best.planet_speed == pytest.approx((1 - carrier) * s.sun / s.planet, rel=1e-12)
 
 
 def test_synth_with_free_element_positions_reports_the_layout() -> None:

@@ -125,6 +125,9 @@ struct Row {
     efficiency: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     element_torque: Option<f64>,
+    /// Largest |mesh multiplier| per unit input torque.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    mesh_torque: Option<f64>,
     /// Largest planet speed relative to its carrier per unit input speed.
     #[serde(skip_serializing_if = "Option::is_none")]
     planet_speed: Option<f64>,
@@ -332,6 +335,7 @@ fn row(search: &Synthesis, c: &Candidate, rank: usize, spec: Option<String>) -> 
         same_ratio_teeth: c.same_ratio_teeth.clone(),
         efficiency: c.efficiency,
         element_torque: c.element_torque,
+        mesh_torque: c.mesh_torque,
         planet_speed: c.planet_speed,
         spec,
         shift: None,

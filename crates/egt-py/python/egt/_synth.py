@@ -82,6 +82,8 @@ class Candidate:
     """Lowest efficiency over the targeted states."""
     element_torque: Optional[float] = None
     """Largest engaged element torque per unit input torque over the targeted states."""
+    mesh_torque: Optional[float] = None
+    """Largest mesh multiplier (torque on a mesh's first gear) per unit input torque over the targeted states."""
     planet_speed: Optional[float] = None
     """Largest planet speed relative to its carrier per unit input speed over the targeted states."""
 
@@ -190,6 +192,7 @@ def _candidate(core: SearchCore, rank: int, sets: Sequence[str], c: Mapping[str,
         same_ratio_teeth={name: tuple(ts) for name, ts in zip(sets, c.get("same_ratio_teeth", []))},
         efficiency=c.get("efficiency"),
         element_torque=c.get("element_torque"),
+        mesh_torque=c.get("mesh_torque"),
         planet_speed=c.get("planet_speed"),
     )
 

@@ -328,8 +328,14 @@ fn the_c4_concept_is_found_from_its_ratios() {
             .flat_map(|g| g.relative.iter().map(|r| r.speed.abs()))
             .fold(0.0, f64::max);
         assert!(fastest > 0.0);
+        let mesh = table
+            .gears
+            .iter()
+            .flat_map(|g| g.meshes.iter().map(|m| m.multiplier.abs()))
+            .fold(0.0, f64::max);
         if x.ratios == ratios {
             assert_eq!(x.planet_speed, Some(fastest));
+            assert_eq!(x.mesh_torque, Some(mesh));
         }
         for g in &table.gears {
             let r = ratios.iter().find(|r| r.0 == g.state).unwrap();

@@ -40,6 +40,10 @@ pub struct Candidate {
     /// targeted states, from the exact analysis.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub element_torque: Option<f64>,
+    /// Largest |mesh multiplier| (the torque on a mesh's first gear) per
+    /// unit input torque over the targeted states, from the exact analysis.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mesh_torque: Option<f64>,
     /// Largest |planet speed relative to its carrier| per unit input speed
     /// over the targeted states (the planet bearings' duty), from the exact
     /// analysis.
@@ -134,8 +138,8 @@ pub fn merge(parts: Vec<(Vec<Candidate>, Stats)>, top: usize) -> (Vec<Candidate>
 }
 
 /// Sort and keep `top`: by the ratio error (score), then the higher lowest
-/// efficiency, the smaller largest element torque, the slower fastest
-/// planet, the fewer shafts (a concept), then by the teeth, layout and
+/// efficiency, the smaller largest element torque, the smaller largest mesh
+/// torque, the slower fastest planet, the fewer shafts (a concept), then by the teeth, layout and
 /// structure, so that the order is canonical.
 pub fn rank(c: &mut Vec<Candidate>, top: usize) {
     let shafts = |x: &Candidate| x.concept.as_ref().map_or(0, |k| k.shafts.len());
@@ -151,13 +155,22 @@ pub fn rank(c: &mut Vec<Candidate>, top: usize) {
                 t(a).total_cmp(&t(b))
             })
             .then_with(|| {
+                let m = |x: &Candidate| x.mesh_torque.unwrap_or(0.0);
+                m(a).total_cmp(&m(b))
+            })
+            .then_with(|| {
                 let p = |x: &Candidate| x.planet_speed.unwrap_or(0.0);
                 p(a).total_cmp(&p(b))
             })
             .then_with(|| shafts(a).cmp(&shafts(b)))
             .then_with(|| {
-                let ka: Vec<_> = a.teeth.iter().map(|t| (t.sun, t.sun2, t.ring)).collect();
-                let kb: Vec<_> = b.teeth.iter().map(|t| (t.sun, t.sun2, t.ring)).collect();
+                let key = |x: &Candidate| -> Vec<_> {
+                    x.teeth
+                        .iter()
+                        .map(|t| (t.sun, t.sun2, t.ring, t.planet, t.planet2))
+                        .collect()
+                };
+                let (ka, kb) = (key(a), key(b));
                 ka.cmp(&kb)
             })
             .then_with(|| a.layout.cmp(&b.layout))

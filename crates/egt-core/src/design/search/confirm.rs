@@ -113,6 +113,9 @@ impl Search {
         let element_torque = targeted()
             .flat_map(|g| g.elements.iter().map(|e| e.torque.abs()))
             .reduce(f64::max);
+        let mesh_torque = targeted()
+            .flat_map(|g| g.meshes.iter().map(|m| m.multiplier.abs()))
+            .reduce(f64::max);
         let planet_speed = targeted()
             .flat_map(|g| g.relative.iter().map(|r| r.speed.abs()))
             .reduce(f64::max);
@@ -120,6 +123,7 @@ impl Search {
             same_ratio_teeth: sets.iter().map(|t| (*t).clone()).collect(),
             efficiency,
             element_torque,
+            mesh_torque,
             planet_speed,
             concept: None,
             basic: teeth

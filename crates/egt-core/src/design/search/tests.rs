@@ -436,9 +436,10 @@ fn a_double_pinion_unknown_set_is_found_again_from_its_ratio() {
 }
 
 /// The rank's keys in order: score, then the higher lowest efficiency, the
-/// smaller largest element torque, then the slower fastest planet.
+/// smaller largest element torque, the smaller largest mesh torque, then the
+/// slower fastest planet.
 #[test]
-fn rank_orders_by_score_efficiency_torque_then_planet_speed() {
+fn rank_orders_by_score_efficiency_torques_then_planet_speed() {
     let base = Candidate {
         basic: vec!["2".into()],
         basic2: vec![None],
@@ -457,6 +458,7 @@ fn rank_orders_by_score_efficiency_torque_then_planet_speed() {
         same_ratio_teeth: Vec::new(),
         efficiency: Some(0.95),
         element_torque: Some(2.0),
+        mesh_torque: Some(5.0),
         planet_speed: Some(3.0),
         concept: None,
     };
@@ -467,6 +469,7 @@ fn rank_orders_by_score_efficiency_torque_then_planet_speed() {
     };
     let mut c = vec![
         with(&|c| c.planet_speed = Some(4.0)),
+        with(&|c| c.mesh_torque = Some(6.0)),
         with(&|c| c.element_torque = Some(3.0)),
         with(&|c| c.efficiency = Some(0.9)),
         with(&|c| c.score = 2e-3),
@@ -475,16 +478,25 @@ fn rank_orders_by_score_efficiency_torque_then_planet_speed() {
     rank(&mut c, 10);
     let keys: Vec<_> = c
         .iter()
-        .map(|c| (c.score, c.efficiency, c.element_torque, c.planet_speed))
+        .map(|c| {
+            (
+                c.score,
+                c.efficiency,
+                c.element_torque,
+                c.mesh_torque,
+                c.planet_speed,
+            )
+        })
         .collect();
     assert_eq!(
         keys,
         [
-            (1e-3, Some(0.95), Some(2.0), Some(3.0)),
-            (1e-3, Some(0.95), Some(2.0), Some(4.0)),
-            (1e-3, Some(0.95), Some(3.0), Some(3.0)),
-            (1e-3, Some(0.9), Some(2.0), Some(3.0)),
-            (2e-3, Some(0.95), Some(2.0), Some(3.0)),
+            (1e-3, Some(0.95), Some(2.0), Some(5.0), Some(3.0)),
+            (1e-3, Some(0.95), Some(2.0), Some(5.0), Some(4.0)),
+            (1e-3, Some(0.95), Some(2.0), Some(6.0), Some(3.0)),
+            (1e-3, Some(0.95), Some(3.0), Some(5.0), Some(3.0)),
+            (1e-3, Some(0.9), Some(2.0), Some(5.0), Some(3.0)),
+            (2e-3, Some(0.95), Some(2.0), Some(5.0), Some(3.0)),
         ]
     );
 }
