@@ -137,30 +137,43 @@ pub fn merge(parts: Vec<(Vec<Candidate>, Stats)>, top: usize) -> (Vec<Candidate>
     (found, total)
 }
 
+/// `x` to 9 significant digits: the analysis keys of one concept computed
+/// through different but equivalent trains differ in the last bits (the
+/// 8HP's three concepts' mesh torques 1.4454946439823564, ..566, ..568),
+/// which must not decide their order. Rounding keeps the order total.
+fn key9(x: f64) -> f64 {
+    if x == 0.0 || !x.is_finite() {
+        return x;
+    }
+    let scale = 10f64.powi(8 - x.abs().log10().floor() as i32);
+    (x * scale).round() / scale
+}
+
 /// Sort and keep `top`: by the ratio error (score), then the higher lowest
 /// efficiency, the smaller largest element torque, the smaller largest mesh
-/// torque, the slower fastest planet, the fewer shafts (a concept), then by the teeth, layout and
-/// structure, so that the order is canonical.
+/// torque, the slower fastest planet (each to 9 significant digits), the
+/// fewer shafts (a concept), then by the teeth, layout and structure, so
+/// that the order is canonical.
 pub fn rank(c: &mut Vec<Candidate>, top: usize) {
     let shafts = |x: &Candidate| x.concept.as_ref().map_or(0, |k| k.shafts.len());
+    let keys = |x: &Candidate| {
+        [
+            -key9(x.efficiency.unwrap_or(1.0)),
+            key9(x.element_torque.unwrap_or(0.0)),
+            key9(x.mesh_torque.unwrap_or(0.0)),
+            key9(x.planet_speed.unwrap_or(0.0)),
+        ]
+    };
     c.sort_by(|a, b| {
         a.score
             .total_cmp(&b.score)
             .then_with(|| {
-                let e = |x: &Candidate| x.efficiency.unwrap_or(1.0);
-                e(b).total_cmp(&e(a))
-            })
-            .then_with(|| {
-                let t = |x: &Candidate| x.element_torque.unwrap_or(0.0);
-                t(a).total_cmp(&t(b))
-            })
-            .then_with(|| {
-                let m = |x: &Candidate| x.mesh_torque.unwrap_or(0.0);
-                m(a).total_cmp(&m(b))
-            })
-            .then_with(|| {
-                let p = |x: &Candidate| x.planet_speed.unwrap_or(0.0);
-                p(a).total_cmp(&p(b))
+                let (ka, kb) = (keys(a), keys(b));
+                ka.iter()
+                    .zip(&kb)
+                    .map(|(x, y)| x.total_cmp(y))
+                    .find(|o| o.is_ne())
+                    .unwrap_or(std::cmp::Ordering::Equal)
             })
             .then_with(|| shafts(a).cmp(&shafts(b)))
             .then_with(|| {

@@ -437,7 +437,8 @@ fn a_double_pinion_unknown_set_is_found_again_from_its_ratio() {
 
 /// The rank's keys in order: score, then the higher lowest efficiency, the
 /// smaller largest element torque, the smaller largest mesh torque, then the
-/// slower fastest planet.
+/// slower fastest planet; analysis keys equal but for round-off are equal
+/// (the slower planet first, not the mesh torque's last bits).
 #[test]
 fn rank_orders_by_score_efficiency_torques_then_planet_speed() {
     let base = Candidate {
@@ -469,6 +470,10 @@ fn rank_orders_by_score_efficiency_torques_then_planet_speed() {
     };
     let mut c = vec![
         with(&|c| c.planet_speed = Some(4.0)),
+        with(&|c| {
+            c.mesh_torque = Some(5.0 + 8.0 * f64::EPSILON);
+            c.planet_speed = Some(2.5);
+        }),
         with(&|c| c.mesh_torque = Some(6.0)),
         with(&|c| c.element_torque = Some(3.0)),
         with(&|c| c.efficiency = Some(0.9)),
@@ -491,6 +496,13 @@ fn rank_orders_by_score_efficiency_torques_then_planet_speed() {
     assert_eq!(
         keys,
         [
+            (
+                1e-3,
+                Some(0.95),
+                Some(2.0),
+                Some(5.0 + 8.0 * f64::EPSILON),
+                Some(2.5)
+            ),
             (1e-3, Some(0.95), Some(2.0), Some(5.0), Some(3.0)),
             (1e-3, Some(0.95), Some(2.0), Some(5.0), Some(4.0)),
             (1e-3, Some(0.95), Some(2.0), Some(6.0), Some(3.0)),
