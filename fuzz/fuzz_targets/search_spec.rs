@@ -2,10 +2,12 @@
 //! bounded search) over the bundled base train its `base` names (the C4 by
 //! default). Any refusal is fine; a panic, an abort, a hang, or a candidate
 //! with a non-finite score or ratio is a bug. The harness bounds each run
-//! below the CLI's budgets (at most 200 leaves, each range cut to 6 values,
+//! below the CLI's budgets (at most 50 leaves, each range cut to 6 values,
 //! two freed elements), so that an execution of the unoptimised build CI
-//! runs stays under a second: with 24 values a Ravigneaux search whose
-//! tolerance prunes nothing (13 824 combinations) took 27.9 s there.
+//! runs stays within seconds: with 24 values a Ravigneaux search whose
+//! tolerance prunes nothing (13 824 combinations) took 27.9 s there, and
+//! with 200 leaves the 6HP26 search at tolerance 1.0005 (every leaf
+//! confirmed by an exact analysis, beside the wheel's build) took 12 s.
 #![no_main]
 
 use std::sync::LazyLock;
@@ -54,8 +56,11 @@ fuzz_target!(|data: &[u8]| {
         if let Some(s2) = s.sun2.as_mut() {
             cut(s2);
         }
+        if let Some(p) = s.planet.as_mut() {
+            cut(p);
+        }
     }
-    spec.max_leaves = spec.max_leaves.min(200);
+    spec.max_leaves = spec.max_leaves.min(50);
     spec.top = spec.top.min(20);
     let base = match spec.base.rsplit('/').next() {
         Some("zf_8hp70.toml") => &*ZF8,
