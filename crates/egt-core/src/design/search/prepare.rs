@@ -177,7 +177,7 @@ impl Search {
             if w.4.is_nan() && dim_of[i].is_none() {
                 return Err(DesignError::Invalid {
                     field: format!("planetary.{}.teeth", w.0),
-                    message: "give sun and ring teeth, or list the set under [sets]".into(),
+                    message: "give sun and ring teeth (and planet and planet2 for a stepped set), or list the set under [sets]".into(),
                 });
             }
         }

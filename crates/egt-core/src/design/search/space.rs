@@ -115,30 +115,37 @@ pub(super) fn check_ranges(
         ));
     }
     let max = crate::error::MAX_TEETH;
-    if r.sun[1] > max
-        || r.ring[1] > max
-        || r.sun2.is_some_and(|s| s[1] > max)
-        || r.planet.is_some_and(|p| p[1] > max)
-    {
-        return Err(bad(
-            "sun",
-            &format!("tooth counts above {max} are not searched"),
-        ));
+    for (field, range) in [
+        ("sun", Some(r.sun)),
+        ("ring", Some(r.ring)),
+        ("sun2", r.sun2),
+        ("planet", r.planet),
+    ] {
+        if range.is_some_and(|x| x[1] > max) {
+            return Err(bad(
+                field,
+                &format!("tooth counts above {max} are not searched"),
+            ));
+        }
     }
     // Bounded work per set: every tooth combination of the ranges is visited once.
     // The bounds are 3..=MAX_TEETH here, so a span cannot overflow; i128 keeps
     // the product exact.
     let span = |x: [i64; 2]| i128::from(x[1]) - i128::from(x[0]) + 1;
     // A stepped set also visits every first step and, per one, the second
-    // steps the profile-shift allowance admits.
-    let combos = span(r.sun)
-        * span(r.ring)
-        * r.sun2.map_or(1, span)
+    // steps the profile-shift allowance admits: past the budget only with
+    // them, the planet range is named.
+    let pairs = span(r.sun) * span(r.ring) * r.sun2.map_or(1, span);
+    let combos = pairs
         * r.planet
             .map_or(1, |p| span(p) * (2 * i128::from(c.profile_shift) + 1));
     if combos > i128::from(MAX_SET_PAIRS) {
         return Err(bad(
-            "ring",
+            if pairs > i128::from(MAX_SET_PAIRS) {
+                "ring"
+            } else {
+                "planet"
+            },
             &format!(
                 "{combos} tooth combinations in this set; at most {MAX_SET_PAIRS} are searched per set"
             ),
@@ -215,7 +222,7 @@ pub(crate) fn stepped_assembles(
 }
 
 /// The second steps of a stepped planet on `sun` and `ring` whose first
-/// step has `planet` teeth: one module for both meshes, so the coaxial
+/// step has `planet` teeth (at least `min_planet`): one module for both meshes, so the coaxial
 /// condition sun + planet = ring - planet2 within the profile-shift
 /// allowance; `min_planet`, assembly, and neighbouring planets' larger steps
 /// clear of each other: (sun + planet) sin(pi / n) > max(planet, planet2) + 2.
@@ -229,7 +236,6 @@ pub(super) fn stepped_planet2s(
     let centre = ring - sun - planet;
     (centre - c.profile_shift..=centre + c.profile_shift).filter(move |&planet2| {
         planet2 >= c.min_planet
-            && planet >= c.min_planet
             && (!c.assembly || stepped_assembles(sun, ring, planet, planet2, planets))
             && (!c.non_interference
                 || planets == 1
@@ -256,7 +262,7 @@ pub(super) fn stepped_basics(
         ));
     };
     by_ratio(name, r, c, &|sun, ring, out| {
-        for planet in first[0]..=first[1] {
+        for planet in first[0].max(c.min_planet)..=first[1] {
             for planet2 in stepped_planet2s(sun, ring, planet, r.planets, c) {
                 out.push((
                     Ratio::new(ring * planet, sun * planet2),

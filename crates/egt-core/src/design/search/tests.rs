@@ -681,4 +681,20 @@ fn a_planet_range_belongs_to_a_stepped_set() {
         panic!("a planet range on a double-pinion set");
     };
     assert!(err.to_string().starts_with("sets.D.planet:"), "{err}");
+    // A first-step range past the tooth limit, or one that alone takes the
+    // set past the combination budget, is refused by its own field.
+    for planet in ["[14, 1000001]", "[14, 100000]"] {
+        let spec: SynthSpec = toml::from_str(&format!(
+            "base = \"stepped.toml\"\n[sets]\nS = {{ sun = [18, 30], ring = [60, 80], planet = {planet} }}\n[targets]\nratios = {{ \"1\" = 6.178 }}\n"
+        ))
+        .expect("test input");
+        let base = parse_spec(STEPPED, Format::Toml, "stepped").expect("test input");
+        let Err(err) = Search::new(spec, base) else {
+            panic!("planet = {planet} is refused");
+        };
+        assert!(
+            err.to_string().starts_with("sets.S.planet:"),
+            "{planet}: {err}"
+        );
+    }
 }
